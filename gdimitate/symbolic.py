@@ -165,6 +165,10 @@ class SymbolicModel:
         every supported type (constant motion subspace in the joint frame)."""
         jm = self.model.joints[jid]
         kind = jm.shortname()
+        if kind not in SUPPORTED_JOINTS:
+            raise UnsupportedJointError(
+                f"joint {self.model.names[jid]!r} has type {kind}, which the symbolic model "
+                f"does not implement; supported types: {', '.join(SUPPORTED_JOINTS)}")
         q = self.q[jm.idx_q: jm.idx_q + jm.nq]
         vj = self.v[jm.idx_v: jm.idx_v + jm.nv]
         aj = self.a[jm.idx_v: jm.idx_v + jm.nv]
@@ -183,14 +187,10 @@ class SymbolicModel:
         elif kind == "JointModelFreeFlyer":
             m = (_quat_rotation(q[3], q[4], q[5], q[6]), q[:3])
             sub = np.eye(6)
-        elif kind == "JointModelPlanar":
+        else:  # JointModelPlanar: q = [x, y, cos, sin], v = [vx, vy, wz] (local)
             m = (_rotation(np.array([0.0, 0.0, 1.0]), q[2], q[3]), ca.vertcat(q[0], q[1], 0))
             sub = np.zeros((6, 3))
             sub[0, 0] = sub[1, 1] = sub[5, 2] = 1.0
-        else:
-            raise UnsupportedJointError(
-                f"joint {self.model.names[jid]!r} has type {kind}, which the symbolic model "
-                f"does not implement; supported types: {', '.join(SUPPORTED_JOINTS)}")
         return m, ca.SX(sub), vj, aj
 
     def _build(self) -> None:
