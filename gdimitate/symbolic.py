@@ -23,7 +23,7 @@ child coordinates to parent coordinates.
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import casadi as ca
 import numpy as np
@@ -44,7 +44,6 @@ SUPPORTED_JOINTS: tuple[str, ...] = (
 )
 """Pinocchio joint types (``shortname()``) that :class:`SymbolicModel` implements."""
 
-Vec = ca.SX
 Motion = tuple[ca.SX, ca.SX]  # (linear (3,), angular (3,))
 Placement = tuple[ca.SX, ca.SX]  # (R (3, 3), p (3,))
 
@@ -312,7 +311,7 @@ class SymbolicModel:
         jid = int(fr.parentJoint)
         return jid, _compose(self._omi[jid], (ca.SX(pl.rotation), ca.SX(pl.translation)))
 
-    def _cached(self, key: tuple, make) -> ca.Function:
+    def _cached(self, key: tuple, make: Callable[[], ca.Function]) -> ca.Function:
         if key not in self._cache:
             self._cache[key] = make()
         return self._cache[key]
