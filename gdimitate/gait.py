@@ -9,7 +9,7 @@ import numpy as np
 
 from .errors import InvalidInputError
 
-__all__ = ["read_mot", "human_walk_path"]
+__all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path"]
 
 
 def human_walk_path() -> Path:
@@ -50,3 +50,80 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
     out = {n: data[:, i].copy() for i, n in enumerate(short)}
     out["__in_degrees__"] = np.asarray(in_degrees)
     return out
+
+
+def _grf_contact(grf_path: Path, t: np.ndarray, threshold: float) -> tuple[dict, float]:
+    """Stance flags from measured vertical GRF (OpenSim: ``ground_force_vy`` right foot,
+    ``1_ground_force_vy`` left foot, Y up) resampled onto ``t``; and the body mass [kg] from the
+    mean total vertical force."""
+    g = read_mot(grf_path)
+    for col in ("ground_force_vy", "1_ground_force_vy"):
+        if col not in g:
+            raise InvalidInputError(f"{grf_path}: no column {col!r} (OpenSim GRF file expected)")
+    right = np.interp(t, g["time"], g["ground_force_vy"])
+    left = np.interp(t, g["time"], g["1_ground_force_vy"])
+    mass = float(np.mean(g["ground_force_vy"] + g["1_ground_force_vy"]) / 9.81)
+    return {"left": left > threshold, "right": right > threshold}, mass
+
+
+def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = None,
+                 grf: str | Path | None = None, contact_threshold: float = 20.0):
+    """Read an OpenSim sagittal coordinates file → ``(robot, motion)``.
+
+    The file needs ``pelvis_tilt``, ``hip_flexion_r/l``, ``knee_angle_r/l`` and
+    ``ankle_angle_r/l`` (OpenSim's signs: hip flexion +, knee negative in flexion, ankle
+    dorsiflexion +; ``pelvis_tx``/``pelvis_ty`` are not used: the base is placed so that the
+    stance foot stands on the ground without slipping, which also turns a treadmill walk into
+    overground progression). The demonstrator is a planar human with Winter's segment ratios
+    scaled to ``height`` [m] (default 1.75 m); ``mass`` [kg] defaults to the mean measured
+    vertical GRF / g when ``grf`` is given, else 70 kg.
+
+    Contact: from the measured vertical GRF in ``grf`` (an OpenSim GRF ``.mot``; a foot is in
+    stance above ``contact_threshold`` [N]); without it, a foot is in stance while its sole is
+    within 1 % of the body height of the lower sole.
+    """
+    from .robot import Robot
+    from .sagittal import compose_q, frame_paths, ground_base, robot_motion
+    from .urdfgen import human_spec
+
+    d = read_mot(path)
+    need = ["time", "pelvis_tilt", "hip_flexion_r", "knee_angle_r", "ankle_angle_r",
+            "hip_flexion_l", "knee_angle_l", "ankle_angle_l"]
+    missing = [c for c in need if c not in d]
+    if missing:
+        raise InvalidInputError(f"{path}: missing columns {missing}; found {sorted(d)}")
+    scale = np.pi / 180.0 if bool(d["__in_degrees__"]) else 1.0
+    t = d["time"] - d["time"][0]
+    for c in need[1:]:
+        if not np.all(np.isfinite(d[c])):
+            raise InvalidInputError(f"{path}: column {c} has NaN/inf")
+    contact = None
+    if grf is not None:
+        contact, measured_mass = _grf_contact(Path(grf), d["time"], contact_threshold)
+        mass = measured_mass if mass is None else mass
+    robot = Robot.from_spec(human_spec(height=height, mass=70.0 if mass is None else mass))
+    torso = d["pelvis_tilt"] * scale
+    angles = {}
+    for side, s in (("left", "l"), ("right", "r")):
+        angles[side] = np.column_stack([
+            torso + d[f"hip_flexion_{s}"] * scale,
+            d[f"knee_angle_{s}"] * scale,
+            d[f"ankle_angle_{s}"] * scale,
+        ])
+    q = compose_q(robot, torso, angles)
+    if contact is None:
+        soles = frame_paths(robot, q, [robot.legs[s].sole for s in ("left", "right")])
+        zl, zr = soles[robot.legs["left"].sole][:, 2], soles[robot.legs["right"].sole][:, 2]
+        low = np.minimum(zl, zr)
+        tol = 0.01 * height
+        contact = {"left": zl - low < tol, "right": zr - low < tol}
+    q = ground_base(robot, q, contact)
+    return robot, robot_motion(robot, t, q, contact)
+
+
+def human_walk(height: float = 1.75):
+    """The shipped real treadmill walk (OpenSim subject01, 60 Hz, 2.5 s, about two strides)
+    with measured-GRF contact → ``(robot, motion)``. See :func:`read_opensim`."""
+    folder = human_walk_path().parent
+    return read_opensim(human_walk_path(), height=height,
+                        grf=folder / "walk_gait1018_subject01_grf.mot")

@@ -1,0 +1,169 @@
+"""``adapt``: regenerate a demonstrated motion for an imitator robot.
+
+Methods: ``"analytic"`` — the paper's Eq. (1) per leg (DESIGN §4); ``"copy"`` — the paper's
+"without adaptor" baseline (same planar joint angles); ``"optimal"`` — the CasADi trajectory
+optimisation of DESIGN §6 (see :mod:`gdimitate.optimal`). Every method returns an
+:class:`AdaptedMotion` whose report says what was and was not achieved.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .errors import InvalidInputError, LegMatchError, UnknownNameError
+from .metrics import force_direction, hip_height_ratio, joint_limit_margins
+from .motion import Motion
+from .planar import eq1
+from .robot import SIDES, Robot
+from .sagittal import compose_q, ground_base, leg_angles, robot_motion
+
+__all__ = ["AdaptationReport", "AdaptedMotion", "adapt", "METHODS", "compare"]
+
+METHODS = ("analytic", "copy", "optimal")
+
+
+@dataclass
+class AdaptationReport:
+    """What an adaptation achieved.
+
+    ``feasible``: per leg ``(T,)`` bool, frames where the method met its constraints (Eq. 1:
+    ``|arg| ≤ 1``); ``infeasible_frames``: their count per leg; ``force_direction_error``: per
+    leg ``(T,)`` imitator − demonstrator push direction [rad] under ``force_model`` (NaN in
+    swing), and its max; ``hip_height_ratio_error_max``: max |hip-over-ankle height / leg
+    length − the demonstrator's| over all frames; ``joint_limit_violation``: per joint the
+    largest excursion beyond a position limit [rad] (only joints that violate), and its max.
+    Optimal-method fields (``solver``) are filled by :mod:`gdimitate.optimal`.
+    """
+
+    method: str
+    force_model: str
+    feasible: dict[str, np.ndarray]
+    infeasible_frames: dict[str, int]
+    force_direction_error: dict[str, np.ndarray]
+    force_direction_error_max: float
+    hip_height_ratio_error_max: float
+    joint_limit_violation: dict[str, float]
+    joint_limit_violation_max: float
+    solver: dict[str, Any] = field(default_factory=dict)
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def all_feasible(self) -> bool:
+        """True when every frame of both legs is feasible and no limit is violated."""
+        return (all(v == 0 for v in self.infeasible_frames.values())
+                and self.joint_limit_violation_max <= 1e-9)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready summary (no per-frame arrays except the feasibility masks)."""
+        return {
+            "method": self.method,
+            "force_model": self.force_model,
+            "infeasible_frames": dict(self.infeasible_frames),
+            "frames": int(next(iter(self.feasible.values())).size),
+            "force_direction_error_max_rad": self.force_direction_error_max,
+            "hip_height_ratio_error_max": self.hip_height_ratio_error_max,
+            "joint_limit_violation_max_rad": self.joint_limit_violation_max,
+            "joint_limit_violation_rad": dict(self.joint_limit_violation),
+            "feasible": {s: m.astype(int).tolist() for s, m in self.feasible.items()},
+            "solver": {k: v for k, v in self.solver.items()},
+            **{k: v for k, v in self.extra.items()},
+        }
+
+
+@dataclass(frozen=True)
+class AdaptedMotion:
+    """The imitator's :class:`Motion` plus the :class:`AdaptationReport`."""
+
+    motion: Motion
+    report: AdaptationReport
+    robot: Robot
+
+
+def _nanmax_abs(arrs) -> float:
+    vals = np.concatenate([np.abs(a[~np.isnan(a)]) for a in arrs])
+    return float(vals.max()) if vals.size else 0.0
+
+
+def compare(demonstrator: Robot, demo: Motion, imitator: Robot, motion: Motion, method: str,
+            feasible: dict[str, np.ndarray], force: str = "segment") -> AdaptationReport:
+    """Measure an imitator motion against the demonstration (used by every method)."""
+    fd_m = force_direction(demonstrator, demo, force)
+    fd_r = force_direction(imitator, motion, force)
+    err = {s: fd_r[s] - fd_m[s] for s in SIDES}
+    hr_m = hip_height_ratio(demonstrator, demo)
+    hr_r = hip_height_ratio(imitator, motion)
+    viol = {}
+    for j, margin in joint_limit_margins(imitator, motion).items():
+        worst = float(-margin.min())
+        if worst > 1e-12:
+            viol[j] = worst
+    return AdaptationReport(
+        method=method, force_model=force,
+        feasible={s: np.asarray(feasible[s], bool) for s in SIDES},
+        infeasible_frames={s: int((~np.asarray(feasible[s], bool)).sum()) for s in SIDES},
+        force_direction_error=err,
+        force_direction_error_max=_nanmax_abs(err.values()),
+        hip_height_ratio_error_max=float(max(np.max(np.abs(hr_r[s] - hr_m[s])) for s in SIDES)),
+        joint_limit_violation=viol,
+        joint_limit_violation_max=max(viol.values(), default=0.0),
+    )
+
+
+def _check_pair(motion: Motion, demonstrator: Robot, imitator: Robot) -> None:
+    if not isinstance(motion, Motion):
+        raise InvalidInputError(f"motion must be a gdimitate.Motion; got {type(motion).__name__}")
+    if tuple(motion.joint_names) != demonstrator.joint_names or \
+            motion.q.shape[1] != demonstrator.model.nq:
+        raise InvalidInputError(
+            f"the motion's joints do not match the demonstrator {demonstrator.name!r}: "
+            f"motion has {list(motion.joint_names)}, robot has {list(demonstrator.joint_names)}")
+    for r in (demonstrator, imitator):
+        if set(r.legs) != set(SIDES):
+            raise LegMatchError(f"{r.name} legs {sorted(r.legs)} cannot be matched to {SIDES}")
+        if r.base == "fixed":
+            raise LegMatchError(f"{r.name} has a fixed base; a walking imitator needs a floating "
+                                "base to follow its feet")
+    for s in SIDES:
+        if s not in motion.contact:
+            raise InvalidInputError(f"motion.contact has no {s!r} schedule")
+
+
+def adapt(motion: Motion, demonstrator: Robot, imitator: Robot, method: str = "analytic",
+          force: str = "segment", **options) -> AdaptedMotion:
+    """Regenerate ``motion`` (of ``demonstrator``) for ``imitator``.
+
+    ``method``: ``"analytic"`` (Eq. 1), ``"copy"`` (same planar joint angles — the paper's
+    baseline) or ``"optimal"`` (trajectory optimisation; ``options`` go to
+    :func:`gdimitate.optimal.adapt_optimal`). ``force``: the force-direction model the report
+    (and the optimal method's constraint) uses: ``"segment"``, ``"com"`` or ``"grf"``.
+    The imitator keeps the demonstrator's torso angle and ankle angles; its floating base is
+    placed so the stance foot stands on the ground without slipping.
+    """
+    if method not in METHODS:
+        raise UnknownNameError("method", method, METHODS)
+    _check_pair(motion, demonstrator, imitator)
+    if method == "optimal":
+        from .optimal import adapt_optimal
+
+        return adapt_optimal(motion, demonstrator, imitator, force=force, **options)
+    if options:
+        raise InvalidInputError(f"method {method!r} takes no options; got {sorted(options)}")
+    torso, angles = leg_angles(demonstrator, motion.q)
+    new, feasible = {}, {}
+    for s in SIDES:
+        a = angles[s]
+        if method == "copy":
+            new[s] = a.copy()
+            feasible[s] = np.ones(len(a), dtype=bool)
+        else:
+            dl, il = demonstrator.legs[s], imitator.legs[s]
+            r = eq1(a[:, 0], a[:, 1], (dl.thigh, dl.shank), (il.thigh, il.shank))
+            new[s] = np.column_stack([r.theta1, r.theta2, a[:, 2]])
+            feasible[s] = r.feasible
+    q = ground_base(imitator, compose_q(imitator, torso, new), motion.contact)
+    out = robot_motion(imitator, motion.t, q, motion.contact)
+    report = compare(demonstrator, motion, imitator, out, method, feasible, force)
+    return AdaptedMotion(motion=out, report=report, robot=imitator)

@@ -1,0 +1,137 @@
+"""``Motion``: a robot's joint trajectory on a time grid, with its feet's contact schedule."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import InvalidInputError, TimeGridError, UnknownNameError
+
+__all__ = ["Motion", "check_time"]
+
+
+def check_time(t: np.ndarray) -> np.ndarray:
+    """Validate a time grid: 1-D, at least 2 samples, finite, strictly increasing [s]."""
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        raise TimeGridError(f"time must be a 1-D array of at least 2 samples; got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise TimeGridError(f"time has NaN/inf at index {int(np.flatnonzero(~np.isfinite(t))[0])}")
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        i = int(bad[0])
+        raise TimeGridError(
+            f"time must be strictly increasing; t[{i}]={t[i]!r} ≥ t[{i + 1}]={t[i + 1]!r}")
+    return t
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A joint trajectory of one robot.
+
+    - ``t`` ``(T,)`` [s], strictly increasing;
+    - ``joint_names``: the robot's joints in Pinocchio order (without ``universe``);
+    - ``q`` ``(T, nq)``: full Pinocchio configurations in that order [rad, m] — the floating base
+      first where present (free-flyer: x, y, z, qx, qy, qz, qw; our planar models: ``base_x``,
+      ``base_z``, ``base_pitch``), see :attr:`base`;
+    - ``contact``: ``{"left": (T,) bool, "right": (T,) bool}``, True while the foot is in stance;
+    - ``base_nq``: how many leading columns of ``q`` are the floating base (0, 3 or 7);
+    - ``joint_nq``: columns per joint (same length as ``joint_names``).
+    """
+
+    t: np.ndarray
+    joint_names: tuple[str, ...]
+    q: np.ndarray
+    contact: Mapping[str, np.ndarray] = field(default_factory=dict)
+    base_nq: int = 0
+    joint_nq: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        t = check_time(self.t)
+        q = np.asarray(self.q, dtype=float)
+        names = tuple(self.joint_names)
+        nqs = tuple(self.joint_nq) if self.joint_nq else (1,) * len(names)
+        if len(nqs) != len(names):
+            raise InvalidInputError(f"joint_nq has {len(nqs)} entries for {len(names)} joints")
+        if q.ndim != 2 or q.shape != (t.size, sum(nqs)):
+            raise InvalidInputError(
+                f"q must have shape (T, nq) = ({t.size}, {sum(nqs)}); got {q.shape}")
+        if not np.all(np.isfinite(q)):
+            r, c = np.argwhere(~np.isfinite(q))[0]
+            raise InvalidInputError(f"q has NaN/inf at frame {r}, column {c}")
+        contact = {}
+        for side, c in dict(self.contact).items():
+            c = np.asarray(c, dtype=bool)
+            if c.shape != t.shape:
+                raise InvalidInputError(
+                    f"contact[{side!r}] must have shape {t.shape}; got {c.shape}")
+            contact[side] = c
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "q", q)
+        object.__setattr__(self, "joint_names", names)
+        object.__setattr__(self, "joint_nq", nqs)
+        object.__setattr__(self, "contact", contact)
+
+    # ------------------------------------------------------------------
+    @property
+    def T(self) -> int:
+        """Number of frames."""
+        return int(self.t.size)
+
+    @property
+    def dt(self) -> float:
+        """Median time step [s]."""
+        return float(np.median(np.diff(self.t)))
+
+    @property
+    def base(self) -> np.ndarray | None:
+        """Floating-base trajectory ``(T, base_nq)`` or ``None`` for a fixed base."""
+        return self.q[:, : self.base_nq] if self.base_nq else None
+
+    def column(self, joint: str) -> np.ndarray:
+        """Trajectory ``(T,)`` of a 1-DoF joint (``(T, k)`` for a k-column joint)."""
+        try:
+            i = self.joint_names.index(joint)
+        except ValueError:
+            raise UnknownNameError("joint", joint, self.joint_names) from None
+        start = sum(self.joint_nq[:i])
+        k = self.joint_nq[i]
+        return self.q[:, start] if k == 1 else self.q[:, start : start + k]
+
+    def velocity(self) -> np.ndarray:
+        """Finite-difference joint velocity ``(T, nq)`` of q's columns [rad/s, m/s]
+        (central differences, one-sided at the ends; quaternion columns differentiated as
+        numbers)."""
+        return np.gradient(self.q, self.t, axis=0)
+
+    def replace(self, **changes) -> Motion:
+        """A copy with some fields replaced."""
+        d = dict(t=self.t, joint_names=self.joint_names, q=self.q, contact=self.contact,
+                 base_nq=self.base_nq, joint_nq=self.joint_nq)
+        d.update(changes)
+        return Motion(**d)
+
+    def to_npz(self, path) -> None:
+        """Save as NPZ: ``t``, ``q``, ``joint_names``, ``joint_nq``, ``base_nq``,
+        ``contact_left``, ``contact_right``."""
+        np.savez(path, t=self.t, q=self.q, joint_names=np.array(self.joint_names),
+                 joint_nq=np.array(self.joint_nq), base_nq=self.base_nq,
+                 **{f"contact_{k}": v for k, v in self.contact.items()})
+
+    @classmethod
+    def from_npz(cls, path) -> Motion:
+        """Load what :meth:`to_npz` wrote."""
+        with np.load(path) as z:
+            contact = {k[8:]: z[k] for k in z.files if k.startswith("contact_")}
+            return cls(t=z["t"], joint_names=tuple(str(s) for s in z["joint_names"]), q=z["q"],
+                       contact=contact, base_nq=int(z["base_nq"]),
+                       joint_nq=tuple(int(i) for i in z["joint_nq"]))
+
+    def to_csv(self, path, columns: list[str] | None = None) -> None:
+        """Write ``time`` and 1-DoF joint columns (all by default) as CSV [s, rad]."""
+        cols = columns or [n for n, k in zip(self.joint_names, self.joint_nq) if k == 1]
+        data = np.column_stack([self.t] + [self.column(c) for c in cols])
+        np.savetxt(path, data, delimiter=",", header=",".join(["time", *cols]), comments="",
+                   fmt="%.9g")

@@ -1,0 +1,392 @@
+"""``Robot``: a Pinocchio model plus a description of its legs in the sagittal plane.
+
+Each leg is described by its hip-pitch, knee and ankle-pitch joints, its sole frame, the
+sagittal segment lengths *measured from the model* at the neutral pose, and the sign/offset that
+map a joint angle onto DESIGN §4's planar angles (from the downward vertical, positive when the
+distal end is in front)::
+
+    planar angle = sign · q + offset
+
+The robot's own "forward/left/up" is measured too (legs point down, left hip is on the left), so
+Y-up models such as example-robot-data's ``human`` or iCub (x backwards) are turned to face +x
+with z up by a constant base rotation :attr:`Robot.base_rotation`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import LegDetectionError, UnknownNameError, UnknownRobotError, URDFError
+from .library import LIBRARY, library_entry, list_robots
+from .urdfgen import PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
+
+__all__ = ["Leg", "Robot", "PLANAR_BASE"]
+
+SIDES = ("left", "right")
+#: Joint names of our planar floating base (x, z, pitch), in q order.
+PLANAR_BASE = ("base_x", "base_z", "base_pitch")
+
+#: Explicit legs for library robots whose joint names don't say hip/knee/ankle.
+LEG_PRESETS: dict[str, dict[str, dict[str, str | None]]] = {
+    "talos": {
+        s: {"hip": f"leg_{s}_3_joint", "knee": f"leg_{s}_4_joint", "ankle": f"leg_{s}_5_joint",
+            "sole": f"{s}_sole_link"} for s in SIDES
+    },
+    "human": {
+        s: {"hip": f"{s}_hip_Z", "knee": f"{s}_knee_Z", "ankle": f"{s}_ankle_Z",
+            "sole": f"{s}_foot"} for s in SIDES
+    },
+    "bolt": {
+        s: {"hip": f"F{s[0].upper()}_HFE", "knee": f"F{s[0].upper()}_KFE", "ankle": None,
+            "sole": f"F{s[0].upper()}_FOOT"} for s in SIDES
+    },
+}
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg in the sagittal plane.
+
+    ``hip``, ``knee``, ``ankle``: joint names (``ankle`` is ``None`` for point-footed robots such
+    as Bolt); ``sole``: frame name of the contact point. ``thigh``, ``shank``, ``foot`` [m]:
+    sagittal distances hip→knee, knee→ankle and ankle→sole at the neutral pose (``foot`` is
+    the vertical ankle-to-sole height). ``signs``/``offsets`` (hip, knee, ankle): planar angle
+    = sign·q + offset, with the hip angle relative to the torso and the knee/ankle angles
+    relative to their parent segment.
+    """
+
+    side: str
+    hip: str
+    knee: str
+    ankle: str | None
+    sole: str
+    thigh: float
+    shank: float
+    foot: float
+    signs: tuple[float, float, float]
+    offsets: tuple[float, float, float]
+
+    @property
+    def length(self) -> float:
+        """Thigh + shank [m]."""
+        return self.thigh + self.shank
+
+
+def _side_of(name: str) -> str | None:
+    n = name
+    if re.search(r"(^|[_\W])left([_\W]|$)", n, re.I) or re.match(r"^(l_|L(?=[A-Z])|FL_)", n):
+        return "left"
+    if re.search(r"(^|[_\W])right([_\W]|$)", n, re.I) or re.match(r"^(r_|R(?=[A-Z])|FR_)", n):
+        return "right"
+    return None
+
+
+_ROLE_PATTERNS = {
+    "hip": r"hip|hfe",
+    "knee": r"knee|kfe",
+    "ankle": r"ankle",
+}
+
+
+class Robot:
+    """A robot model (Pinocchio) with its legs described for sagittal imitation.
+
+    Attributes: ``name``; ``model``/``data`` (``pin.Model``/``pin.Data``); ``visual_model``
+    (``pin.GeometryModel`` or ``None`` when the URDF has no visual geometry); ``legs``
+    (``{"left": Leg, "right": Leg}``); ``base`` (``"planar"``, ``"free"`` or ``"fixed"``);
+    ``base_rotation`` (3×3, turns the model to face +x with z up); ``package_dir``;
+    ``urdf_path`` (``None`` for in-memory models).
+    """
+
+    def __init__(self, name: str, model: pin.Model, visual_model: pin.GeometryModel | None,
+                 legs: Mapping[str, Mapping[str, str | None]] | None = None,
+                 package_dir: Path | None = None, urdf_path: Path | None = None):
+        self.name = name
+        self.model = model
+        self.data = model.createData()
+        self.visual_model = visual_model if visual_model is not None and visual_model.ngeoms else None
+        self.package_dir = package_dir
+        self.urdf_path = urdf_path
+        names = list(model.names)[1:]
+        if all(b in names for b in PLANAR_BASE):
+            self.base = "planar"
+        elif model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer":
+            self.base = "free"
+        else:
+            self.base = "fixed"
+        spec = self._resolve_leg_names(legs)
+        self.base_rotation = np.eye(3)
+        q0 = pin.neutral(model)
+        self.base_rotation = self._measure_orientation(spec, q0)
+        self.legs: dict[str, Leg] = {s: self._measure_leg(s, spec[s]) for s in SIDES}
+        self.neutral = self._grounded_neutral()
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_urdf(cls, path: str | Path, legs: Mapping[str, Mapping[str, str | None]] | None = None,
+                  *, name: str | None = None, package_dir: str | Path | None = None,
+                  floating: bool | None = None) -> Robot:
+        """Load a URDF. ``legs``: ``{"left": {"hip":…, "knee":…, "ankle":…, "sole":…},
+        "right": {…}}`` (joint/frame names), auto-detected from names when omitted.
+
+        ``floating``: add a free-flyer root joint (default: yes, unless the URDF already has
+        our planar base joints). ``package_dir``: folder resolving ``package://`` meshes.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise URDFError(f"URDF file not found: {path}")
+        text = path.read_text(errors="replace")
+        if floating is None:
+            floating = not all(f'name="{b}"' in text for b in PLANAR_BASE)
+        pkg = [str(package_dir)] if package_dir else [str(path.parent)]
+        try:
+            if floating:
+                model, _, visual = pin.buildModelsFromUrdf(str(path), pkg, pin.JointModelFreeFlyer())
+            else:
+                model, _, visual = pin.buildModelsFromUrdf(str(path), pkg)
+        except Exception as e:  # Pinocchio raises ValueError/RuntimeError on bad files/meshes
+            try:
+                model = (pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer()) if floating
+                         else pin.buildModelFromUrdf(str(path)))
+                visual = None
+            except Exception:
+                raise URDFError(f"cannot read URDF {path}: {e}") from None
+        return cls(name or model.name or path.stem, model, visual, legs,
+                   Path(pkg[0]), path)
+
+    @classmethod
+    def from_spec(cls, spec: PlanarBipedSpec) -> Robot:
+        """Build one of our planar bipeds from its spec (the same text ``urdf/`` holds)."""
+        xml = planar_biped_urdf(spec)
+        with tempfile.TemporaryDirectory() as tmp:
+            p = Path(tmp) / f"{spec.name}.urdf"
+            p.write_text(xml)
+            model, _, visual = pin.buildModelsFromUrdf(str(p), [tmp])
+        robot = cls(spec.name, model, visual)
+        robot.spec = spec
+        return robot
+
+    @classmethod
+    def from_library(cls, name: str) -> Robot:
+        """A named robot: our planar models (``hoap2``, ``case1_demonstrator``, …) or an
+        example-robot-data model (``human``, ``talos``, ``romeo``, ``icub``, ``g1``, ``bolt``).
+        :func:`gdimitate.list_robots` lists the names."""
+        if name in PLANAR_MODELS:
+            return cls.from_spec(PLANAR_MODELS[name])
+        if name not in LIBRARY:
+            raise UnknownRobotError(name, list_robots())
+        path, pkg = library_entry(name)
+        return cls.from_urdf(path, LEG_PRESETS.get(name), name=name, package_dir=pkg,
+                             floating=True)
+
+    # ------------------------------------------------------------------ leg detection
+    def _resolve_leg_names(self, legs) -> dict[str, dict[str, str | None]]:
+        model = self.model
+        joints = list(model.names)[1:]
+        frames = [f.name for f in model.frames]
+        if legs is not None:
+            out = {}
+            for s in SIDES:
+                if s not in legs:
+                    raise LegDetectionError(f"legs= must give 'left' and 'right'; got {list(legs)}")
+                d = dict(legs[s])
+                for role in ("hip", "knee", "ankle"):
+                    j = d.get(role)
+                    if j is None and role == "ankle":
+                        continue
+                    if j not in joints:
+                        raise UnknownNameError("joint", j, joints)
+                if d.get("sole") not in frames:
+                    raise UnknownNameError("frame", d.get("sole"), frames)
+                out[s] = {k: d.get(k) for k in ("hip", "knee", "ankle", "sole")}
+            return out
+        # Auto-detection: side from name tokens, role from 'hip'/'knee'/'ankle' (or HFE/KFE),
+        # the pitch joint among candidates chosen geometrically later (axis ⟂ sagittal plane).
+        out = {}
+        for s in SIDES:
+            d: dict[str, str | None] = {}
+            for role, pat in _ROLE_PATTERNS.items():
+                cands = [j for j in joints if _side_of(j) == s and re.search(pat, j, re.I)
+                         and model.joints[model.getJointId(j)].nv == 1]
+                if not cands:
+                    if role == "ankle":
+                        d[role] = None
+                        continue
+                    raise LegDetectionError(
+                        f"cannot find the {s} {role} joint of {self.name!r}: no 1-DoF joint name "
+                        f"has a {s}-side token (left/l_/L…/FL_) and matches /{pat}/i. Joints: "
+                        f"{joints}. Pass legs={{'left': {{'hip': …, 'knee': …, 'ankle': …, "
+                        f"'sole': …}}, 'right': {{…}}}} explicitly."
+                    )
+                d[role] = self._pick_pitch(cands) if len(cands) > 1 else cands[0]
+            bodies = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+            soles = []
+            for pat in (r"sole", r"foot", r"toe", r"ankle"):  # first that matches, lowest of it
+                soles = soles or [f for f in bodies if _side_of(f) == s and re.search(pat, f, re.I)]
+            if not soles:
+                raise LegDetectionError(
+                    f"cannot find the {s} sole frame of {self.name!r}: no body frame name with a "
+                    f"{s}-side token matches /sole/, /foot/, /toe/ or /ankle/. Pass legs= "
+                    "explicitly."
+                )
+            d["sole"] = self._lowest_frame(soles)
+            out[s] = d
+        return out
+
+    def _joint_axis_world(self, joint: str, q: np.ndarray) -> np.ndarray:
+        jid = self.model.getJointId(joint)
+        pin.computeJointJacobians(self.model, self.data, q)
+        J = pin.getJointJacobian(self.model, self.data, jid, pin.LOCAL_WORLD_ALIGNED)
+        return J[3:, self.model.joints[jid].idx_v]
+
+    def _pick_pitch(self, cands: list[str]) -> str:
+        """Among same-side candidates, the joint whose axis is closest to the lateral axis."""
+        q0 = pin.neutral(self.model)
+        pin.framesForwardKinematics(self.model, self.data, q0)
+        # lateral axis from the hips' side tokens is not known yet: use the axis most
+        # perpendicular to the leg (hip → lowest frame) and to the other candidates' mean axis.
+        axes = [self._joint_axis_world(c, q0) for c in cands]
+        lat = self._lateral_guess()
+        score = [abs(float(a @ lat)) for a in axes]
+        return cands[int(np.argmax(score))]
+
+    def _lateral_guess(self) -> np.ndarray:
+        q0 = pin.neutral(self.model)
+        pin.forwardKinematics(self.model, self.data, q0)
+        left = [self.data.oMi[i].translation for i, n in enumerate(self.model.names)
+                if i > 0 and _side_of(n) == "left"]
+        right = [self.data.oMi[i].translation for i, n in enumerate(self.model.names)
+                 if i > 0 and _side_of(n) == "right"]
+        if not left or not right:
+            return np.array([0.0, 1.0, 0.0])
+        v = np.mean(left, axis=0) - np.mean(right, axis=0)
+        return v / (np.linalg.norm(v) or 1.0)
+
+    def _lowest_frame(self, frames: list[str]) -> str:
+        q0 = pin.neutral(self.model)
+        pin.framesForwardKinematics(self.model, self.data, q0)
+        # "lowest" along the leg direction: farthest from the root
+        d = [np.linalg.norm(self.data.oMf[self.model.getFrameId(f)].translation) for f in frames]
+        return frames[int(np.argmax(d))]
+
+    # ------------------------------------------------------------------ measurements
+    def _pos(self, joint: str | None = None, frame: str | None = None) -> np.ndarray:
+        if joint is not None:
+            return self.data.oMi[self.model.getJointId(joint)].translation.copy()
+        return self.data.oMf[self.model.getFrameId(frame)].translation.copy()
+
+    def _measure_orientation(self, spec, q0) -> np.ndarray:
+        pin.framesForwardKinematics(self.model, self.data, q0)
+        up = np.mean([self._pos(spec[s]["hip"]) - self._pos(frame=spec[s]["sole"]) for s in SIDES],
+                     axis=0)
+        up /= np.linalg.norm(up)
+        left = self._pos(spec["left"]["hip"]) - self._pos(spec["right"]["hip"])
+        left -= (left @ up) * up
+        if np.linalg.norm(left) < 1e-6:
+            raise LegDetectionError(f"{self.name}: the left and right hips coincide; "
+                                    "cannot tell the sagittal plane")
+        left /= np.linalg.norm(left)
+        fwd = np.cross(left, up)
+        R0 = np.vstack([fwd, left, up])  # rows: world x, y, z expressed in model coordinates
+        if self.base != "free" and not np.allclose(R0, np.eye(3), atol=1e-6):
+            raise LegDetectionError(
+                f"{self.name}: a non-floating model must face +x with z up (found forward "
+                f"{np.round(fwd, 3)}, up {np.round(up, 3)})")
+        return R0 if self.base == "free" else np.eye(3)
+
+    def _measure_leg(self, side: str, names) -> Leg:
+        q0 = pin.neutral(self.model)
+        if self.base == "free":
+            q0[3:7] = pin.Quaternion(self.base_rotation).coeffs()
+        pin.framesForwardKinematics(self.model, self.data, q0)
+        hip, knee = self._pos(names["hip"]), self._pos(names["knee"])
+        sole = self._pos(frame=names["sole"])
+        ankle = self._pos(names["ankle"]) if names["ankle"] else sole
+
+        def ang(v):  # planar angle of vector v from the downward vertical, + forward
+            return math.atan2(v[0], -v[2])
+
+        th_off = ang(knee - hip)
+        sh_off = ang(ankle - knee)
+        signs = []
+        for role in ("hip", "knee", "ankle"):
+            j = names[role]
+            if j is None:
+                signs.append(1.0)
+                continue
+            a = self._joint_axis_world(j, q0)
+            if abs(a[1]) < 0.9:
+                raise LegDetectionError(
+                    f"{self.name}: {side} {role} joint {j!r} turns about {np.round(a, 3)}, not "
+                    "about the lateral axis; pass the pitch joint in legs=")
+            signs.append(-float(np.sign(a[1])))
+        return Leg(
+            side=side, hip=names["hip"], knee=names["knee"], ankle=names["ankle"],
+            sole=names["sole"],
+            thigh=float(np.hypot(*(knee - hip)[[0, 2]])),
+            shank=float(np.hypot(*(ankle - knee)[[0, 2]])),
+            foot=float(ankle[2] - sole[2]),
+            signs=(signs[0], signs[1], signs[2]),
+            offsets=(th_off, sh_off - th_off, 0.0),
+        )
+
+    def _grounded_neutral(self) -> np.ndarray:
+        q = pin.neutral(self.model)
+        if self.base == "free":
+            q[3:7] = pin.Quaternion(self.base_rotation).coeffs()
+        pin.framesForwardKinematics(self.model, self.data, q)
+        zmin = min(self._pos(frame=self.legs[s].sole)[2] for s in SIDES)
+        if self.base == "free":
+            q[2] -= zmin
+        elif self.base == "planar":
+            q[self.idx_q("base_z")] -= zmin
+        return q
+
+    # ------------------------------------------------------------------ queries
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Model joint names in Pinocchio order (without ``universe``)."""
+        return tuple(self.model.names)[1:]
+
+    @property
+    def mass(self) -> float:
+        """Total mass [kg] (Pinocchio)."""
+        return float(pin.computeTotalMass(self.model))
+
+    def idx_q(self, joint: str) -> int:
+        """Index in q of a 1-DoF joint (the first index for multi-DoF joints)."""
+        if not self.model.existJointName(joint):
+            raise UnknownNameError("joint", joint, self.joint_names)
+        return int(self.model.joints[self.model.getJointId(joint)].idx_q)
+
+    def idx_v(self, joint: str) -> int:
+        """Index in v of a joint (the first for multi-DoF joints)."""
+        if not self.model.existJointName(joint):
+            raise UnknownNameError("joint", joint, self.joint_names)
+        return int(self.model.joints[self.model.getJointId(joint)].idx_v)
+
+    def frame_id(self, frame: str) -> int:
+        """Pinocchio frame id; :class:`UnknownNameError` lists the valid names."""
+        if not self.model.existFrame(frame):
+            raise UnknownNameError("frame", frame, [f.name for f in self.model.frames])
+        return int(self.model.getFrameId(frame))
+
+    def com(self, q: np.ndarray) -> np.ndarray:
+        """Whole-body centre of mass [m] for q ``(nq,)`` → ``(3,)`` or ``(T, nq)`` → ``(T, 3)``."""
+        q = np.asarray(q, dtype=float)
+        if q.ndim == 1:
+            return pin.centerOfMass(self.model, self.data, q).copy()
+        return np.array([pin.centerOfMass(self.model, self.data, qi) for qi in q])
+
+    def __repr__(self) -> str:
+        L = self.legs["left"]
+        return (f"Robot({self.name!r}, base={self.base}, nq={self.model.nq}, mass={self.mass:.2f} kg, "
+                f"thigh={L.thigh:.4f} m, shank={L.shank:.4f} m, foot={L.foot:.4f} m)")
