@@ -112,7 +112,8 @@ class Robot:
         self.name = name
         self.model = model
         self.data = model.createData()
-        self.visual_model = visual_model if visual_model is not None and visual_model.ngeoms else None
+        has_geometry = visual_model is not None and visual_model.ngeoms > 0
+        self.visual_model = visual_model if has_geometry else None
         self.package_dir = package_dir
         self.urdf_path = urdf_path
         names = list(model.names)[1:]
@@ -149,7 +150,8 @@ class Robot:
         pkg = [str(package_dir)] if package_dir else [str(path.parent)]
         try:
             if floating:
-                model, _, visual = pin.buildModelsFromUrdf(str(path), pkg, pin.JointModelFreeFlyer())
+                model, _, visual = pin.buildModelsFromUrdf(
+                    str(path), pkg, pin.JointModelFreeFlyer())
             else:
                 model, _, visual = pin.buildModelsFromUrdf(str(path), pkg)
         except Exception as e:  # Pinocchio raises ValueError/RuntimeError on bad files/meshes
@@ -388,5 +390,6 @@ class Robot:
 
     def __repr__(self) -> str:
         L = self.legs["left"]
-        return (f"Robot({self.name!r}, base={self.base}, nq={self.model.nq}, mass={self.mass:.2f} kg, "
+        return (f"Robot({self.name!r}, base={self.base}, nq={self.model.nq}, "
+                f"mass={self.mass:.2f} kg, "
                 f"thigh={L.thigh:.4f} m, shank={L.shank:.4f} m, foot={L.foot:.4f} m)")

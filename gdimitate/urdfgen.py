@@ -99,7 +99,8 @@ def _inertial(mass: float, com: tuple[float, float, float], ixx: float, iyy: flo
     return (
         f'    <inertial>\n      <origin xyz="{" ".join(_f(c) for c in com)}" rpy="0 0 0"/>\n'
         f'      <mass value="{_f(mass)}"/>\n'
-        f'      <inertia ixx="{_f(ixx)}" ixy="0" ixz="0" iyy="{_f(iyy)}" iyz="0" izz="{_f(izz)}"/>\n'
+        f'      <inertia ixx="{_f(ixx)}" ixy="0" ixz="0" iyy="{_f(iyy)}" iyz="0" '
+        f'izz="{_f(izz)}"/>\n'
         "    </inertial>\n"
     )
 
@@ -144,8 +145,8 @@ def planar_biped_urdf(spec: PlanarBipedSpec) -> str:
         f'<limit lower="-1.57" upper="1.57" {lim}/>\n  </joint>\n'
     )
     m_torso = m * (1.0 - 2.0 * sum(MASS_FRACTIONS.values()))
-    out.append(f'  <link name="torso">\n{_rod(m_torso, spec.torso, spec.torso / 2, 0.1 * L, "torso")}'
-               f"  </link>\n")
+    torso = _rod(m_torso, spec.torso, spec.torso / 2, 0.1 * L, "torso")
+    out.append(f'  <link name="torso">\n{torso}  </link>\n')
     for side, sgn in (("left", 1.0), ("right", -1.0)):
         y = sgn * spec.hip_width / 2
         limits = {"hip": spec.hip_limits, "knee": spec.knee_limits, "ankle": spec.ankle_limits}
