@@ -1,0 +1,100 @@
+"""Demonstrator and imitator in one scene: side by side, or the demonstrator as a ghost."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import ViewerError
+from .scene import Style
+from .viewer import Viewer
+
+__all__ = ["compare", "leg_length"]
+
+_GHOST_COLOR = (0.55, 0.75, 1.0)
+
+
+def leg_length(robot: object) -> float:
+    """Hip-to-sole distance [m] of the robot's first leg at its neutral configuration
+    (``nan`` if the robot has no legs with ``.hip`` and ``.sole``)."""
+    model: pin.Model = robot.model
+    for leg in (getattr(robot, "legs", None) or {}).values():
+        hip, sole = getattr(leg, "hip", None), getattr(leg, "sole", None)
+        if hip and sole and model.existJointName(hip) and model.existFrame(sole):
+            data = model.createData()
+            pin.framesForwardKinematics(model, data, pin.neutral(model))
+            a = data.oMi[model.getJointId(hip)].translation
+            b = data.oMf[model.getFrameId(sole)].translation
+            return float(np.linalg.norm(a - b))
+    return float("nan")
+
+
+def compare(demonstrator: object, demo_motion: object, imitator: object,
+            imitator_motion: object, *, layout: str = "side", gap: float = 1.2,
+            ghost_scale: float | None = None,
+            demo_force: Mapping[str, np.ndarray] | None = None,
+            imitator_force: Mapping[str, np.ndarray] | None = None,
+            fps: float = 30.0, html: str | os.PathLike | None = None,
+            viewer: Viewer | None = None, port: int | None = None, open_browser: bool = False,
+            camera: Sequence[float] | None = None, style: Style | None = None) -> Viewer:
+    """Show a demonstrator and an imitator over their motions, animated, in one scene.
+
+    Args:
+        demonstrator, demo_motion: the demonstrating robot and its ``Motion``.
+        imitator, imitator_motion: the imitating robot and its ``Motion`` or
+            ``AdaptedMotion``.
+        layout: ``"side"`` — the demonstrator at y = -gap/2, the imitator at y = +gap/2;
+            ``"ghost"`` — the demonstrator as a translucent copy over the imitator, scaled
+            by ``ghost_scale``.
+        gap: distance [m] between the two in the ``"side"`` layout.
+        ghost_scale: uniform scale of the ghost; default imitator leg length / demonstrator
+            leg length (hip to sole, neutral pose), 1 if unknown.
+        demo_force, imitator_force: leg name → ``(T,)`` force direction [rad] of each (see
+            :meth:`Viewer.show`).
+        fps: animation frames per second.
+        html: if given, also write the self-contained page there.
+        viewer: draw into this viewer (cleared first) instead of starting a new one.
+        port, open_browser: for the new viewer (see :meth:`Viewer.start`).
+        camera: camera position (3,) [m]; default: to the side, looking at the scene.
+        style: decoration sizes and colours.
+
+    Returns:
+        The viewer (call :meth:`Viewer.close` when done, unless you passed ``viewer``).
+    """
+    if layout not in ("side", "ghost"):
+        raise ViewerError(f"unknown layout {layout!r}; valid layouts: 'side', 'ghost'")
+    own = viewer is None
+    v = Viewer.start(port, open_browser, style=style) if own else viewer
+    try:
+        if not own:
+            v.clear()
+        if layout == "side":
+            v.show(demonstrator, demo_motion, name="demonstrator", offset=(0, -gap / 2, 0),
+                   force_directions=demo_force)
+            v.show(imitator, imitator_motion, name="imitator", offset=(0, gap / 2, 0),
+                   force_directions=imitator_force)
+        else:
+            if ghost_scale is None:
+                ratio = leg_length(imitator) / leg_length(demonstrator)
+                ghost_scale = ratio if np.isfinite(ratio) and ratio > 0 else 1.0
+            v.show(imitator, imitator_motion, name="imitator", force_directions=imitator_force)
+            v.show(demonstrator, demo_motion, name="demonstrator", scale=ghost_scale,
+                   color=_GHOST_COLOR, opacity=v.style.ghost_opacity,
+                   force_directions=demo_force, foot_paths=False)
+        v.animate(fps=fps)
+        track = v.tracks["imitator"]
+        base = track.frames.com[0] + track.offset if track.frames is not None else np.zeros(3)
+        target = np.array([base[0], 0.0, max(float(base[2]), 0.5)])
+        pos = np.asarray(camera, dtype=float) if camera is not None else (
+            target + np.array([1.2, -3.6 - gap, 0.6]))
+        v.set_camera(pos, target)
+        if html is not None:
+            v.save_html(html)
+    except BaseException:
+        if own:
+            v.close()
+        raise
+    return v

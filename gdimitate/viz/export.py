@@ -1,0 +1,81 @@
+"""Self-contained HTML: writing meshcat's ``static_html()`` to a file, and notebook display.
+
+meshcat's static page embeds the viewer's JavaScript and every drawing command (meshes
+included, base64) so it plays offline; :func:`network_references` lists anything in a page
+that would still reach out to the network (it should find nothing).
+"""
+
+from __future__ import annotations
+
+import html as _html
+import os
+import re
+from pathlib import Path
+
+from ..errors import ViewerError
+
+__all__ = ["check_writable", "inline_html", "network_references", "write_html"]
+
+# Attributes and JS/CSS constructs that make a browser fetch a URL when the page loads.
+_FETCHING = re.compile(
+    r"""(?:\b(?:src|href|data|poster|srcset)\s*=\s*["']?\s*(?:https?:)?//"""
+    r"""|@import\s+(?:url\()?\s*["']?\s*(?:https?:)?//"""
+    r"""|\burl\(\s*["']?\s*(?:https?:)?//"""
+    r"""|\bimport\s*\(?\s*["']\s*(?:https?:)?//"""
+    r"""|\bfrom\s+["']\s*(?:https?:)?//"""
+    r"""|\bfetch\(\s*["']\s*(?:https?:)?//)""",
+    re.IGNORECASE,
+)
+
+
+def network_references(html: str) -> list[str]:
+    """Snippets of ``html`` that would load something over the network when the page opens
+    (``<script src="https://...">``, ``<link href="//...">``, CSS ``url(http...)``, ES
+    ``import ... from "https://..."``, ``fetch("http...")``). Empty for a self-contained page.
+
+    URLs that only appear inside strings (licence headers, error messages) are not counted.
+    """
+    return [html[max(m.start() - 40, 0): m.end() + 60] for m in _FETCHING.finditer(html)]
+
+
+def check_writable(path: str | os.PathLike) -> Path:
+    """``path`` as a ``Path`` if a file can be written there (an existing file is left as it
+    is); else :class:`ViewerError` saying why."""
+    p = Path(path).expanduser()
+    if p.is_dir():
+        raise ViewerError(f"cannot write HTML to {p}: it is a folder; give a file name")
+    if not p.parent.is_dir():
+        raise ViewerError(f"cannot write HTML to {p}: folder {p.parent} does not exist")
+    existed = p.exists()
+    try:
+        with open(p, "ab"):
+            pass
+    except OSError as e:
+        raise ViewerError(f"cannot write HTML to {p}: {e.strerror or e}") from e
+    if not existed:
+        p.unlink(missing_ok=True)
+    return p
+
+
+def write_html(html: str, path: str | os.PathLike) -> Path:
+    """Write ``html`` to ``path`` (UTF-8); return the absolute path.
+
+    Raises:
+        ViewerError: if the folder does not exist or the file cannot be written.
+    """
+    p = check_writable(path)
+    try:
+        p.write_text(html, encoding="utf-8")
+    except OSError as e:
+        raise ViewerError(f"cannot write HTML to {p}: {e.strerror or e}") from e
+    return p.resolve()
+
+
+def inline_html(html: str, height: int = 480) -> str:
+    """An ``<iframe srcdoc=...>`` snippet that shows the self-contained page ``html`` inside
+    a notebook cell of ``height`` pixels (needs no server and no network)."""
+    return (
+        f'<div style="height: {int(height)}px; width: 100%; overflow: hidden; resize: both">'
+        f'<iframe srcdoc="{_html.escape(html, quote=True)}" '
+        'style="width: 100%; height: 100%; border: none"></iframe></div>'
+    )

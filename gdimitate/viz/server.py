@@ -1,0 +1,276 @@
+"""A meshcat server process that we own, and a connection to it that cannot hang.
+
+``meshcat.Visualizer()`` spawns its server with stdout/stderr piped and never read: once a
+browser disconnects mid-transfer the server's tracebacks fill the pipe and every later call
+blocks forever (DESIGN §10). Here the server's output goes to a log file (or ``/dev/null``),
+the ports are chosen by us (a free one, or the one asked for, with a clear error if it is
+taken), every request on the zmq socket has a timeout, and :meth:`MeshcatServer.close` (also
+run at interpreter exit) terminates the process.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import weakref
+from pathlib import Path
+
+import meshcat
+import umsgpack
+import zmq
+from meshcat.visualizer import ViewerWindow
+
+from ..errors import ViewerError
+
+__all__ = ["MeshcatServer", "PortInUseError", "connect", "free_port", "port_in_use"]
+
+_SERVE_SCRIPT = Path(__file__).with_name("_serve.py")
+_LOCALHOST = "127.0.0.1"
+
+
+class PortInUseError(ViewerError):
+    """A port asked for is already taken by another process."""
+
+    def __init__(self, port: int, what: str = "web"):
+        self.port = port
+        super().__init__(
+            f"{what} port {port} is already in use; pass another port, or port=None to let "
+            "gdimitate choose a free one"
+        )
+
+
+def port_in_use(port: int) -> bool:
+    """Whether a TCP ``port`` cannot be bound on all interfaces (as meshcat's web server does)."""
+    for host in ("", _LOCALHOST):
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                s.bind((host, port))
+            except OSError:
+                return True
+    return False
+
+
+def free_port() -> int:
+    """A TCP port that is free right now (the OS picks it; another process may still take it)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((_LOCALHOST, 0))
+        return int(s.getsockname()[1])
+
+
+class _Window(ViewerWindow):
+    """meshcat's ``ViewerWindow`` talking to an existing server, with a timeout on every reply.
+
+    A request that gets no reply within ``timeout_s`` raises :class:`ViewerError` (and the
+    socket is replaced, since a zmq REQ socket is unusable after an unanswered request).
+    """
+
+    def __init__(self, zmq_url: str, web_url: str | None = None, timeout_s: float = 30.0):
+        self.server_proc = None
+        self.zmq_url = zmq_url
+        self.timeout_s = float(timeout_s)
+        self.connect_zmq()
+        self.web_url = web_url if web_url is not None else self.request_web_url()
+
+    def connect_zmq(self) -> None:
+        sock = self.context.socket(zmq.REQ)
+        sock.setsockopt(zmq.LINGER, 0)
+        sock.setsockopt(zmq.RCVTIMEO, int(self.timeout_s * 1000))
+        sock.setsockopt(zmq.SNDTIMEO, int(self.timeout_s * 1000))
+        sock.connect(self.zmq_url)
+        self.zmq_socket = sock
+
+    def _recv(self, what: str) -> bytes:
+        try:
+            return self.zmq_socket.recv()
+        except zmq.Again:
+            self.zmq_socket.close(linger=0)
+            self.connect_zmq()
+            raise ViewerError(
+                f"the meshcat server at {self.zmq_url} did not answer {what!r} within "
+                f"{self.timeout_s:g} s (is it still running?)"
+            ) from None
+
+    def _send(self, frames: list[bytes], what: str) -> bytes:
+        try:
+            self.zmq_socket.send_multipart(frames)
+        except zmq.Again:
+            raise ViewerError(f"could not send {what!r} to the meshcat server at "
+                              f"{self.zmq_url}") from None
+        return self._recv(what)
+
+    def request_web_url(self) -> str:
+        return self._send([b"url"], "url").decode("utf-8")
+
+    def send(self, command) -> None:  # noqa: ANN001  (meshcat command object)
+        data = command.lower()
+        reply = self._send(
+            [data["type"].encode("utf-8"), data["path"].encode("utf-8"), umsgpack.packb(data)],
+            data["type"],
+        )
+        if reply.startswith(b"error"):
+            raise ViewerError(f"meshcat server refused {data['type']!r}: {reply.decode()}")
+
+    def get_scene(self) -> str:
+        return self._send([b"get_scene"], "get_scene").decode("utf-8")
+
+    def wait(self) -> str:  # blocks until a browser connects: only with a timeout
+        return self._send([b"wait"], "wait").decode("utf-8")
+
+    def close(self) -> None:
+        self.zmq_socket.close(linger=0)
+
+
+def connect(zmq_url: str, web_url: str | None = None, timeout_s: float = 30.0
+            ) -> meshcat.Visualizer:
+    """A ``meshcat.Visualizer`` on a running server at ``zmq_url`` (e.g. ``tcp://127.0.0.1:6000``).
+
+    Every request times out after ``timeout_s`` seconds with :class:`ViewerError` instead of
+    blocking. Prints nothing (unlike ``meshcat.Visualizer(zmq_url)``).
+    """
+    return meshcat.Visualizer(window=_Window(zmq_url, web_url, timeout_s))
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=5)
+
+
+class MeshcatServer:
+    """A meshcat server (web page + zmq command socket) running as our own child process.
+
+    Create one with :meth:`start`; stop it with :meth:`close` (or use it as a context
+    manager; it is also stopped when garbage-collected or at interpreter exit).
+
+    Attributes:
+        web_url: the page to open in a browser, e.g. ``http://127.0.0.1:7001/static/``.
+        zmq_url: where drawing commands go, e.g. ``tcp://127.0.0.1:6001``.
+        port: the web port.
+        log_path: the file that receives the server's output (``None`` for ``/dev/null``).
+    """
+
+    def __init__(self, proc: subprocess.Popen, web_url: str, zmq_url: str, port: int,
+                 log_path: Path | None, owns_log: bool):
+        self.proc = proc
+        self.web_url = web_url
+        self.zmq_url = zmq_url
+        self.port = port
+        self.log_path = log_path
+        self._finalizer = weakref.finalize(self, _stop, proc)
+        self._owns_log = owns_log
+
+    @classmethod
+    def start(cls, port: int | None = None, *, zmq_port: int | None = None,
+              log: str | os.PathLike | None = "auto", timeout_s: float = 20.0,
+              ) -> MeshcatServer:
+        """Start a server and wait (at most ``timeout_s`` s) until it listens.
+
+        Args:
+            port: web port; ``None`` picks a free one. If the port is taken,
+                :class:`PortInUseError` is raised at once.
+            zmq_port: port of the zmq command socket; ``None`` picks a free one.
+            log: file for the server's output; ``"auto"`` (a temporary file, deleted by
+                :meth:`close`) or ``None`` (``/dev/null``).
+            timeout_s: how long to wait for the process to come up.
+        """
+        for p, what in ((port, "web"), (zmq_port, "zmq")):
+            if p is not None and port_in_use(int(p)):
+                raise PortInUseError(int(p), what)
+        attempts = 1 if (port is not None and zmq_port is not None) else 3
+        last = ""
+        for _ in range(attempts):
+            web_p = int(port) if port is not None else free_port()
+            zmq_p = int(zmq_port) if zmq_port is not None else free_port()
+            server = cls._spawn(web_p, zmq_p, log, timeout_s)
+            if isinstance(server, MeshcatServer):
+                return server
+            last = server
+            if "cannot bind" in last and port is not None and port_in_use(int(port)):
+                raise PortInUseError(int(port))
+        raise ViewerError(f"the meshcat server did not start: {last}")
+
+    @classmethod
+    def _spawn(cls, web_p: int, zmq_p: int, log: str | os.PathLike | None, timeout_s: float
+               ) -> MeshcatServer | str:
+        owns_log = log == "auto"
+        if owns_log:
+            fd, name = tempfile.mkstemp(prefix="gdimitate-meshcat-", suffix=".log")
+            os.close(fd)
+            log_path: Path | None = Path(name)
+        else:
+            log_path = Path(log) if log is not None else None
+        # The ready lines are read from a file, so output never fills a pipe.
+        out = open(log_path, "wb") if log_path is not None else None  # noqa: SIM115
+        ready = tempfile.NamedTemporaryFile(prefix="gdimitate-meshcat-ready-", delete=False)
+        ready.close()
+        ready_path = Path(ready.name)
+        try:
+            with open(ready_path, "wb") as ready_out:
+                proc = subprocess.Popen(
+                    [sys.executable, "-u", str(_SERVE_SCRIPT),
+                     "--zmq-url", f"tcp://{_LOCALHOST}:{zmq_p}", "--port", str(web_p)],
+                    stdout=ready_out, stderr=out if out is not None else subprocess.DEVNULL,
+                    stdin=subprocess.DEVNULL, start_new_session=True,
+                )
+            web_url = zmq_url = None
+            deadline = time.monotonic() + timeout_s
+            while time.monotonic() < deadline:
+                text = ready_path.read_text(errors="replace")
+                for line in text.splitlines():
+                    if line.startswith("zmq_url="):
+                        zmq_url = line.split("=", 1)[1].strip()
+                    elif line.startswith("web_url="):
+                        web_url = line.split("=", 1)[1].strip()
+                if web_url and zmq_url:
+                    break
+                if proc.poll() is not None:
+                    err = log_path.read_text(errors="replace")[-2000:] if log_path else ""
+                    text = ready_path.read_text(errors="replace")
+                    return (f"process exited with status {proc.returncode}: "
+                            f"{text.strip()} {err.strip()}").strip()
+                time.sleep(0.05)
+            else:
+                _stop(proc)
+                return f"no answer within {timeout_s:g} s"
+        finally:
+            if out is not None:
+                out.close()
+            ready_path.unlink(missing_ok=True)
+        # Later output of the process (tornado's tracebacks) goes to the log only.
+        return cls(proc, web_url, zmq_url, web_p, log_path, owns_log)
+
+    @property
+    def alive(self) -> bool:
+        """Whether the server process is still running."""
+        return self.proc.poll() is None
+
+    def visualizer(self, timeout_s: float = 30.0) -> meshcat.Visualizer:
+        """A new ``meshcat.Visualizer`` connected to this server (see :func:`connect`)."""
+        if not self.alive:
+            raise ViewerError(f"the meshcat server (pid {self.proc.pid}) is not running")
+        return connect(self.zmq_url, self.web_url, timeout_s)
+
+    def close(self) -> None:
+        """Stop the process (terminate, then kill after 5 s) and delete an automatic log."""
+        self._finalizer()
+        if self._owns_log and self.log_path is not None:
+            self.log_path.unlink(missing_ok=True)
+
+    def __enter__(self) -> MeshcatServer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        state = "running" if self.alive else "stopped"
+        return f"MeshcatServer({self.web_url!r}, zmq={self.zmq_url!r}, {state})"
