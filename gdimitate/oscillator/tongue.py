@@ -99,9 +99,8 @@ def arnold_tongue(
 
     base = params.replace(k=0.0)
     f_free = float(np.ravel(free_running_frequency(base))[0])
-    p = MatsuokaParams(
-        **{**{n: np.ravel(v)[0] for n, v in base.to_dict().items() if n != "k"}, "k": k[:, None, None]}
-    )
+    scalars = {n: np.ravel(v)[0] for n, v in base.to_dict().items() if n != "k"}
+    p = MatsuokaParams(**scalars, k=k[:, None, None])
     shape = (k.size, f.size, 1)
     bank = MatsuokaBank(p, shape=shape)
     if dt is None:
