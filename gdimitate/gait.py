@@ -67,7 +67,8 @@ def _grf_contact(grf_path: Path, t: np.ndarray, threshold: float) -> tuple[dict,
 
 
 def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = None,
-                 grf: str | Path | None = None, contact_threshold: float = 20.0):
+                 grf: str | Path | None = None, contact_threshold: float = 20.0,
+                 base: str = "ground", belt_speed: float | None = None):
     """Read an OpenSim sagittal coordinates file → ``(robot, motion)``.
 
     The file needs ``pelvis_tilt``, ``hip_flexion_r/l``, ``knee_angle_r/l`` and
@@ -81,6 +82,13 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     Contact: from the measured vertical GRF in ``grf`` (an OpenSim GRF ``.mot``; a foot is in
     stance above ``contact_threshold`` [N]); without it, a foot is in stance while its sole is
     within 1 % of the body height of the lower sole.
+
+    ``base``: ``"ground"`` (default) places the floating base so the stance sole stands still on
+    z = 0 — consistent contacts for the adaptor; ``"measured"`` uses the file's
+    ``pelvis_tx``/``pelvis_ty`` plus a treadmill ``belt_speed`` [m/s] (estimated from the
+    stance feet when ``None``), shifted so the stance soles touch z = 0 on average — the
+    measured body motion, whose centre-of-mass acceleration reproduces the measured GRF
+    direction (see ``tests/test_gait.py``).
     """
     from .robot import Robot
     from .sagittal import compose_q, frame_paths, ground_base, robot_motion
@@ -117,8 +125,33 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
         low = np.minimum(zl, zr)
         tol = 0.01 * height
         contact = {"left": zl - low < tol, "right": zr - low < tol}
-    q = ground_base(robot, q, contact)
+    if base == "ground":
+        q = ground_base(robot, q, contact)
+    elif base == "measured":
+        q = _measured_base(robot, q, contact, d, t, belt_speed)
+    else:
+        raise InvalidInputError(f"base must be 'ground' or 'measured'; got {base!r}")
     return robot, robot_motion(robot, t, q, contact)
+
+
+def _measured_base(robot, q, contact, d, t, belt_speed):
+    from .sagittal import frame_paths
+
+    for c in ("pelvis_tx", "pelvis_ty"):
+        if c not in d:
+            raise InvalidInputError(f"base='measured' needs column {c!r}")
+    q = q.copy()
+    ix, iz = robot.idx_q("base_x"), robot.idx_q("base_z")
+    q[:, ix], q[:, iz] = d["pelvis_tx"], d["pelvis_ty"]
+    soles = frame_paths(robot, q, [robot.legs[s].sole for s in ("left", "right")])
+    sole = {s: soles[robot.legs[s].sole] for s in ("left", "right")}
+    if belt_speed is None:  # stance feet ride the belt backwards at -belt_speed
+        v = [np.gradient(sole[s][:, 0], t)[contact[s]] for s in ("left", "right")]
+        belt_speed = -float(np.median(np.concatenate(v)))
+    q[:, ix] = d["pelvis_tx"] - d["pelvis_tx"][0] + belt_speed * t
+    low = [sole[s][contact[s], 2] for s in ("left", "right")]
+    q[:, iz] -= float(np.median(np.concatenate(low)))
+    return q
 
 
 def human_walk(height: float = 1.75):

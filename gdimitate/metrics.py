@@ -94,7 +94,8 @@ def _angle_down(v: np.ndarray) -> np.ndarray:
     return np.arctan2(v[:, 0], -v[:, 2])
 
 
-def force_direction(robot: Robot, motion: Motion, model: str = "segment") -> dict[str, np.ndarray]:
+def force_direction(robot: Robot, motion: Motion, model: str = "segment",
+                    cutoff: float | None = 4.0) -> dict[str, np.ndarray]:
     """Direction of each stance foot's push on the ground, ``{side: (T,)}`` [rad] from the
     downward vertical, positive when it points forward (+x); NaN where the foot is in swing.
 
@@ -102,7 +103,9 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment") -> dic
     sole for legs without an ankle); ``com`` — from the whole-body centre of mass to the sole
     (inverted pendulum); ``grf`` — the reverse of the net ground reaction force
     f = m·(c̈ − g), with c̈ from central finite differences of the Pinocchio centre of mass
-    (in double support both feet get the net direction, as the split is unknown).
+    low-passed at ``cutoff`` [Hz] (2nd-order Butterworth, zero phase; ``None``: unfiltered —
+    the usual gait-analysis practice, as differentiating twice amplifies noise); in double
+    support both feet get the net direction, as the split is unknown.
     """
     if model not in FORCE_MODELS:
         raise UnknownNameError("force model", model, FORCE_MODELS)
@@ -122,6 +125,12 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment") -> dic
             out[s] = _angle_down(sole[s] - c)
     else:
         c = com_path(robot, motion)
+        rate = 1.0 / motion.dt
+        if cutoff is not None and cutoff < rate / 2 and motion.T > 15:
+            from scipy.signal import butter, filtfilt
+
+            b, a = butter(2, cutoff / (rate / 2))
+            c = filtfilt(b, a, c, axis=0)
         acc = np.gradient(np.gradient(c, motion.t, axis=0), motion.t, axis=0)
         f = robot.mass * (acc - np.array([0.0, 0.0, -GRAVITY]))  # GRF on the robot
         for s in SIDES:

@@ -15,7 +15,11 @@ import numpy as np
 
 from .errors import InvalidInputError
 
-__all__ = ["Eq1Result", "eq1", "fk2", "ik2"]
+__all__ = ["Eq1Result", "eq1", "fk2", "ik2", "ROUNDOFF"]
+
+#: |arg| up to 1 + ROUNDOFF counts as feasible: floating-point round-off of a reachable pose
+#: (e.g. a straight leg, arg = 1 + 2e-16) is not an infeasible frame.
+ROUNDOFF = 1e-12
 
 
 def _lengths(pair, what: str) -> tuple[float, float]:
@@ -47,7 +51,8 @@ class Eq1Result(NamedTuple):
     """Result of :func:`eq1`, every field the broadcast shape of the inputs.
 
     ``theta1``, ``theta2``: imitator thigh (absolute) and knee (relative) angles [rad];
-    ``argument``: the unclipped argument of arccos; ``feasible``: ``|argument| ≤ 1``. Where not
+    ``argument``: the unclipped argument of arccos; ``feasible``: ``|argument| ≤ 1`` (up to
+    :data:`ROUNDOFF`). Where not
     feasible, the argument is clipped to ±1 (the nearest reachable angle) and the frame flagged.
     """
 
@@ -71,7 +76,7 @@ def eq1(theta1, theta2, demonstrator=(0.4, 0.6), imitator=(0.1, 0.1)) -> Eq1Resu
     Lm, Lr = lm1 + lm2, lr1 + lr2
     shank = th1 + th2
     arg = ((Lr * lm1 / Lm) * np.cos(th1) + ((Lr * lm2 / Lm) - lr2) * np.cos(shank)) / lr1
-    feasible = np.abs(arg) <= 1.0
+    feasible = np.abs(arg) <= 1.0 + ROUNDOFF
     sign = np.where(th1 < 0.0, -1.0, 1.0)
     r1 = sign * np.arccos(np.clip(arg, -1.0, 1.0))
     return Eq1Result(theta1=r1, theta2=shank - r1, argument=arg, feasible=feasible)

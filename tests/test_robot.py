@@ -1,0 +1,175 @@
+"""Robots: our generated URDFs, library models, measured legs, bad input."""
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yourdfpy
+
+import gdimitate
+from gdimitate import LegDetectionError, UnknownNameError, UnknownRobotError, URDFError
+from gdimitate.library import library_entry
+from gdimitate.robot import Robot
+from gdimitate.sagittal import compose_q, frame_paths, joint_paths, leg_angles
+from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+
+ROOT = Path(__file__).resolve().parents[1]
+LIBRARY = ["human", "talos", "romeo", "icub", "g1", "bolt"]
+
+
+@pytest.mark.parametrize("name", list(PLANAR_MODELS))
+def test_committed_urdf_matches_generator(name):
+    committed = (ROOT / "urdf" / f"{name}.urdf").read_text()
+    assert committed == planar_biped_urdf(PLANAR_MODELS[name]), (
+        f"urdf/{name}.urdf differs from the generator: run `python -m gdimitate.urdfgen urdf`")
+
+
+@pytest.mark.parametrize("name", list(PLANAR_MODELS))
+def test_planar_model_lengths_mass_and_fk_against_pinocchio(name, robot):
+    r = robot(name)
+    spec = PLANAR_MODELS[name]
+    assert r.mass == pytest.approx(spec.mass, rel=1e-12)  # Pinocchio's total mass
+    for leg in r.legs.values():
+        assert (leg.thigh, leg.shank, leg.foot) == pytest.approx(
+            (spec.thigh, spec.shank, spec.foot), abs=1e-12)
+    # DESIGN §4 closed-form FK vs Pinocchio FK at random planar angles
+    rng = np.random.default_rng(0)
+    T = 20
+    torso = rng.uniform(-0.3, 0.3, T)
+    angles = {s: np.column_stack([rng.uniform(-0.8, 0.8, T), rng.uniform(-1.5, 0, T),
+                                  rng.uniform(-0.5, 0.5, T)]) for s in ("left", "right")}
+    q = compose_q(r, torso, angles)
+    for s in ("left", "right"):
+        leg = r.legs[s]
+        hip = joint_paths(r, q, [leg.hip])[leg.hip][:, [0, 2]]
+        knee = joint_paths(r, q, [leg.knee])[leg.knee][:, [0, 2]]
+        ankle = joint_paths(r, q, [leg.ankle])[leg.ankle][:, [0, 2]]
+        sole = frame_paths(r, q, [leg.sole])[leg.sole][:, [0, 2]]
+        t1, t2, t3 = angles[s].T
+        exp_knee = hip + spec.thigh * np.column_stack([np.sin(t1), -np.cos(t1)])
+        exp_ankle = exp_knee + spec.shank * np.column_stack([np.sin(t1 + t2), -np.cos(t1 + t2)])
+        foot = t1 + t2 + t3  # foot's absolute angle; sole is 'foot' below the ankle in the foot
+        exp_sole = exp_ankle + spec.foot * np.column_stack([np.sin(foot), -np.cos(foot)])
+        np.testing.assert_allclose(knee, exp_knee, atol=1e-12)
+        np.testing.assert_allclose(ankle, exp_ankle, atol=1e-12)
+        np.testing.assert_allclose(sole, exp_sole, atol=1e-12)
+    # and the planar angles read back
+    torso2, angles2 = leg_angles(r, q)
+    np.testing.assert_allclose(torso2, torso, atol=1e-14)
+    for s in angles:
+        np.testing.assert_allclose(angles2[s], angles[s], atol=1e-14)
+
+
+@pytest.mark.parametrize("name", LIBRARY)
+def test_library_segment_lengths_against_yourdfpy(name, robot):
+    """Thigh/shank measured by Robot (Pinocchio) vs the same joint origins from yourdfpy's
+    independent URDF forward kinematics, projected onto the sagittal plane."""
+    r = robot(name)
+    path, _ = library_entry(name)
+    u = yourdfpy.URDF.load(str(path), build_scene_graph=True, load_meshes=False,
+                           build_collision_scene_graph=False, load_collision_meshes=False)
+
+    def origin(joint):
+        return u.get_transform(u.joint_map[joint].child, u.base_link)[:3, 3]
+
+    lat = origin(r.legs["left"].hip) - origin(r.legs["right"].hip)
+    lat /= np.linalg.norm(lat)
+    for leg in r.legs.values():
+        ends = [origin(leg.hip), origin(leg.knee)]
+        if leg.ankle:
+            ends.append(origin(leg.ankle))
+        else:
+            sole_link = leg.sole
+            ends.append(u.get_transform(sole_link, u.base_link)[:3, 3])
+
+        def sag(v):
+            return np.linalg.norm(v - (v @ lat) * lat)
+
+        assert leg.thigh == pytest.approx(sag(ends[1] - ends[0]), abs=1e-9)
+        assert leg.shank == pytest.approx(sag(ends[2] - ends[1]), abs=1e-9)
+        assert 0.1 < leg.thigh < 0.6 and 0.1 < leg.shank < 0.6
+
+
+def test_known_lengths_and_masses(robot):
+    # Talos: hip pitch → knee 0.38 m, knee → ankle 0.325 m, ankle → sole 0.107 m (URDF)
+    talos = robot("talos")
+    assert (talos.legs["left"].thigh, talos.legs["left"].shank, talos.legs["left"].foot) == \
+        pytest.approx((0.38, 0.325, 0.107), abs=1e-9)
+    m = pin.buildModelFromUrdf(str(library_entry("talos")[0]), pin.JointModelFreeFlyer())
+    assert talos.mass == pytest.approx(pin.computeTotalMass(m), rel=1e-12)
+    assert robot("bolt").legs["left"].ankle is None
+
+
+@pytest.mark.parametrize("name", LIBRARY + ["hoap2"])
+def test_neutral_pose_stands_on_ground_facing_forward(name, robot):
+    r = robot(name)
+    soles = frame_paths(r, r.neutral[None], [r.legs[s].sole for s in ("left", "right")])
+    zl, zr = (soles[r.legs[s].sole][0, 2] for s in ("left", "right"))
+    assert min(zl, zr) == pytest.approx(0.0, abs=1e-12)
+    hips = joint_paths(r, r.neutral[None], [r.legs[s].hip for s in ("left", "right")])
+    left, right = (hips[r.legs[s].hip][0] for s in ("left", "right"))
+    assert left[1] - right[1] > 0.05  # left hip on +y
+    assert left[2] > zl + 0.3 * r.legs["left"].length  # hips above the feet (z up)
+    # a positive planar thigh angle moves the knee forward (+x)
+    torso, angles = leg_angles(r, r.neutral[None])
+    angles["left"][0, 0] += 0.3
+    q = compose_q(r, torso, angles, template=r.neutral)
+    knee0 = joint_paths(r, r.neutral[None], [r.legs["left"].knee])[r.legs["left"].knee][0]
+    knee1 = joint_paths(r, q, [r.legs["left"].knee])[r.legs["left"].knee][0]
+    assert knee1[0] - knee0[0] > 0.05 * r.legs["left"].thigh
+
+
+def test_list_robots():
+    names = gdimitate.list_robots()
+    for n in ["human", "talos", "romeo", "icub", "g1", "bolt", "hoap2", "case1_demonstrator"]:
+        assert n in names
+
+
+def test_unknown_robot_lists_names():
+    with pytest.raises(UnknownRobotError, match="talos") as e:
+        Robot.from_library("tallos")
+    assert "hoap2" in str(e.value)
+
+
+def test_missing_and_malformed_urdf(tmp_path):
+    with pytest.raises(URDFError, match="not found"):
+        Robot.from_urdf(tmp_path / "nope.urdf")
+    bad = tmp_path / "bad.urdf"
+    bad.write_text("<robot name='x'><link name='a'></robot")
+    with pytest.raises(URDFError, match="cannot read"):
+        Robot.from_urdf(bad)
+
+
+def _two_leg_urdf(names):
+    joints = []
+    links = ['<link name="base"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" '
+             'iyy="1" iyz="0" izz="1"/></inertial></link>']
+    for side, y in (("a", 0.1), ("b", -0.1)):
+        parent = "base"
+        for k, n in enumerate(names):
+            child = f"{side}{n}_link"
+            z = 0 if k == 0 else -0.3
+            joints.append(f'<joint name="{side}{n}" type="revolute"><parent link="{parent}"/>'
+                          f'<child link="{child}"/><origin xyz="0 {y if k == 0 else 0} {z}"/>'
+                          '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" '
+                          'velocity="1"/></joint>')
+            links.append(f'<link name="{child}"><inertial><mass value="1"/><inertia ixx="1" '
+                         'ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>')
+            parent = child
+    return f'<robot name="x">{"".join(links)}{"".join(joints)}</robot>'
+
+
+def test_undetectable_legs_say_what_was_tried(tmp_path):
+    p = tmp_path / "x.urdf"
+    p.write_text(_two_leg_urdf(["j1", "j2", "j3"]))
+    with pytest.raises(LegDetectionError, match="hip.*legs=") as e:
+        Robot.from_urdf(p)
+    assert "aj1" in str(e.value)  # lists the joints it saw
+    # explicit legs work
+    legs = {"left": {"hip": "aj1", "knee": "aj2", "ankle": "aj3", "sole": "aj3_link"},
+            "right": {"hip": "bj1", "knee": "bj2", "ankle": "bj3", "sole": "bj3_link"}}
+    r = Robot.from_urdf(p, legs=legs)
+    assert r.legs["left"].thigh == pytest.approx(0.3)
+    with pytest.raises(UnknownNameError, match="valid joints"):
+        Robot.from_urdf(p, legs={**legs, "left": {**legs["left"], "knee": "nope"}})
