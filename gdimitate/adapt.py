@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InvalidInputError, LegMatchError, UnknownNameError
-from .metrics import force_direction, hip_height_ratio, joint_limit_margins
+from .metrics import foot_heights, force_direction, hip_height_ratio, joint_limit_margins
 from .motion import Motion
 from .planar import eq1
 from .robot import SIDES, Robot
@@ -34,7 +34,8 @@ class AdaptationReport:
     leg ``(T,)`` imitator − demonstrator push direction [rad] under ``force_model`` (NaN in
     swing), and its max; ``hip_height_ratio_error_max``: max |hip-over-ankle height / leg
     length − the demonstrator's| over all frames; ``joint_limit_violation``: per joint the
-    largest excursion beyond a position limit [rad] (only joints that violate), and its max.
+    largest excursion beyond a position limit [rad] (only joints that violate), and its max;
+    ``ground_penetration_max``: deepest any sole goes below the ground z = 0 [m].
     Optimal-method fields (``solver``) are filled by :mod:`gdimitate.optimal`.
     """
 
@@ -47,6 +48,7 @@ class AdaptationReport:
     hip_height_ratio_error_max: float
     joint_limit_violation: dict[str, float]
     joint_limit_violation_max: float
+    ground_penetration_max: float = 0.0
     solver: dict[str, Any] = field(default_factory=dict)
     extra: dict[str, Any] = field(default_factory=dict)
 
@@ -67,6 +69,7 @@ class AdaptationReport:
             "hip_height_ratio_error_max": self.hip_height_ratio_error_max,
             "joint_limit_violation_max_rad": self.joint_limit_violation_max,
             "joint_limit_violation_rad": dict(self.joint_limit_violation),
+            "ground_penetration_max_m": self.ground_penetration_max,
             "feasible": {s: m.astype(int).tolist() for s, m in self.feasible.items()},
             "solver": {k: v for k, v in self.solver.items()},
             **{k: v for k, v in self.extra.items()},
@@ -109,6 +112,8 @@ def compare(demonstrator: Robot, demo: Motion, imitator: Robot, motion: Motion, 
         hip_height_ratio_error_max=float(max(np.max(np.abs(hr_r[s] - hr_m[s])) for s in SIDES)),
         joint_limit_violation=viol,
         joint_limit_violation_max=max(viol.values(), default=0.0),
+        ground_penetration_max=float(max(0.0, -min(h.min() for h in
+                                                   foot_heights(imitator, motion).values()))),
     )
 
 

@@ -104,4 +104,5 @@ def ik2(dx, dz, lengths) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     reachable = np.abs(c) <= 1.0
     th2 = -np.arccos(np.clip(c, -1.0, 1.0))
     th1 = np.arctan2(dx, -dz) - np.arctan2(l2 * np.sin(th2), l1 + l2 * np.cos(th2))
+    th1 = np.mod(th1 + np.pi, 2 * np.pi) - np.pi  # in [-π, π)
     return th1, th2, reachable

@@ -1,0 +1,120 @@
+"""Matplotlib figures of demonstrator vs imitator(s), normalised by leg length (Agg backend)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg", force=False)
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import metrics  # noqa: E402
+from .motion import Motion  # noqa: E402
+from .robot import Robot  # noqa: E402
+from .sagittal import leg_angles  # noqa: E402
+
+__all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument"]
+
+Track = tuple[str, Robot, Motion]  # (label, robot, motion)
+STYLES = ["-", "--", ":", "-."]
+
+
+def _L(robot: Robot) -> float:
+    return robot.legs["left"].length
+
+
+def _save(fig, path: Path | None):
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+    return fig
+
+
+def plot_heights(tracks: list[Track], title: str = "", path: Path | None = None):
+    """Hip height, foot (sole) heights and foot distance over time, each / leg length
+    (paper Figs. 4–6, 10–11 in spirit)."""
+    fig, ax = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
+    for k, (label, r, m) in enumerate(tracks):
+        L, ls = _L(r), STYLES[k % 4]
+        ax[0].plot(m.t, metrics.hip_height(r, m) / L, ls, label=label)
+        fh = metrics.foot_heights(r, m)
+        ax[1].plot(m.t, fh["left"] / L, ls, color=f"C{k}", label=f"{label} left")
+        ax[1].plot(m.t, fh["right"] / L, ls, color=f"C{k}", alpha=0.5)
+        ax[2].plot(m.t, metrics.foot_distance(r, m) / L, ls, label=label)
+    ax[0].set_ylabel("hip height / L")
+    ax[1].set_ylabel("sole height / L\n(left dark, right light)")
+    ax[2].set_ylabel("ankle x: left − right / L")
+    ax[2].set_xlabel("time [s]")
+    ax[0].legend(fontsize=8)
+    ax[0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_angles(tracks: list[Track], title: str = "", path: Path | None = None):
+    """Left-leg planar angles θ1 (thigh, absolute), θ2 (knee) and the shank angle θ1+θ2 [deg]."""
+    fig, ax = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
+    for k, (label, r, m) in enumerate(tracks):
+        _, a = leg_angles(r, m.q)
+        a = np.degrees(a["left"])
+        ls = STYLES[k % 4]
+        ax[0].plot(m.t, a[:, 0], ls, label=label)
+        ax[1].plot(m.t, a[:, 1], ls, label=label)
+        ax[2].plot(m.t, a[:, 0] + a[:, 1], ls, label=label)
+    for a_, lab in zip(ax, ["θ1 thigh [deg]", "θ2 knee [deg]", "θ1+θ2 shank [deg]"]):
+        a_.set_ylabel(lab)
+    ax[2].set_xlabel("time [s]")
+    ax[0].legend(fontsize=8)
+    ax[0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_paths(tracks: list[Track], title: str = "", path: Path | None = None):
+    """x–z paths of the hip and both soles, / leg length (paper Figs. 7–8, 12–13 in spirit)."""
+    fig, ax = plt.subplots(len(tracks), 1, figsize=(9, 2.2 * len(tracks) + 0.6), squeeze=False)
+    for k, (label, r, m) in enumerate(tracks):
+        L = _L(r)
+        h = metrics.hip_path(r, m) / L
+        s = metrics.sole_paths(r, m)
+        a = ax[k, 0]
+        a.plot(h[:, 0], h[:, 2], "k-", label="hip")
+        a.plot(s["left"][:, 0] / L, s["left"][:, 2] / L, "C1-", label="left sole")
+        a.plot(s["right"][:, 0] / L, s["right"][:, 2] / L, "C0--", label="right sole")
+        a.set_aspect("equal")
+        a.set_ylabel(f"{label}\nz / L")
+    ax[-1, 0].set_xlabel("x / L")
+    ax[0, 0].legend(fontsize=8, ncol=3)
+    ax[0, 0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_com(tracks: list[Track], title: str = "", path: Path | None = None):
+    """Whole-body centre of mass (Pinocchio): x–z path and height over time, / leg length."""
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.5))
+    for k, (label, r, m) in enumerate(tracks):
+        c = metrics.com_path(r, m) / _L(r)
+        ax[0].plot(c[:, 0], c[:, 2], STYLES[k % 4], label=label)
+        ax[1].plot(m.t, c[:, 2], STYLES[k % 4], label=label)
+    ax[0].set_xlabel("x / L")
+    ax[0].set_ylabel("CoM z / L")
+    ax[1].set_xlabel("time [s]")
+    ax[1].set_ylabel("CoM z / L")
+    ax[1].legend(fontsize=8)
+    ax[0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_eq1_argument(t: np.ndarray, arguments: dict[str, np.ndarray], title: str = "",
+                      path: Path | None = None):
+    """Eq. (1)'s arccos argument per leg; outside ±1 the imitator cannot reach (paper Fig. 9)."""
+    fig, ax = plt.subplots(figsize=(8, 3))
+    for s, a in arguments.items():
+        ax.plot(t, a, label=s)
+    ax.axhspan(-1, 1, color="0.9", zorder=-1, label="reachable |arg| ≤ 1")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("Eq. (1) argument")
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)

@@ -1,0 +1,62 @@
+"""The command line, run in-process on the built-in defaults."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from gdimitate.cli import main
+from gdimitate.planar import eq1
+
+
+def test_demo_writes_its_outputs(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert "force-direction error max" in printed
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["frames"] == 151 and s["imitator"] == "hoap2"
+    assert s["adaptor"]["force_direction_error_max_rad"] < 1e-12
+    for f in ("imitator_joints.csv", "imitator_motion.npz", "heights.png", "paths.png"):
+        assert (tmp_path / f).stat().st_size > 0
+
+
+def test_paper_summary_matches_eq1_on_the_same_inputs(tmp_path):
+    assert main(["paper", "--out", str(tmp_path)]) == 0
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert set(s) == {"I", "II", "humanoid"}
+    assert s["I"]["infeasible_fraction"] == 0 and s["humanoid"]["infeasible_fraction"] == 0
+    assert 0.05 < s["II"]["infeasible_fraction"] < 0.9
+    for case in s.values():
+        assert case["shank_direction_error_max"]["with_adaptor"] < 1e-12
+        assert case["step_length_over_leg_length"]["demonstrator"] == pytest.approx(0.6)
+    assert s["I"]["hip_height_ratio_error_max"]["with_adaptor"] < 1e-12
+    assert s["I"]["hip_height_ratio_error_max"]["without_adaptor"] > 0.01
+    # an independent recount of Case II's infeasible share straight from Eq. (1)
+    from gdimitate import paper_case
+    from gdimitate.sagittal import leg_angles
+
+    demo, imit, motion = paper_case("II")
+    _, ang = leg_angles(demo, motion.q)
+    n = sum(int((~eq1(a[:, 0], a[:, 1], (0.06, 0.04), (0.1, 0.1)).feasible).sum())
+            for a in ang.values())
+    assert s["II"]["infeasible_fraction"] == pytest.approx(n / (2 * motion.T))
+    assert len(list(tmp_path.glob("case_*.png"))) == 15
+
+
+def test_adapt_command_and_errors(tmp_path, capsys):
+    assert main(["adapt", "--out", str(tmp_path), "--method", "copy"]) == 0
+    rep = json.loads((tmp_path / "report.json").read_text())
+    assert rep["method"] == "copy"
+    data = np.loadtxt(tmp_path / "imitator_joints.csv", delimiter=",", skiprows=1)
+    assert data.shape[0] == 151
+    assert main(["adapt", str(tmp_path / "missing.mot"), "--out", str(tmp_path)]) == 2
+    assert "no such OpenSim file" in capsys.readouterr().err
+    assert main(["adapt", str(tmp_path / "x.csv"), "--out", str(tmp_path)]) == 2
+
+
+def test_console_script_help():
+    r = subprocess.run([sys.executable, "-m", "gdimitate.cli", "--help"], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0 and "demo" in r.stdout and "paper" in r.stdout
