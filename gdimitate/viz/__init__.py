@@ -17,11 +17,11 @@ Modules: :mod:`~.server` (our own meshcat server process, connection with timeou
 
 from .animate import MotionMismatchError
 from .browser import BrowserNotFoundError, changed_fraction, find_chromium, screenshot_html
-from .compare import compare, leg_length
+from .compare import compare
 from .export import network_references
 from .scene import Style, skeleton_geometry
 from .server import MeshcatServer, PortInUseError
-from .viewer import Track, Viewer
+from .viewer import Track, Viewer, leg_length
 
 __all__ = [
     "BrowserNotFoundError",

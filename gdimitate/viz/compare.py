@@ -6,30 +6,14 @@ import os
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-import pinocchio as pin
 
 from ..errors import ViewerError
 from .scene import Style
-from .viewer import Viewer
+from .viewer import Viewer, leg_length
 
-__all__ = ["compare", "leg_length"]
+__all__ = ["compare"]
 
 _GHOST_COLOR = (0.55, 0.75, 1.0)
-
-
-def leg_length(robot: object) -> float:
-    """Hip-to-sole distance [m] of the robot's first leg at its neutral configuration
-    (``nan`` if the robot has no legs with ``.hip`` and ``.sole``)."""
-    model: pin.Model = robot.model
-    for leg in (getattr(robot, "legs", None) or {}).values():
-        hip, sole = getattr(leg, "hip", None), getattr(leg, "sole", None)
-        if hip and sole and model.existJointName(hip) and model.existFrame(sole):
-            data = model.createData()
-            pin.framesForwardKinematics(model, data, pin.neutral(model))
-            a = data.oMi[model.getJointId(hip)].translation
-            b = data.oMf[model.getFrameId(sole)].translation
-            return float(np.linalg.norm(a - b))
-    return float("nan")
 
 
 def compare(demonstrator: object, demo_motion: object, imitator: object,
@@ -58,7 +42,8 @@ def compare(demonstrator: object, demo_motion: object, imitator: object,
         html: if given, also write the self-contained page there.
         viewer: draw into this viewer (cleared first) instead of starting a new one.
         port, open_browser: for the new viewer (see :meth:`Viewer.start`).
-        camera: camera position (3,) [m]; default: to the side, looking at the scene.
+        camera: camera position (3,) [m], looking at the middle of the imitator's path;
+            default: framed by :meth:`Viewer.animate`.
         style: decoration sizes and colours.
 
     Returns:
@@ -85,12 +70,10 @@ def compare(demonstrator: object, demo_motion: object, imitator: object,
                    color=_GHOST_COLOR, opacity=v.style.ghost_opacity,
                    force_directions=demo_force, foot_paths=False)
         v.animate(fps=fps)
-        track = v.tracks["imitator"]
-        base = track.frames.com[0] + track.offset if track.frames is not None else np.zeros(3)
-        target = np.array([base[0], 0.0, max(float(base[2]), 0.5)])
-        pos = np.asarray(camera, dtype=float) if camera is not None else (
-            target + np.array([1.2, -3.6 - gap, 0.6]))
-        v.set_camera(pos, target)
+        if camera is not None:
+            com = v.tracks["imitator"].frames.com + v.tracks["imitator"].offset
+            target = np.array([com[:, 0].mean(), 0.0, com[:, 2].mean()])
+            v.set_camera(camera, target)
         if html is not None:
             v.save_html(html)
     except BaseException:

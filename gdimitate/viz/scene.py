@@ -49,28 +49,31 @@ _Y_TO_Z = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
 
 @dataclass(frozen=True)
 class Style:
-    """Sizes [m] and colours (RGB in [0, 1]) of the decorations drawn around robots.
+    """Colours (RGB in [0, 1]) and sizes of the decorations drawn around robots.
+
+    Sizes of arrows and markers are fractions of each robot's leg length ``L`` (hip to sole in
+    the neutral pose, 1 m when unknown), so a 0.3 m robot and a 1.8 m one look alike.
 
     Attributes:
         ground_color: colour of the ground slab (top face at z = 0).
-        ground_margin: how far the ground extends beyond the motion's feet [m].
-        arrow_length, arrow_radius: force-direction arrow size [m]; the tip touches the sole.
+        ground_margin: how far the ground extends beyond the robots [m].
+        arrow_length, arrow_radius: force-direction arrow size [L]; the tip touches the sole.
         arrow_side_offset: arrows are moved this far sideways, away from the body (+y for the
-            left foot, -y for the right), so that the leg does not hide them [m].
+            left foot, -y for the right), so that the leg does not hide them [L].
         arrow_colors: per leg name, the arrow's colour.
-        com_radius, com_color: the centre-of-mass marker (a sphere).
+        com_radius, com_color: the centre-of-mass marker (a sphere) [L].
         path_colors: per leg name, the colour of the foot-path line.
         ghost_opacity: default opacity of a ghost copy.
     """
 
     ground_color: RGB = (0.78, 0.80, 0.82)
     ground_margin: float = 0.6
-    arrow_length: float = 0.45
-    arrow_radius: float = 0.012
-    arrow_side_offset: float = 0.15
+    arrow_length: float = 0.55
+    arrow_radius: float = 0.014
+    arrow_side_offset: float = 0.18
     arrow_colors: tuple[tuple[str, RGB], ...] = (("left", (0.9, 0.15, 0.1)),
                                                  ("right", (0.1, 0.45, 0.95)))
-    com_radius: float = 0.035
+    com_radius: float = 0.045
     com_color: RGB = (0.95, 0.8, 0.05)
     path_colors: tuple[tuple[str, RGB], ...] = (("left", (0.85, 0.3, 0.1)),
                                                 ("right", (0.15, 0.4, 0.85)))

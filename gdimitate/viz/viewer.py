@@ -51,7 +51,7 @@ from .scene import (
 )
 from .server import MeshcatServer, connect
 
-__all__ = ["Track", "Viewer"]
+__all__ = ["Track", "Viewer", "leg_length"]
 
 
 @dataclass
@@ -68,6 +68,7 @@ class Track:
         com: ``(T, 3)`` [m] given by the caller, ``None`` for Pinocchio's, ``False`` for none.
         offset: ``(3,)`` [m] translation of the whole track; scale: its uniform scale.
         nodes: meshcat node names of the visual objects.
+        size: the robot's leg length [m], the unit of :class:`Style` sizes.
         foot_paths: whether the soles' paths are drawn.
         frames: sampled kinematics of the last animation (or of frame 0).
     """
@@ -83,8 +84,24 @@ class Track:
     offset: np.ndarray
     scale: float
     nodes: list[str]
+    size: float = 1.0
     foot_paths: bool = True
     frames: Frames | None = field(default=None, repr=False)
+
+
+def leg_length(robot: object) -> float:
+    """Hip-to-sole distance [m] of the robot's first leg (``.legs[...]`` with ``.hip`` joint
+    and ``.sole`` frame) in its neutral configuration; ``nan`` if it has no such leg."""
+    model: pin.Model = robot.model
+    for leg in (getattr(robot, "legs", None) or {}).values():
+        hip, sole = getattr(leg, "hip", None), getattr(leg, "sole", None)
+        if hip and sole and model.existJointName(hip) and model.existFrame(sole):
+            data = model.createData()
+            pin.framesForwardKinematics(model, data, pin.neutral(model))
+            a = data.oMi[model.getJointId(hip)].translation
+            b = data.oMf[model.getFrameId(sole)].translation
+            return float(np.linalg.norm(a - b))
+    return float("nan")
 
 
 def _soles(robot: object) -> dict[str, str]:
@@ -125,7 +142,7 @@ class Viewer:
         self.style = style or Style()
         self.tracks: dict[str, Track] = {}
         self._animated = False
-        self._ground = True
+        self._camera_set = False
 
     # -- lifecycle -----------------------------------------------------------------------
     @classmethod
@@ -188,6 +205,7 @@ class Viewer:
         self.vis.delete()
         self.tracks.clear()
         self._animated = False
+        self._camera_set = False
 
     # -- drawing -------------------------------------------------------------------------
     def show(self, robot: object, motion: object, *, name: str | None = None,
@@ -245,6 +263,8 @@ class Viewer:
         if off.shape != (3,) or not np.all(np.isfinite(off)):
             raise ViewerError(f"offset must be 3 finite numbers [m], got {offset!r}")
         track_name = self._unique(name or rname)
+        size = leg_length(robot)
+        size = size if np.isfinite(size) and size > 1e-3 else 1.0
         com_arg: np.ndarray | None | bool = com
         if com is True:
             com_arg = None
@@ -273,7 +293,7 @@ class Viewer:
         root.set_transform(_root_transform(off, float(scale)))
         nodes = draw_geometry(root["robot"], visual, color, opacity)
         track = Track(track_name, model, visual, t, q, soles, force, com_arg, off,
-                      float(scale), nodes, bool(foot_paths), frames)
+                      float(scale), nodes, size, bool(foot_paths), frames)
         self.tracks[track_name] = track
         self._draw_decorations(track, opacity)
         self._place(track, frames, 0)
@@ -288,16 +308,19 @@ class Viewer:
         return name
 
     def _draw_decorations(self, track: Track, opacity: float) -> None:
-        root, st = self.vis[track.name], self.style
+        root, st, L = self.vis[track.name], self.style, track.size
         if track.com is not False:
-            draw_marker(root["com"], st.com_radius, st.com_color, opacity)
+            draw_marker(root["com"], st.com_radius * L, st.com_color, opacity)
         for leg in track.force_directions:
-            draw_arrow(root["force"][leg], st.arrow_length, st.arrow_radius,
+            draw_arrow(root["force"][leg], st.arrow_length * L, st.arrow_radius * L,
                        st.arrow_color(leg), opacity)
 
-    def _arrow_side(self, leg: str) -> float:
-        s = self.style.arrow_side_offset
-        return s if leg == "left" else -s if leg == "right" else 0.0
+    def _arrow_pose(self, track: Track, leg: str, sole: np.ndarray, angle: float
+                    ) -> np.ndarray:
+        s = self.style.arrow_side_offset * track.size
+        side = s if leg == "left" else -s if leg == "right" else 0.0
+        a = angle if np.isfinite(angle) else 0.0
+        return arrow_pose(sole, a, self.style.arrow_length * track.size, side)
 
     def _place(self, track: Track, frames: Frames, k: int) -> None:
         root = self.vis[track.name]
@@ -309,8 +332,7 @@ class Viewer:
         for leg, angle in frames.force.items():
             a = float(angle[k])
             node = root["force"][leg]
-            node.set_transform(arrow_pose(frames.soles[leg][k], a if np.isfinite(a) else 0.0,
-                                          self.style.arrow_length, self._arrow_side(leg)))
+            node.set_transform(self._arrow_pose(track, leg, frames.soles[leg][k], a))
             node.set_property("visible", bool(np.isfinite(a)))
 
     # -- animation -----------------------------------------------------------------------
@@ -344,14 +366,15 @@ class Viewer:
                 record_frames(anim, root["com"], frames.t, poses)
             for leg, angle in frames.force.items():
                 finite = np.isfinite(angle)
-                poses = np.stack([
-                    arrow_pose(s, a if f else 0.0, self.style.arrow_length, self._arrow_side(leg))
-                    for s, a, f in zip(frames.soles[leg], angle, finite, strict=True)])
+                poses = np.stack([self._arrow_pose(track, leg, s, a)
+                                  for s, a in zip(frames.soles[leg], angle, strict=True)])
                 record_frames(anim, root["force"][leg], frames.t, poses, visible=finite)
             for leg, path in frames.sole_paths.items() if track.foot_paths else ():
                 draw_polyline(root["paths"][leg], path, self.style.path_color(leg))
         if ground:
             self._draw_ground()
+        if not self._camera_set:
+            self._frame_camera()
         self.vis.set_animation(anim, play=play, repetitions=10**6 if loop else 1)
         self._animated = True
 
@@ -364,18 +387,37 @@ class Viewer:
             lo, hi = np.minimum(lo, xy.min(axis=0)), np.maximum(hi, xy.max(axis=0))
         m = self.style.ground_margin
         draw_ground(self.vis["ground"], lo - m, hi + m, self.style.ground_color)
+        # meshcat's own grid and axes would poke through and clutter the view.
+        self.vis["/Grid"].set_property("visible", False)
+        self.vis["/Axes"].set_property("visible", False)
+
+    def _frame_camera(self) -> None:
+        coms = [tr.frames.com * tr.scale + tr.offset for tr in self.tracks.values()]
+        pts = np.concatenate(coms)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        target = (lo + hi) / 2.0
+        span = float(max(hi[0] - lo[0], hi[1] - lo[1], 2.0 * hi[2], 0.5))
+        self._place_camera(target + np.array([0.3, -1.0, 0.2]) * (span + 0.4), target)
 
     def set_camera(self, position: Sequence[float], target: Sequence[float] = (0.0, 0.0, 0.8)
                    ) -> None:
         """Place the camera at ``position`` (3,) [m, world], looking at ``target`` (3,) [m].
 
-        meshcat has no look-at call: the orbit centre is the ``/Cameras/default`` node and
-        the camera sits at an offset from it in a y-up frame.
+        meshcat has no look-at call and its orbit controls always turn around the world
+        origin, so the whole scene (``/meshcat``) is shifted by ``-target`` and the camera is
+        put at ``position - target`` (in the y-up frame of ``/Cameras/default/rotated``). The
+        mouse then orbits around ``target``. Without a call, :meth:`animate` frames all
+        centres of mass from the front left.
         """
+        self._place_camera(position, target)
+        self._camera_set = True
+
+    def _place_camera(self, position: Sequence[float], target: Sequence[float]) -> None:
         p = np.asarray(position, dtype=float) - np.asarray(target, dtype=float)
         T = np.eye(4)
-        T[:3, 3] = np.asarray(target, dtype=float)
-        self.vis["/Cameras/default"].set_transform(T)
+        T[:3, 3] = -np.asarray(target, dtype=float)
+        self.vis.set_transform(T)
+        self.vis["/Cameras/default"].set_transform(np.eye(4))
         self.vis["/Cameras/default/rotated/<object>"].set_property(
             "position", [float(p[0]), float(p[2]), float(-p[1])])
 
