@@ -12,6 +12,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 
 def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1") -> Path:
     """Write the demo scene to ``path``: ``demonstrator`` walking (the generated human-like
@@ -27,12 +29,16 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     imit = Robot.from_library(imitator)
     walk = walking_motion(demo)
     adapted = adapt(walk, demo, imit)
-    v = compare(demo, walk, imit, adapted, layout="side", gap=1.0,
+    v = compare(demo, walk, imit, adapted, layout="side", gap=1.2,
                 demo_force=force_direction(demo, walk),
-                imitator_force=force_direction(imit, adapted.motion),
-                html=path)
-    v.close()
-    return Path(path).resolve()
+                imitator_force=force_direction(imit, adapted.motion))
+    try:
+        com = v.tracks["imitator"].frames.com
+        target = np.array([com[:, 0].mean(), 0.0, 0.75])
+        v.set_camera(target + np.array([1.9, -2.3, 0.8]), target)
+        return v.save_html(path)
+    finally:
+        v.close()
 
 
 def main(argv: list[str] | None = None) -> int:
