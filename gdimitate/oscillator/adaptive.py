@@ -60,7 +60,7 @@ class AdaptiveRun:
 def adapt_frequency(
     unit: MatsuokaParams,
     coupling: np.ndarray | None,
-    unit_frequency: float,
+    unit_frequency: float | np.ndarray,
     teacher: Callable[[np.ndarray], np.ndarray],
     *,
     initial_frequency: float,
@@ -76,7 +76,8 @@ def adapt_frequency(
     Args:
         unit: network parameters ``(n,)`` at time scale 1.
         coupling: ``(n, n)`` coupling (or None).
-        unit_frequency: free frequency [Hz] of the network at time scale 1 (measured).
+        unit_frequency: free frequency [Hz] of the network at time scale 1 (measured), scalar
+            or per oscillator ``(n,)`` (uncoupled groups of a network can differ).
         teacher: ``g(t (T,)) -> (T, n)`` input (already scaled for the input gain ``k``).
         initial_frequency: starting intrinsic frequency ω [Hz].
         teach_cycles: number of adaptation cycles (segments of one intrinsic period).
@@ -87,7 +88,8 @@ def adapt_frequency(
     """
     if not 0 < rate <= 1:
         raise OscillatorError(f"adaptation rate must be in (0, 1], got {rate}")
-    if initial_frequency <= 0 or unit_frequency <= 0:
+    unit_frequency = np.asarray(unit_frequency, dtype=float)
+    if initial_frequency <= 0 or np.any(unit_frequency <= 0):
         raise OscillatorError("frequencies must be > 0 Hz")
     n = unit.shape[-1] if unit.shape else 1
     omega = float(initial_frequency)

@@ -303,7 +303,10 @@ def self_adjust(
     x0 = _x0_pattern(phase, s)
     cal = adapt_frequency(unit, coupling, fT, g_of, initial_frequency=fT, teach_cycles=6,
                           free_cycles=16, dt=dt, rate=1e-9, x0=x0)
-    f_unit = float(np.mean(measured_frequency(cal.t, cal.y, start=cal.teach_until + 4 / fT)))
+    # per joint: groups that are not coupled to each other may run at different frequencies
+    f_unit = measured_frequency(cal.t, cal.y, start=cal.teach_until + 4 / fT)
+    if not np.all(np.isfinite(f_unit)):
+        raise OscillatorError(f"the network did not oscillate freely (frequencies {f_unit})")
     run = adapt_frequency(unit, coupling, f_unit, g_of,
                           initial_frequency=initial_frequency or fT, teach_cycles=teach_cycles,
                           free_cycles=free_cycles, dt=dt, rate=adapt_rate, x0=x0)
