@@ -36,7 +36,9 @@ class AdaptationReport:
     length − the demonstrator's| over all frames; ``joint_limit_violation``: per joint the
     largest excursion beyond a position limit [rad] (only joints that violate), and its max;
     ``ground_penetration_max``: deepest any sole goes below the ground z = 0 [m].
-    Optimal-method fields (``solver``) are filled by :mod:`gdimitate.optimal`.
+    Optimal-method fields (``solver``, ``torque_ratio_max`` — per driven joint max
+    |τ|/τ_limit —, ``infeasible_constraint`` — ``None`` or what could not be met) are filled by
+    :mod:`gdimitate.optimal`.
     """
 
     method: str
@@ -51,6 +53,8 @@ class AdaptationReport:
     ground_penetration_max: float = 0.0
     solver: dict[str, Any] = field(default_factory=dict)
     extra: dict[str, Any] = field(default_factory=dict)
+    torque_ratio_max: dict[str, float] = field(default_factory=dict)
+    infeasible_constraint: str | None = None
 
     @property
     def all_feasible(self) -> bool:
@@ -72,6 +76,8 @@ class AdaptationReport:
             "ground_penetration_max_m": self.ground_penetration_max,
             "feasible": {s: m.astype(int).tolist() for s, m in self.feasible.items()},
             "solver": {k: v for k, v in self.solver.items()},
+            "torque_ratio_max": dict(self.torque_ratio_max),
+            "infeasible_constraint": self.infeasible_constraint,
             **{k: v for k, v in self.extra.items()},
         }
 
