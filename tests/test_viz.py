@@ -297,3 +297,14 @@ def test_headless_chromium_plays_the_animation(scene, tmp_path):
     b = screenshot_html(scene["playing"], tmp_path / "b.png", chromium=exe,
                         size=(640, 480), virtual_time_ms=1600, timeout_s=90.0)
     assert changed_fraction(a, b) > 0.001, "the robot did not move between the two frames"
+
+
+def test_y_up_collada_meshes_are_turned_z_up():
+    """iCub's Collada files are Y_UP (the viewer's loader keeps them so; Pinocchio turns them)."""
+    from gdimitate.library import library_entry
+
+    path, pkg = library_entry("icub")
+    _, _, vm = pin.buildModelsFromUrdf(str(path), str(pkg), pin.JointModelFreeFlyer())
+    obj = next(o for o in vm.geometryObjects if o.meshPath.lower().endswith(".dae"))
+    (_, local), = shapes(obj)
+    assert np.allclose(local[:3, :3] @ [0, 1, 0], np.asarray(obj.meshScale) * [0, 0, 1])
