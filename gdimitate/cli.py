@@ -1,4 +1,4 @@
-"""The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt`` (and more as they land)."""
+"""The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``."""
 
 from __future__ import annotations
 
@@ -63,6 +63,47 @@ def _cmd_adapt(a: argparse.Namespace) -> None:
           f"{r.joint_limit_violation_max:.3g} rad")
 
 
+def _cmd_view(a: argparse.Namespace) -> None:
+    import time
+
+    from .examples import example
+    from .metrics import force_direction
+    from .motion import Motion
+    from .robot import Robot
+    from .viz import Viewer, compare
+
+    live = a.html is None
+    if a.motion is not None:
+        if not a.robot:
+            raise GdimitateError("a motion file needs --robot NAME (the robot it belongs to)")
+        robot, motion = Robot.from_library(a.robot), Motion.from_npz(a.motion)
+        v = Viewer.start(a.port, a.open)
+        v.show(robot, motion, force_directions=force_direction(robot, motion)
+               if motion.contact else None)
+        v.animate()
+        if a.html:
+            v.save_html(a.html)
+    else:
+        print(f"building example {a.example!r} (method={a.method}) …", flush=True)
+        ex = example(a.example, a.method)
+        v = compare(ex.demonstrator, ex.demonstration, ex.imitator, ex.adapted,
+                    layout=a.layout, html=a.html, port=a.port, open_browser=a.open,
+                    demo_force=force_direction(ex.demonstrator, ex.demonstration),
+                    imitator_force=force_direction(ex.imitator, ex.adapted.motion))
+    try:
+        if a.html:
+            print(f"wrote {a.html} (self-contained; open it in a browser, no network needed)")
+        if live:
+            print("press Ctrl-C to stop the viewer", flush=True)
+            deadline = time.monotonic() + (a.seconds if a.seconds else float("inf"))
+            while time.monotonic() < deadline:
+                time.sleep(0.2)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        v.close()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
     from .library import list_robots
@@ -91,6 +132,21 @@ def build_parser() -> argparse.ArgumentParser:
     ad.add_argument("--force", default="segment", choices=["segment", "com", "grf"])
     ad.add_argument("--out", default="gdimitate-adapt", help="output folder (default: %(default)s)")
     ad.set_defaults(func=_cmd_adapt)
+    from .examples import EXAMPLES
+
+    vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE")
+    vw.add_argument("motion", nargs="?", default=None, help="a gdimitate .npz motion (optional)")
+    vw.add_argument("--robot", default=None, help="robot of the motion file")
+    vw.add_argument("--example", default="human-walk", choices=EXAMPLES,
+                    help="built-in example when no motion file is given (default: %(default)s)")
+    vw.add_argument("--method", default="analytic", choices=["analytic", "copy", "optimal"])
+    vw.add_argument("--layout", default="side", choices=["side", "ghost"])
+    vw.add_argument("--html", default=None, help="write a self-contained HTML file and exit")
+    vw.add_argument("--port", type=int, default=None, help="web port of the live viewer")
+    vw.add_argument("--open", action="store_true", help="open the live viewer in a browser")
+    vw.add_argument("--seconds", type=float, default=None,
+                    help="stop the live viewer after this many seconds (default: Ctrl-C)")
+    vw.set_defaults(func=_cmd_view)
     return p
 
 
