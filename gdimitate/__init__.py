@@ -6,11 +6,15 @@ The pipeline (DESIGN §2)::
     imitator = gdimitate.Robot.from_library("hoap2")
     adapted = gdimitate.adapt(demo, robot_m, imitator)      # Eq. (1): keep the push direction
     adapted.report.force_direction_error_max                # [rad]
+    cpg = gdimitate.entrain(imitator, adapted.motion)       # Matsuoka network, free replay
+
+Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import gait, metrics, planar
+from . import gait, metrics, oscillator, planar
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
+from .cpg import CPGReplay, entrain
 from .errors import (
     GdimitateError,
     InvalidInputError,
@@ -27,6 +31,7 @@ from .errors import (
 )
 from .library import list_robots
 from .motion import Motion
+from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
 from .robot import Leg, Robot
 from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
@@ -35,11 +40,14 @@ __version__ = "0.1.0"
 __all__ = [
     "AdaptationReport",
     "AdaptedMotion",
+    "CPGReplay",
     "GaitSpec",
     "GdimitateError",
     "HUMAN_GAIT",
     "InvalidInputError",
     "Leg",
+    "MatsuokaBank",
+    "MatsuokaParams",
     "LegDetectionError",
     "LegMatchError",
     "Motion",
@@ -54,10 +62,13 @@ __all__ = [
     "UnsupportedJointError",
     "ViewerError",
     "adapt",
+    "entrain",
     "gait",
     "list_robots",
     "metrics",
+    "oscillator",
     "paper_case",
     "planar",
+    "self_adjust",
     "walking_motion",
 ]

@@ -104,6 +104,41 @@ def _cmd_view(a: argparse.Namespace) -> None:
         v.close()
 
 
+def _cmd_entrain(a: argparse.Namespace) -> None:
+    from .adapt import adapt
+    from .cpg import entrain
+    from .gait import human_walk
+    from .motion import Motion
+    from .robot import Robot
+
+    if a.motion is not None:
+        if not a.robot:
+            raise GdimitateError("a motion file needs --robot NAME (the robot it belongs to)")
+        robot, motion = Robot.from_library(a.robot), Motion.from_npz(a.motion)
+    else:
+        print("no motion given: adapting the shipped real walk to hoap2 (Eq. 1) …", flush=True)
+        human, walk = human_walk()
+        robot = Robot.from_library(a.robot or "hoap2")
+        motion = adapt(walk, human, robot).motion
+    print(f"entraining a Matsuoka network to {robot.name}'s sagittal angles "
+          f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
+          flush=True)
+    cpg = entrain(robot, motion, duration=a.duration)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "oscillator_params.json").write_text(cpg.result.to_json())
+    cpg.replay.to_csv(out / "replay_joints.csv")
+    cpg.replay.to_npz(out / "replay_motion.npz")
+    (out / "report.json").write_text(json.dumps(
+        {"robot": robot.name, "learned_frequency_hz": float(cpg.result.frequency),
+         "constant_angles_rad": cpg.constant, "per_joint": cpg.report}, indent=2, default=float))
+    print(f"wrote {out}/oscillator_params.json, replay_joints.csv, replay_motion.npz, "
+          f"report.json\n  learned frequency {cpg.result.frequency:.4f} Hz")
+    for j, r in cpg.report.items():
+        print(f"  {j:<12} nRMSE entrained {r['nrmse_entrained'] * 100:5.2f} %   "
+              f"frequency error after stop {r['freq_error_after'] * 100:5.2f} %")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
     from .library import list_robots
@@ -147,6 +182,15 @@ def build_parser() -> argparse.ArgumentParser:
     vw.add_argument("--seconds", type=float, default=None,
                     help="stop the live viewer after this many seconds (default: Ctrl-C)")
     vw.set_defaults(func=_cmd_view)
+    en = sub.add_parser("entrain", help="tune a Matsuoka network to a motion and replay it")
+    en.add_argument("motion", nargs="?", default=None,
+                    help="a gdimitate .npz motion (default: the real walk adapted to hoap2)")
+    en.add_argument("--robot", default=None, help="robot of the motion file")
+    en.add_argument("--duration", type=float, default=None,
+                    help="seconds of free-running replay (default: the motion's duration)")
+    en.add_argument("--out", default="gdimitate-entrain",
+                    help="output folder (default: %(default)s)")
+    en.set_defaults(func=_cmd_entrain)
     return p
 
 

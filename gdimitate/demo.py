@@ -1,9 +1,11 @@
 """``gdimitate demo``: the main job on the built-in default.
 
 The shipped real human walk (OpenSim subject01) → planar human demonstrator → HOAP-2-sized
-imitator through the adaptor → plots, the imitator's joint trajectories (CSV), a summary (JSON)
-and a short table on stdout. Later stages (oscillator replay, meshcat HTML) are added when their
-modules are present.
+imitator through the adaptor → a Matsuoka oscillator network entrained to the imitator's
+angles, then replaying free after the teaching input stops → plots, the imitator's and the
+replay's joint trajectories (CSV), tuned oscillator parameters and a summary (JSON),
+``demo.html`` (meshcat: demonstrator ghost, imitator, CPG replay; plays offline) and a short
+table on stdout.
 """
 
 from __future__ import annotations
@@ -17,8 +19,9 @@ import numpy as np
 
 from . import plots
 from .adapt import adapt
+from .cpg import entrain
 from .gait import human_walk
-from .metrics import joint_limit_margins
+from .metrics import force_direction, joint_limit_margins
 from .paper import step_length
 from .robot import Robot
 
@@ -28,6 +31,26 @@ __all__ = ["run_demo"]
 def _table(rows: list[tuple[str, str]]) -> str:
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
+
+
+def _write_html(path: Path, demo_robot, demo, imit, adapted, cpg) -> str:
+    """Demonstrator (a translucent ghost scaled to the imitator), imitator and CPG replay."""
+    from .viz import Viewer
+
+    L = imit.legs["left"].length
+    v = Viewer.start(quiet=True)
+    try:
+        v.show(imit, adapted.motion, name="imitator",
+               force_directions=force_direction(imit, adapted.motion))
+        v.show(demo_robot, demo, name="demonstrator", scale=L / demo_robot.legs["left"].length,
+               color=(0.55, 0.75, 1.0), opacity=0.35, foot_paths=False,
+               force_directions=force_direction(demo_robot, demo))
+        v.show(imit, cpg.replay, name="cpg_replay", offset=(0.0, 2.5 * L, 0.0))
+        v.animate(fps=30)
+        v.save_html(path)
+    finally:
+        v.close()
+    return str(path)
 
 
 def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
@@ -43,15 +66,15 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
         from .errors import InvalidInputError
 
         raise InvalidInputError(f"cannot write to output folder {out}: {e}") from None
-    log("[1/4] loading the shipped real walk (OpenSim subject01, 60 Hz) …")
+    log("[1/6] loading the shipped real walk (OpenSim subject01, 60 Hz) …")
     demo_robot, demo = human_walk()
     imit = Robot.from_library(imitator)
-    log(f"[2/4] adapting {demo_robot.name} (leg {demo_robot.legs['left'].length:.3f} m) → "
+    log(f"[2/6] adapting {demo_robot.name} (leg {demo_robot.legs['left'].length:.3f} m) → "
         f"{imit.name} (leg {imit.legs['left'].length:.3f} m), method={method} …")
     adapted = adapt(demo, demo_robot, imit, method)
     baseline = adapt(demo, demo_robot, imit, "copy")
     rep = adapted.report
-    log("[3/4] writing trajectories and plots …")
+    log("[3/6] writing trajectories and plots …")
     adapted.motion.to_csv(out / "imitator_joints.csv")
     adapted.motion.to_npz(out / "imitator_motion.npz")
     tracks = [("human demonstrator", demo_robot, demo),
@@ -77,10 +100,23 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
             "imitator": step_length(imit, adapted.motion) / imit.legs["left"].length,
         },
     }
-    summary["stages"] = {}
+    log("[4/6] entraining the Matsuoka network and replaying it free-running …")
+    cpg = entrain(imit, adapted.motion)
+    (out / "oscillator_params.json").write_text(cpg.result.to_json())
+    cpg.replay.to_csv(out / "cpg_replay_joints.csv")
+    rep_cpg = cpg.report
+    summary["cpg"] = {
+        "learned_frequency_hz": float(cpg.result.frequency),
+        "joints": list(cpg.names),
+        "nrmse_entrained_max": max(v["nrmse_entrained"] for v in rep_cpg.values()),
+        "freq_error_after_max": max(v["freq_error_after"] for v in rep_cpg.values()),
+        "per_joint": rep_cpg,
+    }
+    log("[5/6] writing demo.html (meshcat) …")
+    summary["html"] = _write_html(out / "demo.html", demo_robot, demo, imit, adapted, cpg)
     summary["elapsed_s"] = time.perf_counter() - t0
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    log("[4/4] done.\n")
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    log("[6/6] done.\n")
     worst = min(margins.items(), key=lambda kv: kv[1].min())
     rows = [
         ("demonstration", f"{demo.T} frames, {demo.t[-1]:.2f} s, human leg "
@@ -88,14 +124,19 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
         ("imitator", f"{imit.name}, leg {imit.legs['left'].length:.3f} m"),
         ("infeasible frames (L/R)", f"{rep.infeasible_frames['left']}/"
                                     f"{rep.infeasible_frames['right']} of {demo.T}"),
-        ("force-direction error max", f"{np.degrees(rep.force_direction_error_max):.2e} deg "
-                                      f"(copy: {np.degrees(baseline.report.force_direction_error_max):.2e})"),
+        ("force-direction error max",
+         f"{np.degrees(rep.force_direction_error_max):.2e} deg "
+         f"(copy: {np.degrees(baseline.report.force_direction_error_max):.2e})"),
         ("hip-height ratio error max", f"{rep.hip_height_ratio_error_max:.2e} "
                                        f"(copy: {baseline.report.hip_height_ratio_error_max:.2e})"),
         ("joint-limit violation max", f"{np.degrees(rep.joint_limit_violation_max):.2f} deg"),
         ("tightest joint margin", f"{worst[0]}: {np.degrees(worst[1].min()):.1f} deg"),
         ("ground penetration max", f"{rep.ground_penetration_max * 1000:.1f} mm"),
-        ("output", f"{out}/ (summary.json, imitator_joints.csv, *.png)"),
+        ("CPG: learned frequency", f"{cpg.result.frequency:.4f} Hz"),
+        ("CPG: tracking nRMSE max", f"{summary['cpg']['nrmse_entrained_max'] * 100:.1f} % "
+                                    "(entrained)"),
+        ("CPG: freq. error after stop", f"{summary['cpg']['freq_error_after_max'] * 100:.2f} %"),
+        ("output", f"{out}/ (demo.html, summary.json, *.csv, *.png)"),
         ("elapsed", f"{summary['elapsed_s']:.1f} s"),
     ]
     log(_table(rows))

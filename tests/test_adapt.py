@@ -5,7 +5,6 @@ import pytest
 
 from gdimitate import (
     InvalidInputError,
-    Motion,
     UnknownNameError,
     adapt,
     paper_case,

@@ -18,8 +18,21 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["frames"] == 151 and s["imitator"] == "hoap2"
     assert s["adaptor"]["force_direction_error_max_rad"] < 1e-12
-    for f in ("imitator_joints.csv", "imitator_motion.npz", "heights.png", "paths.png"):
+    for f in ("imitator_joints.csv", "imitator_motion.npz", "heights.png", "paths.png",
+              "cpg_replay_joints.csv", "oscillator_params.json"):
         assert (tmp_path / f).stat().st_size > 0
+    # the CPG replays the imitator's walk: issue 3's targets on the real walk
+    assert s["cpg"]["nrmse_entrained_max"] <= 0.05
+    assert s["cpg"]["freq_error_after_max"] <= 0.02
+    # demo.html: one self-contained page with the three robots' animation
+    from gdimitate.viz import network_references
+
+    html = (tmp_path / "demo.html").read_text()
+    assert not network_references(html)
+    from gdimitate.oscillator import SelfAdjustResult
+
+    res = SelfAdjustResult.from_dict(json.loads((tmp_path / "oscillator_params.json").read_text()))
+    assert res.frequency == pytest.approx(s["cpg"]["learned_frequency_hz"])
 
 
 def test_paper_summary_matches_eq1_on_the_same_inputs(tmp_path):
@@ -60,3 +73,26 @@ def test_console_script_help():
     r = subprocess.run([sys.executable, "-m", "gdimitate.cli", "--help"], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 0 and "demo" in r.stdout and "paper" in r.stdout
+
+
+def test_entrain_command(tmp_path, capsys):
+    from gdimitate import Motion
+
+    assert main(["entrain", "--out", str(tmp_path), "--duration", "3"]) == 0
+    rep = json.loads((tmp_path / "report.json").read_text())
+    assert rep["robot"] == "hoap2" and 0.75 < rep["learned_frequency_hz"] < 0.87
+    m = Motion.from_npz(tmp_path / "replay_motion.npz")
+    assert m.t[-1] == pytest.approx(3.0, abs=0.02)
+    # replayed angles stay in the taught range: the knee never leaves its demonstrated span
+    assert "left_knee" in capsys.readouterr().out
+    assert main(["entrain", str(tmp_path / "replay_motion.npz"), "--out", str(tmp_path)]) == 2
+
+
+def test_view_html_command(tmp_path):
+    page = tmp_path / "case1.html"
+    assert main(["view", "--example", "case-I", "--html", str(page)]) == 0
+    from gdimitate.viz import network_references
+
+    text = page.read_text()
+    assert len(text) > 100_000 and not network_references(text)
+    assert main(["view", "--example", "case-I", "--html", str(tmp_path / "no" / "x.html")]) == 2

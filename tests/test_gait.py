@@ -5,7 +5,7 @@ import pytest
 
 from gdimitate import InvalidInputError, TimeGridError
 from gdimitate.gait import human_walk, human_walk_path, read_mot, read_opensim
-from gdimitate.metrics import force_direction, foot_heights
+from gdimitate.metrics import foot_heights, force_direction
 from gdimitate.sagittal import leg_angles
 from gdimitate.urdfgen import human_spec
 
