@@ -341,7 +341,16 @@ class Robot:
         )
 
     def _grounded_neutral(self) -> np.ndarray:
-        q = pin.neutral(self.model)
+        """Pinocchio's neutral pose with 1-DoF joints moved inside their position limits
+        (e.g. iCub's elbows, whose range excludes 0), base turned and lowered onto z = 0."""
+        m = self.model
+        q = pin.neutral(m)
+        for j in range(1, m.njoints):
+            jm = m.joints[j]
+            if jm.nq == 1 and m.names[j] not in PLANAR_BASE:
+                lo, hi = m.lowerPositionLimit[jm.idx_q], m.upperPositionLimit[jm.idx_q]
+                if np.isfinite(lo) and np.isfinite(hi) and lo <= hi:
+                    q[jm.idx_q] = min(max(q[jm.idx_q], lo), hi)
         if self.base == "free":
             q[3:7] = pin.Quaternion(self.base_rotation).coeffs()
         pin.framesForwardKinematics(self.model, self.data, q)
