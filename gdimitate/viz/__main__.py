@@ -2,7 +2,8 @@
 
 Builds a Talos (example-robot-data) walking next to a Unitree G1 that performs the adapted
 walk, exports the scene as self-contained HTML, and screenshots it in headless Chromium.
-``python -m gdimitate.viz html FILE`` writes only the HTML.
+``python -m gdimitate.viz html FILE`` writes only the HTML;
+``python -m gdimitate.viz screenshot PNG --html PAGE`` screenshots an existing page.
 """
 
 from __future__ import annotations
@@ -48,6 +49,8 @@ def main(argv: list[str] | None = None) -> int:
     s = sub.add_parser("screenshot", help="write the demo scene's screenshot (PNG)")
     s.add_argument("png")
     s.add_argument("--size", default="1200x800", help="WIDTHxHEIGHT in pixels")
+    s.add_argument("--html", default=None,
+                   help="screenshot this existing page (e.g. gdimitate-demo/demo.html) instead")
     h = sub.add_parser("html", help="write the demo scene as self-contained HTML")
     h.add_argument("path")
     args = parser.parse_args(argv)
@@ -57,6 +60,9 @@ def main(argv: list[str] | None = None) -> int:
     from .browser import screenshot_html
 
     w, hgt = (int(x) for x in args.size.lower().split("x"))
+    if args.html:
+        print(screenshot_html(args.html, args.png, size=(w, hgt), virtual_time_ms=3000))
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         page = demo_html(Path(tmp) / "demo.html")
         print(screenshot_html(page, args.png, size=(w, hgt), virtual_time_ms=3000))
