@@ -17,9 +17,9 @@ import numpy as np
 from .motion import Motion
 from .oscillator import SelfAdjustResult, self_adjust
 from .robot import SIDES, Robot
-from .sagittal import compose_q, frame_paths, ground_base, leg_angles, robot_motion
+from .sagittal import compose_q, ground_base, kinematic_contact, leg_angles, robot_motion
 
-__all__ = ["CPGReplay", "entrain", "sagittal_targets", "kinematic_contact"]
+__all__ = ["CPGReplay", "entrain", "sagittal_targets"]
 
 ROLES = ("hip", "knee", "ankle")
 
@@ -46,17 +46,6 @@ def sagittal_targets(robot: Robot, motion: Motion) -> tuple[list[str], np.ndarra
     torso, ang = leg_angles(robot, motion.q)
     names = ["torso"] + [f"{s}_{r}" for s in SIDES for r in ROLES]
     return names, np.column_stack([torso] + [ang[s] for s in SIDES])
-
-
-def kinematic_contact(robot: Robot, q: np.ndarray, tol: float | None = None
-                      ) -> dict[str, np.ndarray]:
-    """Stance flags ``{side: (T,)}``: a sole is in stance while it is within ``tol`` [m]
-    (default 2 % of the leg length) of the lower sole."""
-    soles = frame_paths(robot, q, [robot.legs[s].sole for s in SIDES])
-    z = {s: soles[robot.legs[s].sole][:, 2] for s in SIDES}
-    low = np.minimum(z["left"], z["right"])
-    tol = 0.02 * robot.legs["left"].length if tol is None else tol
-    return {s: z[s] - low < tol for s in SIDES}
 
 
 def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: float | None = None,

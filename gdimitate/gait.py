@@ -91,7 +91,7 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     direction (see ``tests/test_gait.py``).
     """
     from .robot import Robot
-    from .sagittal import compose_q, frame_paths, ground_base, robot_motion
+    from .sagittal import compose_q, ground_base, kinematic_contact, robot_motion
     from .urdfgen import human_spec
 
     d = read_mot(path)
@@ -120,11 +120,7 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
         ])
     q = compose_q(robot, torso, angles)
     if contact is None:
-        soles = frame_paths(robot, q, [robot.legs[s].sole for s in ("left", "right")])
-        zl, zr = soles[robot.legs["left"].sole][:, 2], soles[robot.legs["right"].sole][:, 2]
-        low = np.minimum(zl, zr)
-        tol = 0.01 * height
-        contact = {"left": zl - low < tol, "right": zr - low < tol}
+        contact = kinematic_contact(robot, q, tol=0.01 * height)
     if base == "ground":
         q = ground_base(robot, q, contact)
     elif base == "measured":

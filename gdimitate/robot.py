@@ -252,9 +252,6 @@ class Robot:
     def _pick_pitch(self, cands: list[str]) -> str:
         """Among same-side candidates, the joint whose axis is closest to the lateral axis."""
         q0 = pin.neutral(self.model)
-        pin.framesForwardKinematics(self.model, self.data, q0)
-        # lateral axis from the hips' side tokens is not known yet: use the axis most
-        # perpendicular to the leg (hip → lowest frame) and to the other candidates' mean axis.
         axes = [self._joint_axis_world(c, q0) for c in cands]
         lat = self._lateral_guess()
         score = [abs(float(a @ lat)) for a in axes]

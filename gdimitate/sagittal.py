@@ -17,7 +17,7 @@ from .motion import Motion
 from .robot import SIDES, Robot
 
 __all__ = ["leg_angles", "compose_q", "frame_paths", "joint_paths", "ground_base",
-           "robot_motion"]
+           "kinematic_contact", "robot_motion", "torso_angle"]
 
 
 def _check_q(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -171,6 +171,17 @@ def ground_base(robot: Robot, q: np.ndarray, contact: dict[str, np.ndarray],
     x += x0 - x[0]
     _set_base_xz(robot, q, x, z)
     return q
+
+
+def kinematic_contact(robot: Robot, q: np.ndarray, tol: float | None = None
+                      ) -> dict[str, np.ndarray]:
+    """Stance flags ``{side: (T,)}``: a sole is in stance while it is within ``tol`` [m]
+    (default 2 % of the leg length) of the lower sole."""
+    soles = frame_paths(robot, q, [robot.legs[s].sole for s in SIDES])
+    z = {s: soles[robot.legs[s].sole][:, 2] for s in SIDES}
+    low = np.minimum(z["left"], z["right"])
+    tol = 0.02 * robot.legs["left"].length if tol is None else tol
+    return {s: z[s] - low < tol for s in SIDES}
 
 
 def robot_motion(robot: Robot, t: np.ndarray, q: np.ndarray,
