@@ -127,6 +127,8 @@ class Robot:
         self.base_rotation = np.eye(3)
         q0 = pin.neutral(model)
         self.base_rotation = self._measure_orientation(spec, q0)
+        for s in SIDES:
+            spec[s]["sole"] = self._sole_from_geometry(s, spec[s])
         self.legs: dict[str, Leg] = {s: self._measure_leg(s, spec[s]) for s in SIDES}
         self.neutral = self._grounded_neutral()
 
@@ -300,6 +302,41 @@ class Robot:
                 f"{self.name}: a non-floating model must face +x with z up (found forward "
                 f"{np.round(fwd, 3)}, up {np.round(up, 3)})")
         return R0 if self.base == "free" else np.eye(3)
+
+    def _sole_from_geometry(self, side: str, names, min_gap: float = 0.01) -> str:
+        """If the foot's visual geometry reaches more than ``min_gap`` [m] below the named sole
+        frame (e.g. example-robot-data's ``human``, whose "foot" frame sits at the ankle), add
+        a frame ``<side>_sole_auto`` directly below the sole frame at the geometry's lowest
+        point (neutral pose) and use it. Legs without an ankle (point feet) keep their frame.
+        Returns the sole frame name to use."""
+        if self.visual_model is None or names["ankle"] is None:  # point feet: keep the frame
+            return names["sole"]
+        m = self.model
+        fid = m.getFrameId(names["sole"])
+        parent = m.frames[fid].parentJoint
+        q0 = pin.neutral(m)
+        if self.base == "free":
+            q0[3:7] = pin.Quaternion(self.base_rotation).coeffs()
+        pin.framesForwardKinematics(m, self.data, q0)
+        sole = self.data.oMf[fid].translation
+        low = sole[2]
+        for g in self.visual_model.geometryObjects:
+            if g.parentJoint != parent or not hasattr(g.geometry, "vertices"):
+                continue
+            v = np.asarray(g.geometry.vertices())
+            if v.size == 0:
+                continue
+            M = self.data.oMi[parent] * g.placement
+            world = v @ M.rotation.T + M.translation
+            low = min(low, float(world[:, 2].min()))
+        if sole[2] - low <= min_gap:
+            return names["sole"]
+        target = sole - np.array([0.0, 0.0, sole[2] - low])
+        placement = pin.SE3(np.eye(3), self.data.oMi[parent].actInv(target))
+        name = f"{side}_sole_auto"
+        m.addFrame(pin.Frame(name, parent, fid, placement, pin.FrameType.OP_FRAME))
+        self.data = m.createData()
+        return name
 
     def _measure_leg(self, side: str, names) -> Leg:
         q0 = pin.neutral(self.model)

@@ -173,3 +173,27 @@ def test_undetectable_legs_say_what_was_tried(tmp_path):
     assert r.legs["left"].thigh == pytest.approx(0.3)
     with pytest.raises(UnknownNameError, match="valid joints"):
         Robot.from_urdf(p, legs={**legs, "left": {**legs["left"], "knee": "nope"}})
+
+
+@pytest.mark.parametrize("name", ["human", "g1"])
+def test_sole_at_the_bottom_of_the_foot_mesh(name, robot):
+    """Models without a sole frame under the ankle get one at the foot mesh's lowest point: at
+    the grounded neutral pose the lowest vertex of the foot mesh (read with trimesh, placed by
+    Pinocchio's geometry placements) touches z = 0 (1 mm)."""
+    import trimesh
+
+    r = robot(name)
+    assert r.legs["left"].sole == "left_sole_auto"
+    gm = r.visual_model
+    gd = pin.GeometryData(gm)
+    pin.forwardKinematics(r.model, r.data, r.neutral)
+    pin.updateGeometryPlacements(r.model, r.data, gm, gd)
+    sole_joint = r.model.frames[r.frame_id(r.legs["left"].sole)].parentJoint
+    lows = []
+    for i, g in enumerate(gm.geometryObjects):
+        if g.parentJoint == sole_joint and g.meshPath.lower().endswith((".stl", ".dae", ".obj")):
+            mesh = trimesh.load(g.meshPath, force="mesh")
+            v = np.asarray(mesh.vertices) * np.asarray(g.meshScale)
+            M = gd.oMg[i]
+            lows.append((v @ M.rotation.T + M.translation)[:, 2].min())
+    assert lows and min(lows) == pytest.approx(0.0, abs=1e-3)
