@@ -277,19 +277,42 @@ class TrajectoryProblem:
 
     def solve(self, X0: np.ndarray, elastic: bool = False, W0: np.ndarray | None = None
               ) -> tuple[np.ndarray, dict]:
-        """Run IPOPT from ``X0`` ``(T, nx)``; ``elastic``: let the limit slacks be positive.
+        """Run IPOPT from ``X0`` ``(T, nx)``; ``elastic``: let the limit slacks be positive
+        (started at the warm start's own violations, so the start is feasible for them).
         Returns the solution vector and CasADi's solver stats."""
-        z0 = [np.asarray(X0, float).ravel()]
-        if self.use_dyn:
-            z0.append((self.initial_wrench(X0) if W0 is None else W0).ravel())
-        z0.append(np.zeros(self._nS))
+        X0 = np.asarray(X0, float)
+        z0 = self.start_vector(X0, W0)
         lbx, ubx = self.lbx.copy(), self.ubx.copy()
         lbx[0] = ubx[0] = X0[0, 0]
         s0 = len(lbx) - self._nS
         lbx[s0:] = 0.0
         ubx[s0:] = np.inf if elastic else 0.0
-        sol = self.solver(x0=np.concatenate(z0), lbx=lbx, ubx=ubx, lbg=self.lbg, ubg=self.ubg)
+        if elastic:
+            z0[s0:] = self._initial_slack(z0)
+        sol = self.solver(x0=z0, lbx=lbx, ubx=ubx, lbg=self.lbg, ubg=self.ubg)
         return np.array(sol["x"]).ravel(), dict(self.solver.stats())
+
+    def start_vector(self, X: np.ndarray, W: np.ndarray | None = None) -> np.ndarray:
+        """Solution-shaped vector of a motion ``X`` ``(T, nx)``: wrenches by least squares (or
+        ``W`` ``(T, 2·nw)``), zero slacks."""
+        z = [np.asarray(X, float).ravel()]
+        if self.use_dyn:
+            z.append((self.initial_wrench(X) if W is None else W).ravel())
+        z.append(np.zeros(self._nS))
+        return np.concatenate(z)
+
+    def _initial_slack(self, z: np.ndarray) -> np.ndarray:
+        """Slacks ``(3·n_driven,)`` that make the limit constraints of ``z`` hold (+1 %)."""
+        nd = len(self.model.driven)
+        viol = self.violations(z)
+        out = np.zeros((3, nd))
+        for k, kind in enumerate(("position", "velocity", "torque")):
+            for i, j in enumerate(self.model.driven):
+                v = viol.get(f"{kind} limit ({j})")
+                if v is not None:
+                    scale = self.limits.effort[i] if kind == "torque" else 1.0
+                    out[k, i] = 1.01 * float(np.nanmax(v)) / scale + 1e-6
+        return out.ravel()
 
     # ------------------------------------------------------------------ evaluation
     def violations(self, z: np.ndarray) -> dict[str, np.ndarray]:

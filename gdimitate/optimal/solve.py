@@ -140,7 +140,7 @@ def adapt_optimal(motion: Motion, demonstrator: Robot, imitator: Robot, force: s
         from .streaming import adapt_per_frame
 
         return adapt_per_frame(demo, demonstrator, imitator, force=force, limits=limits,
-                               weights=weights, tol=tol, ipopt=ipopt)
+                               weights=weights, tol=tol, ipopt=ipopt, contact=contact)
     targets = demonstration_targets(demonstrator, demo, force)
     analytic = adapt(demo, demonstrator, imitator, method="analytic", force=force)
     X0 = place_base(model, model.x_of_q(analytic.motion.q), demo.contact)
@@ -156,16 +156,21 @@ def adapt_optimal(motion: Motion, demonstrator: Robot, imitator: Robot, force: s
     solver = {"status": stats.get("return_status"), "success": bool(stats.get("success")),
               "iterations": int(stats.get("iter_count", -1)), "elastic": False}
     if not hard_ok:
+        # least-infeasible fallback: the elastic solve (limits may give, by as little as
+        # possible); the best of {elastic, hard last iterate, Eq. (1)} comes back, ranked by the
+        # goal constraints (contact, force direction) first, then by the limits
         z_el, st_el = problem.solve(X0, elastic=True)
-        X_el, _, _ = problem.split(z_el)
-        z_true = z_el.copy()
-        z_true[-problem._nS:] = 0.0  # real violations: limits without their slack
-        viol = problem.violations(z_true)
+        z_el[-problem._nS:] = 0.0  # real violations: limits without their slack
+        z_an = problem.start_vector(X0)
+        cands = [(z_el, "elastic"), (z, "hard"), (z_an, "analytic")]
+        scored = [(_merit(problem.violations(c)), name, c) for c, name in cands]
+        scored.sort(key=lambda x: x[0])
+        _, best, z = scored[0]
+        viol = problem.violations(z)
         solver.update({"elastic": True, "hard_status": solver["status"],
                        "status": st_el.get("return_status"),
                        "iterations": solver["iterations"] + int(st_el.get("iter_count", 0)),
-                       "success": False})
-        z = z_el
+                       "success": False, "returned": best})
     solver["time_s"] = time.perf_counter() - t0
     solver.update(knots=targets.T, variables=int(problem.lbx.size), constraints=int(
         problem.lbg.size))
@@ -208,6 +213,13 @@ def adapt_optimal(motion: Motion, demonstrator: Robot, imitator: Robot, force: s
         "max_change": _max_change(model, X0, X),
     })
     return AdaptedMotion(motion=out, report=report, robot=imitator)
+
+
+def _merit(viol: dict[str, np.ndarray]) -> tuple[float, float]:
+    """(goal-constraint violation, limit violation) — lexicographic ranking of candidates."""
+    goal = max((np.nanmax(v) for k, v in viol.items() if "limit" not in k), default=0.0)
+    lim = max((np.nanmax(v) for k, v in viol.items() if "limit" in k), default=0.0)
+    return (round(float(goal), 9), float(lim))
 
 
 def place_base(model: SagittalModel, X: np.ndarray, contact: dict[str, np.ndarray]
