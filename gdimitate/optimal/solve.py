@@ -11,6 +11,9 @@ The report (:class:`~gdimitate.adapt.AdaptationReport`) of the optimal method fi
 - ``torque_ratio_max``: per driven joint max |τ| / τ_limit (NaN without a limit);
 - ``infeasible_constraint``: ``None``, or which constraint group could not be met and by how
   much;
+- ``extra["torques"]`` ``(T, n_driven)`` [N·m] and ``extra["wrenches"]`` ``(T, 2·nw)`` (per
+  foot, world axes at the sole: fx, fz, my for planar models, the full wrench otherwise) of the
+  returned motion, ``extra["driven"]`` the joint order;
 - ``extra["analytic"]``: the same limit measures for the Eq. (1) warm start, so that one can see
   what the optimiser fixed; ``extra["violations"]``: max violation per constraint group;
   ``extra["missing_limits"]``: driven joints whose URDF gives no limit of some kind.
@@ -188,8 +191,10 @@ def adapt_optimal(motion: Motion, demonstrator: Robot, imitator: Robot, force: s
     report.feasible = {s: frame_ok.copy() for s in SIDES}
     report.infeasible_frames = {s: int((~frame_ok).sum()) for s in SIDES}
     tau = problem.torques(z)
+    W = problem.split(z)[1]
     if tau is None:
         tau = _torques_lstsq(problem, X)
+        W = problem.initial_wrench(X)
     lr = limit_report(model, lim, targets.t, X, tau)
     report.torque_ratio_max = lr["torque_ratio_max"]
     bad = {k: v for k, v in viol.items() if np.nanmax(v) > tol}
@@ -211,6 +216,7 @@ def adapt_optimal(motion: Motion, demonstrator: Robot, imitator: Robot, force: s
         "missing_limits": lim.missing,
         "contact_mode": contact,
         "max_change": _max_change(model, X0, X),
+        "torques": tau, "wrenches": W, "driven": model.driven,
     })
     return AdaptedMotion(motion=out, report=report, robot=imitator)
 
