@@ -161,8 +161,12 @@ def ground_base(robot: Robot, q: np.ndarray, contact: dict[str, np.ndarray],
             cands = [s for s in SIDES if c[s][i]]
             if cands:
                 new = min(cands, key=lambda s: since[s])
-                base_x = x[i - 1] if i > 0 else x0
-                foot_x = base_x + rel[new][i, 0]
+                if i == 0:
+                    foot_x = x0 + rel[new][0, 0]
+                elif c[new][i - 1]:  # already down: it stays where it stood at i − 1
+                    foot_x = x[i - 1] + rel[new][i - 1, 0]
+                else:  # just landed: where it touches down, base continuing from i − 1
+                    foot_x = x[i - 1] + rel[new][i, 0]
                 anchor = new
         if anchor is not None and c[anchor][i]:
             x[i] = foot_x - rel[anchor][i, 0]
