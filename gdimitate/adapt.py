@@ -75,11 +75,28 @@ class AdaptationReport:
             "joint_limit_violation_rad": dict(self.joint_limit_violation),
             "ground_penetration_max_m": self.ground_penetration_max,
             "feasible": {s: m.astype(int).tolist() for s, m in self.feasible.items()},
-            "solver": {k: v for k, v in self.solver.items()},
-            "torque_ratio_max": dict(self.torque_ratio_max),
-            "infeasible_constraint": self.infeasible_constraint,
-            **{k: v for k, v in self.extra.items()},
+            "solver": _jsonable(self.solver),
+            "torque_ratio_max": _jsonable(self.torque_ratio_max),
+            "infeasible_constraint": _jsonable(self.infeasible_constraint),
+            **{k: _jsonable(v) for k, v in self.extra.items()},
         }
+
+
+def _jsonable(v: Any) -> Any:
+    """Plain JSON types: NumPy scalars → numbers, arrays → (nested) lists, NaN/inf → None."""
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _jsonable(v.tolist())
+    if isinstance(v, (np.bool_, bool)):
+        return bool(v)
+    if isinstance(v, (np.integer, int)):
+        return int(v)
+    if isinstance(v, (np.floating, float)):
+        return float(v) if np.isfinite(v) else None
+    return v
 
 
 @dataclass(frozen=True)

@@ -152,8 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--out", default="gdimitate-demo", help="output folder (default: %(default)s)")
     d.add_argument("--imitator", default="hoap2", choices=list_robots(),
                    help="imitator robot (default: %(default)s)")
-    d.add_argument("--method", default="analytic", choices=["analytic", "copy", "optimal"],
-                   help="adaptor (default: %(default)s)")
+    d.add_argument("--method", default="optimal", choices=["analytic", "copy", "optimal"],
+                   help="adaptor whose motion is entrained and shown (default: %(default)s)")
     d.set_defaults(func=_cmd_demo)
     pp = sub.add_parser("paper", help="the paper's Figs. 4–13 (in spirit) + summary.json")
     pp.add_argument("--out", default="paper-out", help="output folder (default: %(default)s)")

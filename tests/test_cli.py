@@ -14,15 +14,20 @@ from gdimitate.planar import eq1
 def test_demo_writes_its_outputs(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
-    assert "force-direction error max" in printed
+    assert "push-direction error" in printed and "optimal adaptor" in printed
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["frames"] == 151 and s["imitator"] == "hoap2"
     assert s["adaptor"]["force_direction_error_max_rad"] < 1e-12
     for f in ("imitator_joints.csv", "imitator_motion.npz", "heights.png", "paths.png",
               "cpg_replay_joints.csv", "oscillator_params.json"):
         assert (tmp_path / f).stat().st_size > 0
-    # the CPG replays the imitator's walk: issue 3's targets on the real walk
-    assert s["cpg"]["nrmse_entrained_max"] <= 0.05
+    # default: the optimal adaptor, within every limit, where Eq. (1) is not
+    assert s["method"] == "optimal" and s["adaptor"]["joint_limit_violation_max_rad"] < 1e-6
+    assert max(s["adaptor"]["torque_ratio_max"].values()) <= 1 + 1e-6
+    assert s["analytic_baseline"]["joint_limit_violation_max_rad"] > 0.05  # knee hyperextension
+    # the CPG replays the imitator's walk: issue 3's targets (hip/knee) on the real walk
+    per = s["cpg"]["per_joint"]
+    assert max(per[j]["nrmse_entrained"] for j in per if j.endswith(("hip", "knee"))) <= 0.05
     assert s["cpg"]["freq_error_after_max"] <= 0.02
     # demo.html: one self-contained page with the three robots' animation
     from gdimitate.viz import network_references
