@@ -5,13 +5,14 @@ The pipeline (DESIGN §2)::
     robot_m, demo = gdimitate.gait.human_walk()            # real walk → planar demonstrator
     imitator = gdimitate.Robot.from_library("hoap2")
     adapted = gdimitate.adapt(demo, robot_m, imitator)      # Eq. (1): keep the push direction
+    best = gdimitate.adapt(demo, robot_m, imitator, method="optimal")  # + limits, torques
     adapted.report.force_direction_error_max                # [rad]
     cpg = gdimitate.entrain(imitator, adapted.motion)       # Matsuoka network, free replay
 
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import gait, metrics, oscillator, planar
+from . import gait, metrics, optimal, oscillator, planar
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
 from .cpg import CPGReplay, entrain
@@ -31,6 +32,7 @@ from .errors import (
 )
 from .library import list_robots
 from .motion import Motion
+from .optimal import Limits, StreamingAdaptor, Weights
 from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
 from .robot import Leg, Robot
 from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
@@ -46,6 +48,7 @@ __all__ = [
     "HUMAN_GAIT",
     "InvalidInputError",
     "Leg",
+    "Limits",
     "MatsuokaBank",
     "MatsuokaParams",
     "LegDetectionError",
@@ -55,17 +58,20 @@ __all__ = [
     "ROBOT_GAIT",
     "Robot",
     "SolverError",
+    "StreamingAdaptor",
     "TimeGridError",
     "URDFError",
     "UnknownNameError",
     "UnknownRobotError",
     "UnsupportedJointError",
     "ViewerError",
+    "Weights",
     "adapt",
     "entrain",
     "gait",
     "list_robots",
     "metrics",
+    "optimal",
     "oscillator",
     "paper_case",
     "planar",
