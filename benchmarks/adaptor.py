@@ -1,8 +1,11 @@
 """Adaptor speed: analytic Eq. (1), optimal trajectory solve, per-frame (streaming) mode.
 
 Run: ``python benchmarks/adaptor.py``. Prints one table (markdown). "set-up" is building the
-CasADi NLP (symbolic expansion and IPOPT's derivative functions) — paid once per problem shape;
-"solve" is IPOPT's wall time from the Eq. (1) warm start.
+CasADi NLP (symbolic expansion and IPOPT's derivative functions) — paid once per problem shape
+(imitator, knot count, force model, …) and process, then reused from the cache; "solve" is
+IPOPT's wall time from the Eq. (1) warm start; "first call" / "cached call" are the end-to-end
+times of ``adapt(..., method="optimal")`` (set-up, Eq. (1) warm start, solve and report) on a
+fresh cache and on a second call with the same robot pair and knot count.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import numpy as np
 from gdimitate.adapt import adapt
 from gdimitate.cases import paper_case
 from gdimitate.gait import human_walk
-from gdimitate.optimal import slice_motion
+from gdimitate.optimal import problem, slice_motion
 from gdimitate.robot import Robot
 from gdimitate.walking import GaitSpec
 
@@ -28,6 +31,23 @@ def _best(f, n=3):
     return min(ts), out
 
 
+def _optimal_row(name: str, goal: str, f) -> tuple[str, ...]:
+    """One optimal-adaptor row: first call on an empty NLP cache, then the best of two cached
+    calls (end to end), with the solve times of both."""
+    problem.clear_cache()
+    t0 = time.perf_counter()
+    r1 = f()
+    first = time.perf_counter() - t0
+    built = problem.BUILD_COUNT
+    cached, r = _best(f, n=2)
+    assert problem.BUILD_COUNT == built, "the cached call rebuilt the NLP"
+    s1, s = r1.report.solver, r.report.solver
+    return (name, f"first call {first:.2f} s (solve {s1['time_s']:.2f} s)",
+            f"cached call {cached:.2f} s (solve {s['time_s']:.2f} s; set-up+report "
+            f"{cached - s['time_s']:.2f} s)", f"{goal} end to end",
+            f"{s['status']}, {s['iterations']} it, feasible={r.report.all_feasible}")
+
+
 def main() -> None:
     rows = []
     # analytic adaptor frames/s (Case I, 241 frames)
@@ -39,20 +59,14 @@ def main() -> None:
     cyc = GaitSpec(period=1.0, cycles=1, rate=100.0)
     d, i, m = paper_case("II", cyc)
     demo = slice_motion(m, slice(0, 100))
-    tot, r = _best(lambda: adapt(demo, d, i, method="optimal"), n=1)
-    s = r.report.solver
-    rows.append(("optimal, Case II → HOAP-2, 100 knots", f"solve {s['time_s']:.2f} s",
-                 f"set-up+report {tot - s['time_s']:.1f} s", "≤ 1 s",
-                 f"{s['status']}, {s['iterations']} it, feasible={r.report.all_feasible}"))
+    rows.append(_optimal_row("optimal, Case II → HOAP-2, 100 knots", "≤ 1 s",
+                             lambda: adapt(demo, d, i, method="optimal")))
     # optimal: one gait cycle of 100 knots on Talos (real human walk, 60 Hz → 100 frames)
     hd, hm = human_walk()
     talos = Robot.from_library("talos")
     demo = slice_motion(hm, slice(0, 100))
-    tot, r = _best(lambda: adapt(demo, hd, talos, method="optimal"), n=1)
-    s = r.report.solver
-    rows.append(("optimal, human walk → Talos, 100 knots", f"solve {s['time_s']:.2f} s",
-                 f"set-up+report {tot - s['time_s']:.1f} s", "≤ 10 s",
-                 f"{s['status']}, {s['iterations']} it, feasible={r.report.all_feasible}"))
+    rows.append(_optimal_row("optimal, human walk → Talos, 100 knots", "≤ 10 s",
+                             lambda: adapt(demo, hd, talos, method="optimal")))
     # per-frame mode on Talos
     tot, r = _best(lambda: adapt(hm, hd, talos, method="optimal", mode="per_frame"), n=2)
     s = r.report.solver

@@ -245,3 +245,30 @@ def test_resolved_limits_forms(case1):
     assert np.all(r.effort == 2.0)
     assert r.velocity[drv.index("left_knee")] == 1.5
     assert np.all(r.upper == 0.5)
+
+
+def test_nlp_is_cached_per_shape(case2):
+    """A second call with the same robot pair and knot count reuses the built NLP (the build
+    counter does not move) and gives the same motion; an equal robot loaded again shares it."""
+    from gdimitate.optimal import problem
+    from gdimitate.robot import Robot
+
+    d, i, m = case2
+    problem.clear_cache()
+    demo = slice_motion(m, slice(0, 60, 3))
+    first = adapt(demo, d, i, method="optimal")
+    built = problem.BUILD_COUNT
+    again = adapt(demo, d, i, method="optimal")
+    assert problem.BUILD_COUNT == built
+    np.testing.assert_allclose(again.motion.q, first.motion.q, atol=1e-9)
+    assert again.report.infeasible_constraint == first.report.infeasible_constraint
+    # other targets on the same knots (another demonstration) reuse it too
+    other = slice_motion(m, slice(60, 120, 3))
+    adapt(other, d, i, method="optimal")
+    assert problem.BUILD_COUNT == built
+    # a different shape (knot count) builds a new one
+    adapt(slice_motion(m, slice(0, 60, 4)), d, i, method="optimal")
+    assert problem.BUILD_COUNT == built + 1
+    # an equal robot built again shares the sagittal model
+    assert sagittal_model(Robot.from_library("bolt")) is sagittal_model(
+        Robot.from_library("bolt"))

@@ -16,6 +16,7 @@ Velocities and accelerations come from finite differences of ``x`` over the knot
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import casadi as ca
@@ -26,7 +27,7 @@ from ..errors import InvalidInputError, LegMatchError
 from ..robot import PLANAR_BASE, SIDES, Robot
 from ..symbolic import SymbolicModel
 
-__all__ = ["SagittalModel", "difference_matrices", "KIN_POINTS"]
+__all__ = ["SagittalModel", "difference_matrices", "KIN_POINTS", "robot_key"]
 
 #: Points the kinematic function returns, per side, then the centre of mass.
 KIN_POINTS = ("hip", "knee", "ankle", "sole")
@@ -128,6 +129,9 @@ class SagittalModel:
         self.offsets = np.array(off)
         self._build_kin()
         self._dyn: ca.Function | None = None
+        self._base_wrench: ca.Function | None = None
+        self._maps: dict[tuple[str, int], ca.Function] = {}
+        self.key: str = robot_key(robot)
 
     # ------------------------------------------------------------------ configuration
     def q_of_x(self, x: ca.SX) -> ca.SX:
@@ -229,6 +233,33 @@ class SagittalModel:
                                     ["x", "xd", "xdd", "wl", "wr"], ["tau_base", "tau"])
         return self._dyn
 
+    @property
+    def base_wrench(self) -> ca.Function:
+        """``(x, ẋ, ẍ) -> (τ_base at zero wrench, ∂τ_base/∂(w_left, w_right))``: the base rows
+        of the inverse dynamics are affine in the contact wrenches (built on first use)."""
+        if self._base_wrench is None:
+            x, xd, xdd = (ca.SX.sym(n, self.nx) for n in ("x", "xd", "xdd"))
+            wv = ca.SX.sym("w", 2 * self.nw)
+            tb = self.dyn(x, xd, xdd, wv[:self.nw], wv[self.nw:])[0]
+            jac = ca.jacobian(tb, wv)
+            tb0, jac0 = (ca.substitute(e, wv, ca.DM.zeros(2 * self.nw)) for e in (tb, jac))
+            self._base_wrench = ca.Function("base_wrench", [x, xd, xdd], [tb0, jac0])
+        return self._base_wrench
+
+    def base_wrench_map(self, T: int) -> ca.Function:
+        """:attr:`base_wrench` mapped over ``T`` knots (cached per ``T``)."""
+        key = ("base_wrench", T)
+        if key not in self._maps:
+            self._maps[key] = self.base_wrench.map(T)
+        return self._maps[key]
+
+    def dyn_map(self, T: int) -> ca.Function:
+        """:attr:`dyn` mapped over ``T`` knots (cached per ``T``)."""
+        key = ("dyn", T)
+        if key not in self._maps:
+            self._maps[key] = self.dyn.map(T)
+        return self._maps[key]
+
     def planar_angles(self, x) -> dict[str, list]:
         """Per side the planar ``[θ1 absolute, θ2, θ3]`` rows of decision vectors ``x`` of shape
         ``(nx, n)`` (SX, MX or a 2-D NumPy array); θ3 is 0 for legs without an ankle."""
@@ -246,6 +277,29 @@ class SagittalModel:
             rows[0] = rows[0] + x[2, :]
             out[s] = rows
         return out
+
+
+def robot_key(robot: Robot) -> str:
+    """A fingerprint of everything a :class:`SagittalModel` is built from: the Pinocchio model
+    (joint types, placements, inertias, frames, position limits, gravity), the legs, the base
+    and its orientation and the neutral pose. Two robots with the same key give the same
+    model, so a model (and the NLPs built on it) can be shared between them."""
+    m = robot.model
+    h = hashlib.sha1()
+    h.update(repr((robot.name, robot.base, tuple(m.names), tuple(m.parents), m.nq, m.nv,
+                   tuple(j.shortname() for j in m.joints),
+                   tuple(sorted((s, repr(leg)) for s, leg in robot.legs.items())))).encode())
+    arrs = [np.asarray(robot.base_rotation, float), np.asarray(robot.neutral, float),
+            np.asarray(m.lowerPositionLimit, float), np.asarray(m.upperPositionLimit, float),
+            np.asarray(m.gravity.linear, float)]
+    arrs += [np.asarray(p.homogeneous) for p in m.jointPlacements]
+    arrs += [np.asarray(i.toDynamicParameters()) for i in m.inertias]
+    for f in m.frames:
+        h.update(f"{f.name}:{int(f.parentJoint)};".encode())
+        arrs.append(np.asarray(f.placement.homogeneous))
+    for a in arrs:
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    return h.hexdigest()
 
 
 def check_same_legs(demonstrator: Robot, imitator: Robot) -> None:

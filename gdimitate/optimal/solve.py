@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import time
 import weakref
+from collections import OrderedDict
 
 import numpy as np
 
@@ -33,7 +34,7 @@ from ..motion import Motion
 from ..robot import SIDES, Robot
 from ..sagittal import robot_motion
 from .limits import Limits, ResolvedLimits, resolve_limits
-from .model import SagittalModel
+from .model import SagittalModel, robot_key
 from .problem import TrajectoryProblem, Weights
 from .targets import CONTACT_MODES, contact_links, demonstration_targets, slice_motion
 
@@ -41,13 +42,27 @@ __all__ = ["adapt_optimal", "sagittal_model", "MODES", "limit_report", "place_ba
 
 MODES = ("trajectory", "per_frame")
 _MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: Models by :func:`.model.robot_key`, shared by equal robots loaded twice (e.g. two
+#: ``Robot.from_library("talos")``); least recently used dropped first.
+_MODELS_BY_KEY: OrderedDict[str, SagittalModel] = OrderedDict()
+MODEL_CACHE_SIZE = 8
 
 
 def sagittal_model(robot: Robot) -> SagittalModel:
-    """The (cached) :class:`SagittalModel` of ``robot``."""
-    if robot not in _MODELS:
-        _MODELS[robot] = SagittalModel(robot)
-    return _MODELS[robot]
+    """The (cached) :class:`SagittalModel` of ``robot``: per robot object, and per
+    :func:`~.model.robot_key` so that an equal robot built again reuses it."""
+    if robot in _MODELS and _MODELS[robot].key == robot_key(robot):
+        return _MODELS[robot]
+    key = robot_key(robot)
+    model = _MODELS_BY_KEY.get(key)
+    if model is None:
+        model = SagittalModel(robot)
+        _MODELS_BY_KEY[key] = model
+        while len(_MODELS_BY_KEY) > MODEL_CACHE_SIZE:
+            _MODELS_BY_KEY.popitem(last=False)
+    _MODELS_BY_KEY.move_to_end(key)
+    _MODELS[robot] = model
+    return model
 
 
 def _knots(motion: Motion, subsample: int, frames) -> Motion:
@@ -256,7 +271,7 @@ def _torques_lstsq(problem: TrajectoryProblem, X: np.ndarray) -> np.ndarray:
     W = problem.initial_wrench(X)
     V, A = problem.D1 @ X, problem.D2 @ X
     nw = M.nw
-    f = M.dyn.map(len(X))
+    f = M.dyn_map(len(X))
     _, tau = f(X.T, V.T, A.T, W[:, :nw].T, W[:, nw:].T)
     return np.array(ca.DM(tau)).T
 
