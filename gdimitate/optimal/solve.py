@@ -191,7 +191,7 @@ def adapt_optimal(motion: Motion, demonstrator: Robot, imitator: Robot, force: s
                        "success": False, "returned": best})
     solver["time_s"] = time.perf_counter() - t0
     solver.update(knots=targets.T, variables=int(problem.lbx.size), constraints=int(
-        problem.lbg.size))
+        np.sum(np.isfinite(problem.lbg) | np.isfinite(problem.ubg))))  # imposed rows only
     X, _, _ = problem.split(z)
     q = model.q_numeric(X)
     out = robot_motion(imitator, demo.t, q, demo.contact)
