@@ -13,8 +13,8 @@ from .motion import Motion
 from .robot import PLANAR_BASE, SIDES, Robot
 from .sagittal import frame_paths, joint_paths
 
-__all__ = ["FORCE_MODELS", "hip_path", "hip_height", "ankle_paths", "sole_paths", "foot_heights",
-           "foot_distance", "com_path", "force_direction", "joint_limit_margins",
+__all__ = ["FORCE_MODELS", "angle_down", "hip_path", "hip_height", "ankle_paths", "sole_paths",
+           "foot_heights", "foot_distance", "com_path", "force_direction", "joint_limit_margins",
            "hip_height_ratio"]
 
 FORCE_MODELS = ("segment", "com", "grf")
@@ -89,9 +89,11 @@ def hip_height_ratio(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
     return out
 
 
-def _angle_down(v: np.ndarray) -> np.ndarray:
-    """Angle of vectors ``(T, 3)`` from the downward vertical, + forward (x)."""
-    return np.arctan2(v[:, 0], -v[:, 2])
+def angle_down(v: np.ndarray) -> np.ndarray:
+    """Angle [rad] of vectors ``(..., 3)`` from the downward vertical, positive forward (+x):
+    the sign convention of every force direction (DESIGN §4–5)."""
+    v = np.asarray(v, dtype=float)
+    return np.arctan2(v[..., 0], -v[..., 2])
 
 
 def force_direction(robot: Robot, motion: Motion, model: str = "segment",
@@ -117,12 +119,12 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
         ank = ankle_paths(robot, motion)
         for s in SIDES:
             k = joint_paths(robot, motion.q, [robot.legs[s].knee])[robot.legs[s].knee]
-            out[s] = _angle_down(ank[s] - k)
+            out[s] = angle_down(ank[s] - k)
     elif model == "com":
         c = com_path(robot, motion)
         sole = sole_paths(robot, motion)
         for s in SIDES:
-            out[s] = _angle_down(sole[s] - c)
+            out[s] = angle_down(sole[s] - c)
     else:
         c = com_path(robot, motion)
         rate = 1.0 / motion.dt
@@ -134,7 +136,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
         acc = np.gradient(np.gradient(c, motion.t, axis=0), motion.t, axis=0)
         f = robot.mass * (acc - np.array([0.0, 0.0, -GRAVITY]))  # GRF on the robot
         for s in SIDES:
-            out[s] = _angle_down(-f)
+            out[s] = angle_down(-f)
     for s in SIDES:
         out[s] = np.where(motion.contact[s], out[s], np.nan)
     return out

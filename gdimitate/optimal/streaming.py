@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from ..adapt import AdaptedMotion, compare
 from ..errors import InvalidInputError, UnknownNameError
+from ..metrics import angle_down
 from ..motion import Motion
 from ..planar import eq1
 from ..robot import SIDES, Robot
@@ -39,10 +40,6 @@ __all__ = ["StreamingAdaptor", "adapt_per_frame", "STREAMING_FORCE_MODELS"]
 #: Force models the per-frame mode supports (``grf`` needs the next frame).
 STREAMING_FORCE_MODELS = ("segment", "com")
 _STATES = ("swing", "touch", "hold")  # per foot: in the air, landed now, down since before
-
-
-def _angle_down(v: np.ndarray) -> float:
-    return float(np.arctan2(v[0], -v[2]))
 
 
 class StreamingAdaptor:
@@ -113,8 +110,8 @@ class StreamingAdaptor:
             knee = data.oMi[m.getJointId(leg.knee)].translation
             sole = pin.updateFramePlacement(m, data, d.frame_id(leg.sole)).translation
             ankle = data.oMi[m.getJointId(leg.ankle)].translation if leg.ankle else sole
-            shank = _angle_down(ankle - knee)
-            push = shank if self.force == "segment" else _angle_down(sole - com)
+            shank = angle_down(ankle - knee)
+            push = shank if self.force == "segment" else angle_down(sole - com)
             out += [(hip[2] - ankle[2]) / leg.length, shank, ang[s][0, 2], push]
         out.append(torso[0])
         return np.array(out, dtype=float)

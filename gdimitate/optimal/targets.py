@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InvalidInputError, UnknownNameError
-from ..metrics import FORCE_MODELS, force_direction, hip_height_ratio
+from ..metrics import FORCE_MODELS, angle_down, force_direction, hip_height_ratio
 from ..motion import Motion
 from ..robot import SIDES, Robot
 from ..sagittal import frame_paths, joint_paths, leg_angles, robot_motion
@@ -23,10 +23,6 @@ __all__ = ["Targets", "demonstration_targets", "slice_motion", "contact_links", 
 #: ``"anchor"``: only the foot that has been down longest is fixed, the other stance foot only
 #: touches the ground (what Eq. (1) with :func:`gdimitate.sagittal.ground_base` satisfies).
 CONTACT_MODES = ("all", "anchor")
-
-
-def _angle_down(v: np.ndarray) -> np.ndarray:
-    return np.arctan2(v[:, 0], -v[:, 2])
 
 
 @dataclass(frozen=True)
@@ -80,7 +76,7 @@ def demonstration_targets(demonstrator: Robot, motion: Motion, model: str = "seg
                          + ([leg.ankle] if leg.ankle else []))
         sole = frame_paths(demonstrator, motion.q, [leg.sole])[leg.sole]
         ankle = jp[leg.ankle] if leg.ankle else sole
-        shank[s] = _angle_down(ankle - jp[leg.knee])
+        shank[s] = angle_down(ankle - jp[leg.knee])
         placement[s] = (sole[:, 0] - jp[leg.hip][:, 0]) / leg.length
     return Targets(
         model=model, t=motion.t.copy(),
