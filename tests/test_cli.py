@@ -88,8 +88,17 @@ def test_entrain_command(tmp_path, capsys):
     assert rep["robot"] == "hoap2" and 0.75 < rep["learned_frequency_hz"] < 0.87
     m = Motion.from_npz(tmp_path / "replay_motion.npz")
     assert m.t[-1] == pytest.approx(3.0, abs=0.02)
-    # replayed angles stay in the taught range: the knee never leaves its demonstrated span
     assert "left_knee" in capsys.readouterr().out
+    # the free-running replay stays in the taught range: the knee's span of the adapted walk
+    # (Eq. (1), the command's default input), ±10 % of that span
+    import gdimitate as gd
+
+    human, walk = gd.gait.human_walk()
+    taught = gd.adapt(walk, human, gd.Robot.from_library("hoap2")).motion.column("left_knee")
+    replay = m.column("left_knee")
+    margin = 0.1 * np.ptp(taught)
+    assert taught.min() - margin <= replay.min() and replay.max() <= taught.max() + margin
+    assert np.ptp(replay) > 0.8 * np.ptp(taught)  # and it really swings, not a damped copy
     assert main(["entrain", str(tmp_path / "replay_motion.npz"), "--out", str(tmp_path)]) == 2
 
 
