@@ -73,3 +73,8 @@ class SolverError(GdimitateError):
 
 class ViewerError(GdimitateError):
     """The meshcat viewer could not show what was asked (no geometry, port in use, ...)."""
+
+
+class ContactError(GdimitateError):
+    """A robot's feet cannot be found or measured (no sole geometry, point feet): pass
+    ``contacts=`` explicitly."""

@@ -24,7 +24,15 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import LegDetectionError, UnknownNameError, UnknownRobotError, URDFError
+from .contact import DEFAULT_MU, SoleContact, measure_sole
+from .errors import (
+    ContactError,
+    InvalidInputError,
+    LegDetectionError,
+    UnknownNameError,
+    UnknownRobotError,
+    URDFError,
+)
 from .library import LIBRARY, library_entry, list_robots
 from .urdfgen import PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
 
@@ -103,17 +111,28 @@ class Robot:
     (``pin.GeometryModel`` or ``None`` when the URDF has no visual geometry); ``legs``
     (``{"left": Leg, "right": Leg}``); ``base`` (``"planar"``, ``"free"`` or ``"fixed"``);
     ``base_rotation`` (3×3, turns the model to face +x with z up); ``package_dir``;
-    ``urdf_path`` (``None`` for in-memory models).
+    ``urdf_path`` (``None`` for in-memory models); ``contacts`` (``{"left": SoleContact,
+    "right": SoleContact}``, the flat-foot contacts of :mod:`gdimitate.contact`, measured from
+    the feet's geometry unless given; empty for point-footed robots such as Bolt);
+    ``collision_model`` (``pin.GeometryModel`` or ``None``).
+
+    ``contacts=`` overrides the measured soles: per side a :class:`~gdimitate.contact.SoleContact`
+    or a mapping with ``half_length``, ``half_width`` [m] and optionally ``frame`` (default: the
+    measured sole centre) and ``mu`` (default :data:`~gdimitate.contact.DEFAULT_MU`).
     """
 
     def __init__(self, name: str, model: pin.Model, visual_model: pin.GeometryModel | None,
                  legs: Mapping[str, Mapping[str, str | None]] | None = None,
-                 package_dir: Path | None = None, urdf_path: Path | None = None):
+                 package_dir: Path | None = None, urdf_path: Path | None = None,
+                 contacts: Mapping[str, SoleContact | Mapping] | None = None,
+                 collision_model: pin.GeometryModel | None = None):
         self.name = name
         self.model = model
         self.data = model.createData()
         has_geometry = visual_model is not None and visual_model.ngeoms > 0
         self.visual_model = visual_model if has_geometry else None
+        has_collision = collision_model is not None and collision_model.ngeoms > 0
+        self.collision_model = collision_model if has_collision else None
         self.package_dir = package_dir
         self.urdf_path = urdf_path
         names = list(model.names)[1:]
@@ -131,17 +150,22 @@ class Robot:
             spec[s]["sole"] = self._sole_from_geometry(s, spec[s])
         self.legs: dict[str, Leg] = {s: self._measure_leg(s, spec[s]) for s in SIDES}
         self.neutral = self._grounded_neutral()
+        self.contacts: dict[str, SoleContact] = self._make_contacts(contacts)
+        if self.contacts:
+            self.neutral = self._ground(self.neutral, [c.frame for c in self.contacts.values()])
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_urdf(cls, path: str | Path, legs: Mapping[str, Mapping[str, str | None]] | None = None,
                   *, name: str | None = None, package_dir: str | Path | None = None,
-                  floating: bool | None = None) -> Robot:
+                  floating: bool | None = None,
+                  contacts: Mapping[str, SoleContact | Mapping] | None = None) -> Robot:
         """Load a URDF. ``legs``: ``{"left": {"hip":…, "knee":…, "ankle":…, "sole":…},
         "right": {…}}`` (joint/frame names), auto-detected from names when omitted.
 
         ``floating``: add a free-flyer root joint (default: yes, unless the URDF already has
         our planar base joints). ``package_dir``: folder resolving ``package://`` meshes.
+        ``contacts``: sole rectangles overriding the measured ones (see :class:`Robot`).
         """
         path = Path(path)
         if not path.is_file():
@@ -152,19 +176,19 @@ class Robot:
         pkg = [str(package_dir)] if package_dir else [str(path.parent)]
         try:
             if floating:
-                model, _, visual = pin.buildModelsFromUrdf(
+                model, collision, visual = pin.buildModelsFromUrdf(
                     str(path), pkg, pin.JointModelFreeFlyer())
             else:
-                model, _, visual = pin.buildModelsFromUrdf(str(path), pkg)
+                model, collision, visual = pin.buildModelsFromUrdf(str(path), pkg)
         except Exception as e:  # Pinocchio raises ValueError/RuntimeError on bad files/meshes
             try:
                 model = (pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer()) if floating
                          else pin.buildModelFromUrdf(str(path)))
-                visual = None
+                visual = collision = None
             except Exception:
                 raise URDFError(f"cannot read URDF {path}: {e}") from None
         return cls(name or model.name or path.stem, model, visual, legs,
-                   Path(pkg[0]), path)
+                   Path(pkg[0]), path, contacts=contacts, collision_model=collision)
 
     @classmethod
     def from_spec(cls, spec: PlanarBipedSpec) -> Robot:
@@ -173,8 +197,8 @@ class Robot:
         with tempfile.TemporaryDirectory() as tmp:
             p = Path(tmp) / f"{spec.name}.urdf"
             p.write_text(xml)
-            model, _, visual = pin.buildModelsFromUrdf(str(p), [tmp])
-        robot = cls(spec.name, model, visual)
+            model, collision, visual = pin.buildModelsFromUrdf(str(p), [tmp])
+        robot = cls(spec.name, model, visual, collision_model=collision)
         robot.spec = spec
         return robot
 
@@ -374,6 +398,78 @@ class Robot:
             offsets=(th_off, sh_off - th_off, 0.0),
         )
 
+    def _make_contacts(self, given) -> dict[str, SoleContact]:
+        """Sole contacts: measured from the feet's geometry at the grounded neutral pose (a
+        frame ``<side>_sole_contact`` is added where the sole frame is not at the rectangle's
+        centre), then overridden by ``given``. Point-footed legs (no ankle) get none."""
+        given = dict(given or {})
+        self.contact_problems: dict[str, str] = {}
+        bad = [k for k in given if k not in SIDES]
+        if bad:
+            raise InvalidInputError(f"contacts= keys must be 'left'/'right'; got {bad}")
+        out: dict[str, SoleContact] = {}
+        for s in SIDES:
+            g = given.get(s)
+            if isinstance(g, SoleContact):
+                self.frame_id(g.frame)
+                out[s] = g.replace(side=s)
+                continue
+            if self.legs[s].ankle is None and g is None:
+                continue  # point foot
+            measured = None
+            try:
+                measured, frame = measure_sole(
+                    self.model, self.data, [self.collision_model, self.visual_model],
+                    self.neutral, s, self.legs[s].sole)
+                if frame is not None:
+                    self.model.addFrame(frame)
+                    self.data = self.model.createData()
+            except ContactError as e:
+                if g is None:
+                    self.contact_problems[s] = str(e)
+                    continue
+            if g is None:
+                out[s] = measured
+                continue
+            g = dict(g)
+            unknown = set(g) - {"frame", "half_length", "half_width", "mu"}
+            if unknown:
+                raise InvalidInputError(
+                    f"contacts[{s!r}] has unknown keys {sorted(unknown)}; valid: frame, "
+                    "half_length, half_width, mu")
+            frame = g.get("frame") or (measured.frame if measured else self.legs[s].sole)
+            self.frame_id(frame)
+            hl = g.get("half_length", measured.half_length if measured else None)
+            hw = g.get("half_width", measured.half_width if measured else None)
+            if hl is None or hw is None:
+                raise InvalidInputError(
+                    f"contacts[{s!r}] needs half_length and half_width [m] (the foot has no "
+                    "geometry to measure them from)")
+            out[s] = SoleContact(s, frame, hl, hw, g.get("mu", measured.mu if measured
+                                                         else DEFAULT_MU))
+        return out
+
+    def require_contacts(self) -> dict[str, SoleContact]:
+        """:attr:`contacts` of both feet, or :class:`ContactError` saying why a foot has none
+        and how to pass ``contacts=``."""
+        missing = [s for s in SIDES if s not in self.contacts]
+        if missing:
+            why = "; ".join(self.contact_problems.get(s, f"the {s} leg has no ankle (point foot)")
+                            for s in missing)
+            raise ContactError(f"{self.name}: no flat-foot contact for {missing}: {why}")
+        return self.contacts
+
+    def _ground(self, q: np.ndarray, frames: list[str]) -> np.ndarray:
+        """``q`` with the base lowered (or raised) so that the lowest of ``frames`` is at z = 0."""
+        q = q.copy()
+        pin.framesForwardKinematics(self.model, self.data, q)
+        zmin = min(self._pos(frame=f)[2] for f in frames)
+        if self.base == "free":
+            q[2] -= zmin
+        elif self.base == "planar":
+            q[self.idx_q("base_z")] -= zmin
+        return q
+
     def _grounded_neutral(self) -> np.ndarray:
         """Pinocchio's neutral pose with 1-DoF joints moved inside their position limits
         (e.g. iCub's elbows, whose range excludes 0), base turned and lowered onto z = 0."""
@@ -387,13 +483,7 @@ class Robot:
                     q[jm.idx_q] = min(max(q[jm.idx_q], lo), hi)
         if self.base == "free":
             q[3:7] = pin.Quaternion(self.base_rotation).coeffs()
-        pin.framesForwardKinematics(self.model, self.data, q)
-        zmin = min(self._pos(frame=self.legs[s].sole)[2] for s in SIDES)
-        if self.base == "free":
-            q[2] -= zmin
-        elif self.base == "planar":
-            q[self.idx_q("base_z")] -= zmin
-        return q
+        return self._ground(q, [self.legs[s].sole for s in SIDES])
 
     # ------------------------------------------------------------------ queries
     @property

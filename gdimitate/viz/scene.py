@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ViewerError
+from ..meshes import collada_y_up
 
 __all__ = [
     "Style",
@@ -147,21 +148,10 @@ def shapes(obj: pin.GeometryObject) -> list[tuple[mg.Geometry, np.ndarray]]:
     path = obj.meshPath
     if path and Path(path).suffix.lower() in (".stl", ".obj", ".dae") and Path(path).is_file():
         mesh = _mesh_file(str(Path(path).resolve()))
-        if _y_up_collada(str(Path(path).resolve())):
+        if collada_y_up(str(Path(path).resolve())):
             return [(mesh, scale @ _Y_TO_Z)]
         return [(mesh, scale)]
     return []
-
-
-@functools.lru_cache(maxsize=256)
-def _y_up_collada(path: str) -> bool:
-    """Whether a Collada file declares ``<up_axis>Y_UP``: the viewer's loader leaves its
-    vertices y-up, while Pinocchio (assimp) turns them z-up."""
-    if Path(path).suffix.lower() != ".dae":
-        return False
-    with open(path, encoding="utf-8", errors="replace") as f:
-        head = f.read(4096)
-    return "<up_axis>Y_UP</up_axis>" in head.replace(" ", "")
 
 
 def has_visuals(visual_model: pin.GeometryModel | None) -> bool:

@@ -1,0 +1,297 @@
+"""Flat-foot contacts: the sole rectangle of each foot and its contact wrench cone.
+
+A :class:`SoleContact` is a Pinocchio frame at the centre of a foot's sole (z along the sole's
+outward normal — up when the foot is flat on the floor — x forward), the sole rectangle's
+half-length ``X`` (along x) and half-width ``Y`` (along y) [m], and the friction coefficient
+``mu``. The contact wrench ``w = [f; τ]`` (6,) that the ground applies to the foot is written at
+the frame's origin in the frame's axes.
+
+The wrench cone of a rectangular sole (Caron, Pham, Nakamura, "Stability of surface contacts
+for humanoid robots: closed-form formulae of the contact wrench cone for rectangular support
+areas", ICRA 2015, arXiv:1501.04719) is the set of wrenches that four corner forces, each in
+its Coulomb friction cone, can produce. In closed form, 16 linear inequalities
+``A(X, Y, μ) @ w <= 0`` (:func:`wrench_cone`):
+
+    |f_x| ≤ μ f_z,  |f_y| ≤ μ f_z,  |τ_x| ≤ Y f_z,  |τ_y| ≤ X f_z,
+    τ_min ≤ τ_z ≤ τ_max,
+    τ_min = −μ(X+Y) f_z + |Y f_x − μ τ_x| + |X f_y − μ τ_y|,
+    τ_max = +μ(X+Y) f_z − |Y f_x + μ τ_x| − |X f_y + μ τ_y|.
+
+A unilateral minimum ``f_z ≥ f_min`` is kept separate (it is a problem parameter).
+
+Sole rectangles are measured from the foot's geometry (:func:`measure_sole`): the vertices of
+the collision and visual geometry attached to the foot's joint that lie within ``depth`` [m] of
+the lowest one at the robot's grounded neutral pose, their extent along the world x and y axes.
+Users override them with ``Robot(..., contacts=...)``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import ContactError, InvalidInputError
+from .meshes import ASSIMP_Y_UP_UNDO, collada_y_up
+
+__all__ = [
+    "DEFAULT_MU",
+    "SoleContact",
+    "FootForces",
+    "ContactForces",
+    "wrench_cone",
+    "cone_margin",
+    "centre_of_pressure",
+    "geometry_vertices",
+    "measure_sole",
+    "sole_frame_name",
+]
+
+#: Default Coulomb friction coefficient [-] of a foot on the floor. Rubber soles on a hard floor
+#: are 0.8–1.0; human walking needs a friction ratio |f_t|/f_n of at most about 0.3. 0.7 keeps
+#: a margin on both sides.
+DEFAULT_MU = 0.7
+
+
+@dataclass(frozen=True)
+class SoleContact:
+    """A foot's flat contact: ``frame`` (Pinocchio frame name at the sole centre, z normal, x
+    forward), ``half_length`` X and ``half_width`` Y [m] of the sole rectangle, friction ``mu``."""
+
+    side: str
+    frame: str
+    half_length: float
+    half_width: float
+    mu: float = DEFAULT_MU
+
+    def __post_init__(self) -> None:
+        for name in ("half_length", "half_width", "mu"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, float, np.floating)) or not math.isfinite(v) or v <= 0:
+                raise InvalidInputError(
+                    f"{self.side} contact: {name} must be a finite number > 0; got {v!r}"
+                    + (" (a sole rectangle of zero size cannot carry a moment)"
+                       if name != "mu" else " (mu ≤ 0 means no friction: a foot cannot push)"))
+            object.__setattr__(self, name, float(v))
+
+    def corners(self) -> np.ndarray:
+        """The four sole corners ``(4, 3)`` [m] in the contact frame (z = 0): front-left,
+        front-right, back-right, back-left."""
+        X, Y = self.half_length, self.half_width
+        return np.array([[X, Y, 0.0], [X, -Y, 0.0], [-X, -Y, 0.0], [-X, Y, 0.0]])
+
+    def cone(self) -> np.ndarray:
+        """This contact's wrench cone matrix ``(16, 6)``, see :func:`wrench_cone`."""
+        return wrench_cone(self.half_length, self.half_width, self.mu)
+
+    def replace(self, **changes) -> SoleContact:
+        """A copy with some fields changed (validated again)."""
+        d = {k: getattr(self, k) for k in ("side", "frame", "half_length", "half_width", "mu")}
+        d.update(changes)
+        return SoleContact(**d)
+
+
+def wrench_cone(half_length: float, half_width: float, mu: float) -> np.ndarray:
+    """The contact wrench cone of a rectangular sole, ``A`` ``(16, 6)`` with ``A @ w <= 0``
+    exactly when the wrench ``w = [f_x, f_y, f_z, τ_x, τ_y, τ_z]`` (at the sole centre, in the
+    sole frame) is produced by four corner forces inside their friction cones (Caron et al.
+    2015, Eq. 4-6). Rows: friction (4), centre of pressure (4), yaw moment (8)."""
+    X, Y, m = float(half_length), float(half_width), float(mu)
+    rows = [
+        [1, 0, -m, 0, 0, 0], [-1, 0, -m, 0, 0, 0],
+        [0, 1, -m, 0, 0, 0], [0, -1, -m, 0, 0, 0],
+        [0, 0, -Y, 1, 0, 0], [0, 0, -Y, -1, 0, 0],
+        [0, 0, -X, 0, 1, 0], [0, 0, -X, 0, -1, 0],
+    ]
+    for s1 in (1.0, -1.0):
+        for s2 in (1.0, -1.0):
+            # τ_z ≥ τ_min:  −τ_z − μ(X+Y) f_z + s1 (Y f_x − μ τ_x) + s2 (X f_y − μ τ_y) ≤ 0
+            rows.append([s1 * Y, s2 * X, -m * (X + Y), -s1 * m, -s2 * m, -1.0])
+            # τ_z ≤ τ_max:  +τ_z − μ(X+Y) f_z + s1 (Y f_x + μ τ_x) + s2 (X f_y + μ τ_y) ≤ 0
+            rows.append([s1 * Y, s2 * X, -m * (X + Y), s1 * m, s2 * m, 1.0])
+    return np.asarray(rows, dtype=float)
+
+
+def cone_margin(contact: SoleContact, w: np.ndarray) -> dict[str, np.ndarray]:
+    """Margins of wrenches ``w`` ``(..., 6)`` to the contact's cone, each ``(...,)``, positive
+    inside, in physical units:
+
+    - ``normal`` [N]: f_z;
+    - ``friction`` [-]: μ − |f_t|/f_z (``-inf`` where f_z ≤ 0);
+    - ``cop`` [m]: the centre of pressure's distance inside the rectangle (negative outside);
+    - ``yaw`` [N·m]: min(τ_z − τ_min, τ_max − τ_z).
+    """
+    w = np.asarray(w, dtype=float)
+    f, tau = w[..., :3], w[..., 3:]
+    fz = f[..., 2]
+    X, Y, mu = contact.half_length, contact.half_width, contact.mu
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(fz > 0, np.hypot(f[..., 0], f[..., 1]) / np.where(fz > 0, fz, 1), np.inf)
+        px = np.where(fz > 0, -tau[..., 1] / np.where(fz > 0, fz, 1), np.inf)
+        py = np.where(fz > 0, tau[..., 0] / np.where(fz > 0, fz, 1), np.inf)
+    cop = np.minimum(X - np.abs(px), Y - np.abs(py))
+    tmin = (-mu * (X + Y) * fz + np.abs(Y * f[..., 0] - mu * tau[..., 0])
+            + np.abs(X * f[..., 1] - mu * tau[..., 1]))
+    tmax = (mu * (X + Y) * fz - np.abs(Y * f[..., 0] + mu * tau[..., 0])
+            - np.abs(X * f[..., 1] + mu * tau[..., 1]))
+    yaw = np.minimum(tau[..., 2] - tmin, tmax - tau[..., 2])
+    return {"normal": fz, "friction": mu - ratio, "cop": cop, "yaw": yaw}
+
+
+def centre_of_pressure(w: np.ndarray) -> np.ndarray:
+    """Centre of pressure ``(..., 2)`` [m] in the sole frame of wrenches ``(..., 6)`` at the sole
+    centre: ``(−τ_y/f_z, τ_x/f_z)``; NaN where f_z ≤ 0."""
+    w = np.asarray(w, dtype=float)
+    fz = w[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        safe = np.where(fz > 0, fz, np.nan)
+        return np.stack([-w[..., 4] / safe, w[..., 3] / safe], axis=-1)
+
+
+# ---------------------------------------------------------------------- measured forces
+@dataclass(frozen=True)
+class FootForces:
+    """Forces one foot exchanged with the ground, on a time grid of ``T`` samples, in the world
+    frame (x forward, y left, z up): ``force`` ``(T, 3)`` [N] the ground applies to the foot
+    (its reverse is the foot's push on the ground); ``cop`` ``(T, 3)`` [m] centre of pressure
+    (NaN where the foot is off the ground); ``torque`` ``(T, 3)`` [N·m] free moment about the
+    centre of pressure; ``contact`` ``(T,)`` bool, True in stance."""
+
+    force: np.ndarray
+    cop: np.ndarray
+    torque: np.ndarray
+    contact: np.ndarray
+
+    def __post_init__(self) -> None:
+        f = np.asarray(self.force, dtype=float)
+        T = f.shape[0] if f.ndim == 2 else -1
+        for name in ("force", "cop", "torque"):
+            a = np.asarray(getattr(self, name), dtype=float)
+            if a.shape != (T, 3):
+                raise InvalidInputError(f"FootForces.{name} must be (T, 3); got {a.shape}")
+            object.__setattr__(self, name, a)
+        c = np.asarray(self.contact, dtype=bool)
+        if c.shape != (T,):
+            raise InvalidInputError(f"FootForces.contact must be ({T},); got {c.shape}")
+        object.__setattr__(self, "contact", c)
+
+
+@dataclass(frozen=True)
+class ContactForces:
+    """Measured (or simulated) contact forces of both feet: ``t`` ``(T,)`` [s] and ``feet``
+    ``{"left": FootForces, "right": FootForces}``; ``source`` says where they came from (a
+    file path, ``"simulation"`` …) and ``frame_note`` what was done to them (e.g. "treadmill
+    trial turned overground: belt speed 1.2 m/s added")."""
+
+    t: np.ndarray
+    feet: Mapping[str, FootForces]
+    source: str = ""
+    frame_note: str = ""
+
+    def __getitem__(self, side: str) -> FootForces:
+        return self.feet[side]
+
+    @property
+    def contact(self) -> dict[str, np.ndarray]:
+        """``{side: (T,) bool}`` stance masks."""
+        return {s: f.contact for s, f in self.feet.items()}
+
+
+# ---------------------------------------------------------------------- measuring soles
+def geometry_vertices(geom: object, placement: pin.SE3, mesh_path: str = ""
+                      ) -> np.ndarray | None:
+    """Vertices ``(n, 3)`` of an hpp-fcl geometry (meshes: their vertices, Y-up Collada files
+    turned back as :mod:`gdimitate.meshes` explains; boxes: 8 corners; cylinders, capsules,
+    spheres: enclosing polygons) mapped by ``placement``; None when the shape has no extent we
+    can read."""
+    v = None
+    if hasattr(geom, "vertices"):
+        try:
+            v = np.asarray(geom.vertices(), dtype=float)
+        except Exception:  # an empty BVH model raises
+            v = None
+        if v is not None and mesh_path and collada_y_up(mesh_path):
+            v = v @ ASSIMP_Y_UP_UNDO.T
+    elif hasattr(geom, "halfSide"):
+        h = np.asarray(geom.halfSide, dtype=float)
+        v = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
+    elif hasattr(geom, "radius"):
+        r = float(geom.radius)
+        hl = float(getattr(geom, "halfLength", 0.0))
+        ang = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+        ring = np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1)
+        if type(geom).__name__ == "Sphere":
+            v = np.concatenate([np.c_[ring, np.zeros(16)], np.c_[ring[:, :1] * 0, ring[:, :1] * 0,
+                                                                  ring[:, 1:2]]])
+            v = np.concatenate([v, [[0, 0, r], [0, 0, -r]]])
+        else:
+            cap = r if type(geom).__name__ == "Capsule" else 0.0
+            v = np.concatenate([np.c_[ring, np.full(16, z)] for z in (-hl - cap, hl + cap)])
+    if v is None or v.size == 0:
+        return None
+    return v @ placement.rotation.T + placement.translation
+
+
+def sole_frame_name(side: str) -> str:
+    """Name of the frame gdimitate adds at a measured sole centre: ``<side>_sole_contact``."""
+    return f"{side}_sole_contact"
+
+
+def measure_sole(model: pin.Model, data: pin.Data, geometry: list, q: np.ndarray, side: str,
+                 frame: str, mu: float = DEFAULT_MU, depth: float = 0.005,
+                 up: np.ndarray | None = None) -> tuple[SoleContact, pin.Frame | None]:
+    """Measure the sole rectangle below ``frame`` (a frame on the foot) at configuration ``q``
+    ``(nq,)`` (the foot flat on the floor, world z up).
+
+    ``geometry``: ``pin.GeometryModel``\\ s in order of preference (collision, then visual): the
+    first that has objects on the foot's parent joint is used; its vertices within ``depth``
+    [m] of the lowest one form the sole; its extent along world x/y gives the rectangle.
+    Returns the contact and, where the given frame is not already at the rectangle's centre
+    with world-aligned axes, a new ``pin.Frame`` named :func:`sole_frame_name` to add to the
+    model (the caller adds it).
+    Raises :class:`ContactError` when the foot has no geometry.
+    """
+    fid = model.getFrameId(frame)
+    parent = model.frames[fid].parentJoint
+    pin.framesForwardKinematics(model, data, q)
+    pts = []
+    for gm in geometry:
+        if gm is None:
+            continue
+        for g in gm.geometryObjects:
+            if g.parentJoint != parent:
+                continue
+            v = geometry_vertices(g.geometry, data.oMi[parent] * g.placement, g.meshPath)
+            if v is not None:
+                pts.append(v)
+        if pts:
+            break
+    if not pts:
+        raise ContactError(
+            f"cannot measure the {side} sole: no collision or visual geometry is attached to "
+            f"joint {model.names[parent]!r} (the parent of frame {frame!r}). Pass "
+            f"contacts={{'{side}': {{'frame': …, 'half_length': …, 'half_width': …}}, …}}.")
+    P = np.concatenate(pts)
+    low = P[:, 2].min()
+    S = P[P[:, 2] <= low + depth]
+    lo, hi = S[:, :2].min(axis=0), S[:, :2].max(axis=0)
+    half = (hi - lo) / 2
+    if min(half) < 1e-4:
+        raise ContactError(
+            f"the {side} sole measured from the geometry of joint {model.names[parent]!r} has "
+            f"zero size ({2 * half[0]:.4f} × {2 * half[1]:.4f} m): a point or line foot. Pass "
+            "contacts= with a sole rectangle.")
+    centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, low])
+    contact = SoleContact(side, frame, float(half[0]), float(half[1]), mu)
+    oMf = data.oMf[fid]
+    aligned = np.allclose(oMf.rotation, np.eye(3), atol=1e-6)
+    if aligned and np.linalg.norm(oMf.translation - centre) < 1e-4:
+        return contact, None
+    oMi = data.oMi[parent]
+    placement = oMi.actInv(pin.SE3(np.eye(3), centre))
+    name = sole_frame_name(side)
+    new = pin.Frame(name, parent, fid, placement, pin.FrameType.OP_FRAME)
+    return contact.replace(frame=name), new
