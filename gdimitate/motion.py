@@ -9,7 +9,7 @@ import numpy as np
 
 from .errors import InvalidInputError, TimeGridError, UnknownNameError
 
-__all__ = ["Motion", "check_time"]
+__all__ = ["Motion", "check_time", "differentiate"]
 
 
 def check_time(t: np.ndarray) -> np.ndarray:
@@ -38,7 +38,11 @@ class Motion:
       ``base_z``, ``base_pitch``), see :attr:`base`;
     - ``contact``: ``{"left": (T,) bool, "right": (T,) bool}``, True while the foot is in stance;
     - ``base_nq``: how many leading columns of ``q`` are the floating base (0, 3 or 7);
-    - ``joint_nq``: columns per joint (same length as ``joint_names``).
+    - ``joint_nq``: columns per joint (same length as ``joint_names``);
+    - ``v``, ``a`` ``(T, nv)`` or ``None``: velocity and acceleration in Pinocchio's
+      conventions (a free-flyer's base twist in the base's LOCAL frame, linear first), where
+      the motion carries them (an adaptor's output does; :func:`differentiate` adds them to a
+      recorded one).
     """
 
     t: np.ndarray
@@ -47,6 +51,8 @@ class Motion:
     contact: Mapping[str, np.ndarray] = field(default_factory=dict)
     base_nq: int = 0
     joint_nq: tuple[int, ...] = ()
+    v: np.ndarray | None = None
+    a: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = check_time(self.t)
@@ -73,6 +79,18 @@ class Motion:
         object.__setattr__(self, "joint_names", names)
         object.__setattr__(self, "joint_nq", nqs)
         object.__setattr__(self, "contact", contact)
+        for name in ("v", "a"):
+            x = getattr(self, name)
+            if x is None:
+                continue
+            x = np.asarray(x, dtype=float)
+            if x.ndim != 2 or x.shape[0] != t.size:
+                raise InvalidInputError(f"{name} must have shape (T, nv) with T = {t.size}; "
+                                        f"got {x.shape}")
+            if not np.all(np.isfinite(x)):
+                r, c = np.argwhere(~np.isfinite(x))[0]
+                raise InvalidInputError(f"{name} has NaN/inf at frame {r}, column {c}")
+            object.__setattr__(self, name, x)
 
     # ------------------------------------------------------------------
     @property
@@ -109,7 +127,7 @@ class Motion:
     def replace(self, **changes) -> Motion:
         """A copy with some fields replaced."""
         d = dict(t=self.t, joint_names=self.joint_names, q=self.q, contact=self.contact,
-                 base_nq=self.base_nq, joint_nq=self.joint_nq)
+                 base_nq=self.base_nq, joint_nq=self.joint_nq, v=self.v, a=self.a)
         d.update(changes)
         return Motion(**d)
 
@@ -135,3 +153,47 @@ class Motion:
         data = np.column_stack([self.t] + [self.column(c) for c in cols])
         np.savetxt(path, data, delimiter=",", header=",".join(["time", *cols]), comments="",
                    fmt="%.9g")
+
+
+def differentiate(model, motion: Motion, cutoff_hz: float | None = None) -> Motion:
+    """``motion`` with ``v`` and ``a`` ``(T, nv)`` from its ``q`` in Pinocchio's conventions.
+
+    ``model``: the robot's ``pin.Model``. Velocities are central differences on the manifold
+    (``pin.difference`` between the neighbours, divided by their time gap; one-sided at the
+    ends), accelerations the same differences of ``v`` (free-flyer twists differenced as
+    vectors in the base frame, an O(h) approximation of the exact one). ``cutoff_hz``: first
+    low-pass ``q``'s joint and base-position columns with a zero-phase 4th-order Butterworth
+    filter at that frequency [Hz] (OpenSim's inverse-dynamics tool filters coordinates at 6 Hz),
+    the base quaternion re-normalised.
+    """
+    import pinocchio as pin
+
+    q = motion.q.copy()
+    t = motion.t
+    if q.shape[1] != model.nq:
+        raise InvalidInputError(f"motion has {q.shape[1]} q columns; the model has nq = "
+                                f"{model.nq}")
+    if cutoff_hz is not None:
+        from scipy.signal import butter, filtfilt
+
+        fs = 1.0 / float(np.median(np.diff(t)))
+        if not (0 < cutoff_hz < fs / 2):
+            raise InvalidInputError(f"cutoff_hz must be in (0, {fs / 2:g}) Hz for a "
+                                    f"{fs:g} Hz motion; got {cutoff_hz!r}")
+        if t.size <= 15:
+            raise InvalidInputError("a filtered motion needs more than 15 frames")
+        b, a_ = butter(4, cutoff_hz / (fs / 2))
+        q = filtfilt(b, a_, q, axis=0)
+        if motion.base_nq == 7:
+            q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    T = t.size
+
+    def diff(i: int, j: int, x=None) -> np.ndarray:
+        if x is None:
+            return pin.difference(model, q[i], q[j]) / (t[j] - t[i])
+        return (x[j] - x[i]) / (t[j] - t[i])
+
+    idx = [(max(k - 1, 0), min(k + 1, T - 1)) for k in range(T)]
+    v = np.array([diff(i, j) for i, j in idx])
+    acc = np.array([diff(i, j, v) for i, j in idx])
+    return motion.replace(q=q, v=v, a=acc)
