@@ -118,7 +118,7 @@ def compare(demonstrator: Robot, demo: Motion, imitator: Robot, motion: Motion, 
     """Measure an imitator motion against the demonstration (used by every method)."""
     fd_m = force_direction(demonstrator, demo, force)
     fd_r = force_direction(imitator, motion, force)
-    err = {s: fd_r[s] - fd_m[s] for s in SIDES}
+    err = {s: fd_r[s].sagittal - fd_m[s].sagittal for s in SIDES}
     hr_m = hip_height_ratio(demonstrator, demo)
     hr_r = hip_height_ratio(imitator, motion)
     viol = {}

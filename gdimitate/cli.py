@@ -67,7 +67,7 @@ def _cmd_view(a: argparse.Namespace) -> None:
     import time
 
     from .examples import example
-    from .metrics import force_direction
+    from .metrics import force_direction, sagittal_angles
     from .motion import Motion
     from .robot import Robot
     from .viz import Viewer, compare
@@ -78,7 +78,7 @@ def _cmd_view(a: argparse.Namespace) -> None:
             raise GdimitateError("a motion file needs --robot NAME (the robot it belongs to)")
         robot, motion = Robot.from_library(a.robot), Motion.from_npz(a.motion)
         v = Viewer.start(a.port, a.open)
-        v.show(robot, motion, force_directions=force_direction(robot, motion)
+        v.show(robot, motion, force_directions=sagittal_angles(force_direction(robot, motion))
                if motion.contact else None)
         v.animate()
         if a.html:
@@ -88,8 +88,10 @@ def _cmd_view(a: argparse.Namespace) -> None:
         ex = example(a.example, a.method)
         v = compare(ex.demonstrator, ex.demonstration, ex.imitator, ex.adapted,
                     layout=a.layout, html=a.html, port=a.port, open_browser=a.open,
-                    demo_force=force_direction(ex.demonstrator, ex.demonstration),
-                    imitator_force=force_direction(ex.imitator, ex.adapted.motion))
+                    demo_force=sagittal_angles(
+                        force_direction(ex.demonstrator, ex.demonstration)),
+                    imitator_force=sagittal_angles(
+                        force_direction(ex.imitator, ex.adapted.motion)))
     try:
         if a.html:
             print(f"wrote {a.html} (self-contained; open it in a browser, no network needed)")

@@ -22,7 +22,7 @@ from . import plots
 from .adapt import adapt
 from .cpg import entrain
 from .gait import human_walk
-from .metrics import force_direction, joint_limit_margins
+from .metrics import force_direction, joint_limit_margins, sagittal_angles
 from .paper import step_length
 from .robot import Robot
 
@@ -42,10 +42,10 @@ def _write_html(path: Path, demo_robot, demo, imit, adapted, cpg) -> str:
     v = Viewer.start(quiet=True)
     try:
         v.show(imit, adapted.motion, name="imitator",
-               force_directions=force_direction(imit, adapted.motion))
+               force_directions=sagittal_angles(force_direction(imit, adapted.motion)))
         v.show(demo_robot, demo, name="demonstrator", scale=L / demo_robot.legs["left"].length,
                color=(0.55, 0.75, 1.0), opacity=0.35, foot_paths=False,
-               force_directions=force_direction(demo_robot, demo))
+               force_directions=sagittal_angles(force_direction(demo_robot, demo)))
         v.show(imit, cpg.replay, name="cpg_replay", offset=(0.0, 2.5 * L, 0.0))
         v.animate(fps=30)
         v.save_html(path)

@@ -6,8 +6,12 @@ robot and one of its :class:`~gdimitate.motion.Motion`\\ s.
 
 from __future__ import annotations
 
-import numpy as np
+from dataclasses import dataclass
 
+import numpy as np
+import pinocchio as pin
+
+from .contact import ContactForces
 from .errors import InvalidInputError, UnknownNameError
 from .motion import Motion
 from .robot import PLANAR_BASE, SIDES, Robot
@@ -15,10 +19,11 @@ from .sagittal import frame_paths, joint_paths
 
 __all__ = ["FORCE_MODELS", "angle_down", "hip_path", "hip_height", "ankle_paths", "sole_paths",
            "foot_heights", "foot_distance", "com_path", "force_direction", "joint_limit_margins",
-           "hip_height_ratio"]
+           "hip_height_ratio", "ForceDirection", "angle_between", "frame_rotations",
+           "sagittal_angles"]
 
-FORCE_MODELS = ("segment", "com", "grf")
-GRAVITY = 9.81
+#: Force-direction models of :func:`force_direction`.
+FORCE_MODELS = ("measured", "dynamics", "com", "segment")
 
 
 def _check(robot: Robot, motion: Motion) -> None:
@@ -96,49 +101,137 @@ def angle_down(v: np.ndarray) -> np.ndarray:
     return np.arctan2(v[..., 0], -v[..., 2])
 
 
-def force_direction(robot: Robot, motion: Motion, model: str = "segment",
-                    cutoff: float | None = 4.0) -> dict[str, np.ndarray]:
-    """Direction of each stance foot's push on the ground, ``{side: (T,)}`` [rad] from the
-    downward vertical, positive when it points forward (+x); NaN where the foot is in swing.
+@dataclass(frozen=True)
+class ForceDirection:
+    """One foot's push on the ground over a motion (DESIGN §5 of docs/design.md).
 
-    Models (DESIGN §5): ``segment`` — the shank's absolute angle θ1+θ2 (knee → ankle; knee →
-    sole for legs without an ankle); ``com`` — from the whole-body centre of mass to the sole
-    (inverted pendulum); ``grf`` — the reverse of the net ground reaction force
-    f = m·(c̈ − g), with c̈ from central finite differences of the Pinocchio centre of mass
-    low-passed at ``cutoff`` [Hz] (2nd-order Butterworth, zero phase; ``None``: unfiltered —
-    the usual gait-analysis practice, as differentiating twice amplifies noise); in double
-    support both feet get the net direction, as the split is unknown.
+    ``vector`` ``(T, 3)``: unit push ON THE GROUND in the world frame (the ground's reaction on
+    the foot is its reverse); ``sagittal`` ``(T,)`` [rad]: its angle from the downward vertical
+    in the x–z plane, positive when it points forward (+x); ``frontal`` ``(T,)`` [rad]: in the
+    y–z plane, positive when it points left (+y); ``model``: how it was obtained. NaN where
+    the foot is in swing (or, for ``measured``, carries no force).
+    """
+
+    vector: np.ndarray
+    sagittal: np.ndarray
+    frontal: np.ndarray
+    model: str
+
+    @classmethod
+    def from_vectors(cls, v: np.ndarray, stance: np.ndarray, model: str) -> ForceDirection:
+        """Normalise push vectors ``(T, 3)`` and blank them (NaN) outside ``stance`` ``(T,)``
+        and where they vanish."""
+        v = np.asarray(v, dtype=float)
+        n = np.linalg.norm(v, axis=1)
+        ok = np.asarray(stance, bool) & (n > 1e-12)
+        u = np.full_like(v, np.nan)
+        u[ok] = v[ok] / n[ok, None]
+        return cls(u, angle_down(u), np.arctan2(u[:, 1], -u[:, 2]), model)
+
+
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle [rad] between vectors ``(..., 3)`` (NaN where either is NaN or zero)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.sum(a * b, axis=-1) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1))
+        s = np.linalg.norm(np.cross(a, b), axis=-1) / (np.linalg.norm(a, axis=-1)
+                                                        * np.linalg.norm(b, axis=-1))
+    return np.arctan2(s, c)
+
+
+def _measured_on(forces: ContactForces, t: np.ndarray, side: str):
+    """Measured force (T, 3), cop (T, 3) and contact (T,) of one foot on the times ``t``."""
+    f = forces[side]
+    if f.force.shape[0] == t.size and np.allclose(forces.t, t, atol=1e-9):
+        return f.force, f.cop, f.contact
+    if t[0] < forces.t[0] - 1e-9 or t[-1] > forces.t[-1] + 1e-9:
+        raise InvalidInputError(
+            f"the forces cover {forces.t[0]:.3f}–{forces.t[-1]:.3f} s but the motion "
+            f"{t[0]:.3f}–{t[-1]:.3f} s: give forces that span the motion")
+    force = np.column_stack([np.interp(t, forces.t, f.force[:, k]) for k in range(3)])
+    cop = np.column_stack([np.interp(t, forces.t, np.nan_to_num(f.cop[:, k])) for k in range(3)])
+    contact = np.interp(t, forces.t, f.contact.astype(float)) > 0.5
+    cop[~contact] = np.nan
+    return force, cop, contact
+
+
+def force_direction(robot: Robot, motion: Motion, model: str = "segment",
+                    forces: ContactForces | None = None, cutoff: float | None = 6.0
+                    ) -> dict[str, ForceDirection]:
+    """Direction of each stance foot's push on the ground, ``{"left": ForceDirection,
+    "right": ForceDirection}`` (NaN where ``motion.contact`` says the foot is in swing).
+
+    Models (DESIGN §5 of docs/design.md):
+
+    - ``measured`` — the reverse of the measured ground reaction force on each foot
+      (``forces``: :class:`~gdimitate.contact.ContactForces`, resampled onto the motion's
+      times by linear interpolation);
+    - ``dynamics`` — from the demonstrator's own whole-body dynamics: the contact wrenches that
+      explain the base rows of its inverse dynamics inside each foot's contact wrench cone,
+      split between the feet in double support (a QP per knot,
+      :func:`gdimitate.wrenches.estimate_wrenches`); velocities and accelerations from
+      ``motion.v``/``motion.a`` or, when absent, :func:`gdimitate.motion.differentiate` with a
+      ``cutoff`` [Hz] low-pass (zero phase; OpenSim's inverse dynamics uses 6 Hz);
+    - ``com`` — from the whole-body centre of mass to the contact point (the measured centre
+      of pressure where ``forces`` are given, else the sole frame): an inverted pendulum;
+    - ``segment`` — the paper's: along the shank, knee → ankle (knee → sole for legs without
+      an ankle). In the planar case its sagittal angle is the absolute shank angle θ1+θ2.
     """
     if model not in FORCE_MODELS:
         raise UnknownNameError("force model", model, FORCE_MODELS)
     _check(robot, motion)
     if not motion.contact or any(s not in motion.contact for s in SIDES):
         raise InvalidInputError("force_direction needs motion.contact for 'left' and 'right'")
-    out = {}
+    if model == "measured" and forces is None:
+        raise InvalidInputError("force model 'measured' needs forces= (the demonstrator's "
+                                "measured ContactForces, e.g. from gdimitate.opensim.read_grf)")
+    stance = {s: np.asarray(motion.contact[s], bool) for s in SIDES}
+    push: dict[str, np.ndarray] = {}
     if model == "segment":
         ank = ankle_paths(robot, motion)
         for s in SIDES:
             k = joint_paths(robot, motion.q, [robot.legs[s].knee])[robot.legs[s].knee]
-            out[s] = angle_down(ank[s] - k)
+            push[s] = ank[s] - k
     elif model == "com":
         c = com_path(robot, motion)
         sole = sole_paths(robot, motion)
         for s in SIDES:
-            out[s] = angle_down(sole[s] - c)
-    else:
-        c = com_path(robot, motion)
-        rate = 1.0 / motion.dt
-        if cutoff is not None and cutoff < rate / 2 and motion.T > 15:
-            from scipy.signal import butter, filtfilt
-
-            b, a = butter(2, cutoff / (rate / 2))
-            c = filtfilt(b, a, c, axis=0)
-        acc = np.gradient(np.gradient(c, motion.t, axis=0), motion.t, axis=0)
-        f = robot.mass * (acc - np.array([0.0, 0.0, -GRAVITY]))  # GRF on the robot
+            point = sole[s]
+            if forces is not None:
+                _, cop, _ = _measured_on(forces, motion.t, s)
+                point = np.where(np.isfinite(cop), cop, point)
+            push[s] = point - c
+    elif model == "measured":
         for s in SIDES:
-            out[s] = angle_down(-f)
-    for s in SIDES:
-        out[s] = np.where(motion.contact[s], out[s], np.nan)
+            f, _, contact = _measured_on(forces, motion.t, s)
+            push[s] = -f
+            stance[s] = stance[s] & contact
+    else:
+        from .motion import differentiate
+        from .wrenches import estimate_wrenches
+
+        m = motion if motion.v is not None and motion.a is not None else differentiate(
+            robot.model, motion, cutoff_hz=cutoff)
+        est = estimate_wrenches(robot, m, method="cone")
+        contacts = robot.require_contacts()
+        for s in SIDES:
+            R = frame_rotations(robot, m.q, contacts[s].frame)
+            push[s] = -np.einsum("tij,tj->ti", R, est.wrenches[s][:, :3])
+    return {s: ForceDirection.from_vectors(push[s], stance[s], model) for s in SIDES}
+
+
+def sagittal_angles(directions: dict[str, ForceDirection]) -> dict[str, np.ndarray]:
+    """``{side: (T,)}`` sagittal angles [rad] of :func:`force_direction`'s result."""
+    return {s: d.sagittal for s, d in directions.items()}
+
+
+def frame_rotations(robot: Robot, q: np.ndarray, frame: str) -> np.ndarray:
+    """World rotation ``(T, 3, 3)`` of a frame along configurations ``q`` ``(T, nq)``."""
+    fid = robot.frame_id(frame)
+    out = np.empty((len(q), 3, 3))
+    for i, qi in enumerate(np.asarray(q, dtype=float)):
+        pin.framesForwardKinematics(robot.model, robot.data, qi)
+        out[i] = robot.data.oMf[fid].rotation
     return out
 
 

@@ -19,7 +19,7 @@ import pytest
 import umsgpack
 
 from gdimitate.errors import InvalidInputError, ViewerError
-from gdimitate.metrics import force_direction
+from gdimitate.metrics import force_direction, sagittal_angles
 from gdimitate.robot import Robot
 from gdimitate.viz import (
     BrowserNotFoundError,
@@ -45,7 +45,7 @@ SHOT = dict(size=(640, 480), virtual_time_ms=1500, timeout_s=90.0)
 def talos():
     robot = Robot.from_library("talos")
     motion = walking_motion(robot, GAIT)
-    return robot, motion, force_direction(robot, motion)
+    return robot, motion, sagittal_angles(force_direction(robot, motion))
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +53,7 @@ def planar():
     """One of our mesh-less planar URDFs (box/cylinder visuals, base_x/z/pitch), 1 m legs."""
     robot = Robot.from_library("case1_demonstrator")
     motion = walking_motion(robot, GAIT)
-    return robot, motion, force_direction(robot, motion)
+    return robot, motion, sagittal_angles(force_direction(robot, motion))
 
 
 @pytest.fixture(scope="module")
