@@ -1,0 +1,40 @@
+"""``audit(robot, motion, wrenches, ...)``: recompute every feasibility check of a motion."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..contact import SoleContact
+from ..motion import Motion
+from .report import AuditReport, AuditTolerances
+
+__all__ = ["audit"]
+
+
+def audit(robot, motion: Motion, wrenches: Mapping[str, np.ndarray],
+          contacts: Mapping[str, SoleContact] | None = None, *,
+          target: Mapping[str, np.ndarray] | None = None, cone_half_angle: float = 0.0,
+          tolerances: AuditTolerances | None = None) -> AuditReport:
+    """Audit ``motion`` of ``robot`` (a :class:`gdimitate.Robot`) with its contact wrenches.
+
+    - ``motion``: ``t`` ``(T,)`` [s], ``q`` ``(T, nq)``, ``v``/``a`` ``(T, nv)`` (Pinocchio
+      conventions; use :func:`gdimitate.motion.differentiate` to add them to a recorded
+      motion), ``contact`` ``{"left": (T,) bool, "right": (T,) bool}`` (True in stance);
+    - ``wrenches`` ``{side: (T, 6)}``: the wrench ``[f; τ]`` [N, N·m] the ground applies to
+      each foot, in its contact frame (``contacts[side].frame``) at that frame's origin;
+    - ``contacts``: ``{side: SoleContact}``, default ``robot.require_contacts()``;
+    - ``target`` ``{side: (T, 3)}``: unit push directions on the ground (world frame) of the
+      demonstrator — the ground's force on the foot should point along −target; NaN rows where
+      there is none;
+    - ``cone_half_angle`` [rad]: the allowed angle between the push and its target;
+    - ``tolerances``: :class:`AuditTolerances` (defaults stated there).
+
+    Returns an :class:`AuditReport`. Raises :class:`~gdimitate.errors.InvalidInputError` for
+    missing ``v``/``a``, wrong shapes or non-finite values.
+    """
+    from .checks import run_audit
+
+    return run_audit(robot, motion, wrenches, contacts, target, cone_half_angle,
+                     tolerances or AuditTolerances())

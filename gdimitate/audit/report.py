@@ -1,0 +1,272 @@
+"""The audit's result types: tolerances, one :class:`Check` per bound, per-joint and per-foot
+summaries, and the :class:`AuditReport` that holds them (JSON-safe through ``to_dict``)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "AuditTolerances",
+    "Check",
+    "Worst",
+    "JointAudit",
+    "Penetration",
+    "ForceDirectionAudit",
+    "FootAudit",
+    "AuditReport",
+    "CORNER_NAMES",
+]
+
+#: Names of the four sole corners in :meth:`gdimitate.contact.SoleContact.corners` order.
+CORNER_NAMES = ("front-left", "front-right", "back-right", "back-left")
+
+
+@dataclass(frozen=True)
+class AuditTolerances:
+    """How far past each bound a motion may go and still count as feasible.
+
+    - ``base_residual`` [N, N·m]: largest |component| of the unactuated (base) rows of
+      ``rnea(q, v, a) − Σ_c J_cᵀ w_c``;
+    - ``torque`` [-]: fraction over an effort limit (1e-3: 0.1 % over);
+    - ``velocity`` [-]: fraction over a velocity limit (1e-2: 1 % over);
+    - ``position`` [rad or m]: beyond a position limit;
+    - ``velocity_consistency`` [rad/s or m/s]: distance of a forward difference of ``q`` from
+      the interval spanned by the velocities at its two knots;
+    - ``normal`` [N]: below zero normal force in stance;
+    - ``friction`` [-]: friction ratio over μ; ``cop`` [m]: centre of pressure outside the
+      sole; ``yaw`` [N·m]: yaw moment beyond its bounds;
+    - ``penetration`` [m]: a sole corner under the floor (z = 0);
+    - ``slip`` [m], ``slip_rotation`` [rad]: a stance foot's drift from where its stance began;
+    - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
+    - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench.
+    """
+
+    base_residual: float = 1e-6
+    torque: float = 1e-3
+    velocity: float = 1e-2
+    position: float = 1e-6
+    velocity_consistency: float = 1e-2
+    normal: float = 1e-6
+    friction: float = 1e-6
+    cop: float = 1e-6
+    yaw: float = 1e-6
+    penetration: float = 1e-3
+    slip: float = 1e-3
+    slip_rotation: float = 1e-3
+    force_direction: float = 1e-3
+    swing_wrench: float = 1e-6
+
+    def __post_init__(self) -> None:
+        from ..errors import InvalidInputError
+
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise InvalidInputError(
+                    f"AuditTolerances.{f.name} must be a finite number ≥ 0; got {v!r}")
+
+
+class Worst(NamedTuple):
+    """The worst value of a quantity over the knots and the knot where it is (−1: no knot)."""
+
+    value: float
+    knot: int
+
+
+@dataclass(frozen=True)
+class Check:
+    """One bound of the audit.
+
+    ``name`` (e.g. ``"torque:leg_left_4_joint"``, ``"cop:left"``, ``"penetration"``);
+    ``value``: the worst value over the knots, in ``unit``; ``bound``: what it is compared with,
+    tolerance included (``sense`` ``"max"``: value ≤ bound; ``"min"``: value ≥ bound); ``knot``:
+    where the worst value is (−1 where the check has no knots, e.g. a foot never in stance);
+    ``passed``; ``violation`` ≥ 0: how far past the bound, made dimensionless by a stated
+    scale (0 when passed) — it orders :attr:`AuditReport.binding`.
+    """
+
+    name: str
+    value: float
+    bound: float
+    knot: int
+    passed: bool
+    violation: float
+    unit: str
+    sense: str
+
+
+@dataclass(frozen=True)
+class JointAudit:
+    """One actuated joint (its worst degree of freedom where it has several).
+
+    ``torque_max`` [N·m or N] worst |τ| and ``torque_knot``; ``effort_limit`` (inf: none in the
+    model — listed in :attr:`AuditReport.unlimited`); ``torque_ratio`` |τ|/limit (NaN without a
+    limit). ``velocity_max`` [rad/s or m/s]: worst of |v| and |forward difference of q|, at
+    ``velocity_knot``; ``velocity_limit`` (inf: none); ``velocity_ratio``. ``position_margin``
+    [rad or m]: smallest distance to a position limit (negative: outside), at
+    ``position_knot`` (inf, −1: no finite limits)."""
+
+    name: str
+    torque_max: float
+    torque_knot: int
+    effort_limit: float
+    torque_ratio: float
+    velocity_max: float
+    velocity_knot: int
+    velocity_limit: float
+    velocity_ratio: float
+    position_margin: float
+    position_knot: int
+
+
+class Penetration(NamedTuple):
+    """The deepest sole corner under the floor: ``depth`` [m] (positive: under z = 0; negative:
+    the lowest corner's clearance), ``knot``, ``foot`` (side) and ``corner`` (index into
+    :data:`CORNER_NAMES`)."""
+
+    depth: float
+    knot: int
+    foot: str
+    corner: int
+
+
+@dataclass(frozen=True)
+class ForceDirectionAudit:
+    """A stance foot's push direction ``−f`` (world frame) against the demonstrator's target:
+    ``error_max`` [rad] the largest angle between them and its ``knot``; ``error_rms`` [rad];
+    ``sagittal_max``/``frontal_max`` [rad]: the largest |difference| of the angles from the
+    downward vertical in the x–z plane (positive forward) and the y–z plane (positive left), at
+    ``sagittal_knot``/``frontal_knot``; ``knots``: how many knots had both a target and a
+    non-zero force."""
+
+    side: str
+    error_max: float
+    knot: int
+    error_rms: float
+    sagittal_max: float
+    sagittal_knot: int
+    frontal_max: float
+    frontal_knot: int
+    knots: int
+
+
+@dataclass(frozen=True)
+class FootAudit:
+    """One foot: ``stance_knots``; the worst ``normal`` force [N] (smallest f_z in stance),
+    ``friction`` ratio |f_t|/f_z [-] against ``mu``, ``cop`` margin [m] (inside positive),
+    ``yaw`` margin [N·m] (see :func:`gdimitate.contact.cone_margin`), ``slip`` [m] and
+    ``slip_rotation`` [rad] (drift of the sole frame since the stance began), ``swing_wrench``
+    (largest |component| while in swing), ``penetration`` (this foot's deepest corner, all
+    knots), ``force_direction`` (None without a target)."""
+
+    side: str
+    stance_knots: int
+    mu: float
+    normal: Worst
+    friction: Worst
+    cop: Worst
+    yaw: Worst
+    slip: Worst
+    slip_rotation: Worst
+    swing_wrench: Worst
+    penetration: Penetration
+    force_direction: ForceDirectionAudit | None
+
+
+def _json(x: object) -> object:
+    """JSON-safe copy: NaN/inf → None, NumPy → Python, tuples → lists."""
+    if isinstance(x, Mapping):
+        return {str(k): _json(v) for k, v in x.items()}
+    if hasattr(x, "_asdict"):
+        return _json(x._asdict())
+    if hasattr(x, "__dataclass_fields__"):
+        return {f.name: _json(getattr(x, f.name)) for f in fields(x)}
+    if isinstance(x, np.ndarray):
+        return [_json(v) for v in x.tolist()]
+    if isinstance(x, (list, tuple)):
+        return [_json(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    return x
+
+
+@dataclass(frozen=True)
+class AuditReport:
+    """The recomputed feasibility of a motion with its contact wrenches.
+
+    ``feasible``: every check passed; ``binding``: the names of the failed checks, most
+    violated first (by :attr:`Check.violation`); ``checks``: every check; ``feet``
+    ``{side: FootAudit}``; ``joints``: one :class:`JointAudit` per actuated joint;
+    ``unlimited``: ``(joint, "effort" | "velocity")`` pairs of actuated joints without that
+    limit in the model (not checked — reported, not skipped); ``base_residual`` [N, N·m]
+    (largest |component| of the base rows, and its knot); ``penetration``: the deepest sole
+    corner of all feet; ``velocity_consistency`` [rad/s, m/s]; ``knot_feasible`` ``(T,)``: every
+    per-knot check holds at that knot (forward differences count at their first knot);
+    ``tolerances``; ``cone_half_angle`` [rad].
+    """
+
+    feasible: bool
+    binding: tuple[str, ...]
+    checks: tuple[Check, ...]
+    feet: Mapping[str, FootAudit]
+    joints: tuple[JointAudit, ...]
+    unlimited: tuple[tuple[str, str], ...]
+    base_residual: Worst
+    penetration: Penetration
+    velocity_consistency: Worst
+    knot_feasible: np.ndarray
+    tolerances: AuditTolerances = field(default_factory=AuditTolerances)
+    cone_half_angle: float = 0.0
+
+    @property
+    def force_direction_error(self) -> dict[str, ForceDirectionAudit | None]:
+        """``{side: ForceDirectionAudit | None}`` (None where no target was given)."""
+        return {s: f.force_direction for s, f in self.feet.items()}
+
+    def check(self, name: str) -> Check:
+        """The check called ``name``; :class:`~gdimitate.errors.UnknownNameError` lists them."""
+        from ..errors import UnknownNameError
+
+        for c in self.checks:
+            if c.name == name:
+                return c
+        raise UnknownNameError("check", name, [c.name for c in self.checks])
+
+    def joint(self, name: str) -> JointAudit:
+        """The :class:`JointAudit` of joint ``name``."""
+        from ..errors import UnknownNameError
+
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise UnknownNameError("joint", name, [j.name for j in self.joints])
+
+    def to_dict(self) -> dict:
+        """Everything as plain JSON types (NaN and inf become ``None``)."""
+        return _json({f.name: getattr(self, f.name) for f in fields(self)})
+
+    def summary(self, only_failed: bool = False) -> str:
+        """A text table: one line per check (value, bound, unit, worst knot, status)."""
+        head = (f"feasible: {'yes' if self.feasible else 'NO'}"
+                + (f"; binding: {', '.join(self.binding)}" if self.binding else ""))
+        lines = [head, f"{'check':<36} {'value':>12} {'bound':>12} {'unit':<6} {'knot':>5}  ok"]
+        order = sorted(self.checks, key=lambda c: (c.passed, -c.violation))
+        for c in order:
+            if only_failed and c.passed:
+                continue
+            op = "≤" if c.sense == "max" else "≥"
+            lines.append(f"{c.name:<36} {c.value:>12.4g} {op}{c.bound:>11.4g} {c.unit:<6} "
+                         f"{c.knot:>5}  {'yes' if c.passed else 'NO'}")
+        if self.unlimited:
+            lines.append("no limit in the model (not checked): " + ", ".join(
+                f"{j} ({k})" for j, k in self.unlimited))
+        return "\n".join(lines)
