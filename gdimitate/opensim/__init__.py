@@ -1,0 +1,35 @@
+"""OpenSim models and data: ``.osim`` → URDF (Pinocchio), and the coordinate/force/marker files.
+
+Model conversion (:mod:`.model`, :mod:`.joints`, :mod:`.urdf`)::
+
+    from gdimitate.opensim import opensim_to_urdf, pelvis_to_freeflyer, read_osim
+    urdf_path = opensim_to_urdf("subject01.osim")          # -> Path (temporary folder)
+    robot = gdimitate.Robot.from_osim("subject01.osim")      # free-flyer, legs, soles set
+
+* URDF joint names are the OpenSim coordinate names (``hip_flexion_r``, ``knee_angle_r``, …),
+  values equal to OpenSim's (rad, m), so coordinate columns map by name.
+* ``pelvis_to_freeflyer(values, model) -> np.ndarray (T, 7)``: the root joint's coordinates
+  (``values``: name → (T,) array in rad and m, e.g. ``pelvis_tilt``, ``pelvis_list``,
+  ``pelvis_rotation``, ``pelvis_tx``, ``pelvis_ty``, ``pelvis_tz``; ``model``: ``OsimModel`` or
+  ``.osim`` path) → Pinocchio free-flyer ``q[:7] = [x, y, z, qx, qy, qz, qw]`` of the URDF's
+  root link in OUR world frame (x forward, y left, z up).
+* ``WORLD_FROM_OPENSIM`` (3×3): v_ours = WORLD_FROM_OPENSIM @ v_opensim (x = X, y = −Z,
+  z = Y), for forces, centres of pressure and markers given in OpenSim's ground frame.
+"""
+
+from .joints import WORLD_FROM_OPENSIM, Approximation, pelvis_to_freeflyer
+from .model import OsimModel, read_osim
+from .urdf import EFFORT_LIMIT, VELOCITY_LIMIT, OsimConversion, convert_osim, opensim_to_urdf
+
+__all__ = [
+    "EFFORT_LIMIT",
+    "VELOCITY_LIMIT",
+    "WORLD_FROM_OPENSIM",
+    "Approximation",
+    "OsimConversion",
+    "OsimModel",
+    "convert_osim",
+    "opensim_to_urdf",
+    "pelvis_to_freeflyer",
+    "read_osim",
+]
