@@ -95,6 +95,7 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     from .urdfgen import human_spec
 
     d = read_mot(path)
+    _refuse_full_body(path, d)
     need = ["time", "pelvis_tilt", "hip_flexion_r", "knee_angle_r", "ankle_angle_r",
             "hip_flexion_l", "knee_angle_l", "ankle_angle_l"]
     missing = [c for c in need if c not in d]
@@ -128,6 +129,25 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     else:
         raise InvalidInputError(f"base must be 'ground' or 'measured'; got {base!r}")
     return robot, robot_motion(robot, t, q, contact)
+
+
+#: Coordinates of full-body (3-D) OpenSim models that a sagittal model has no joint for.
+_OUT_OF_PLANE = ("pelvis_list", "pelvis_rotation", "hip_adduction_r", "hip_adduction_l",
+                 "hip_rotation_r", "hip_rotation_l", "subtalar_angle_r", "subtalar_angle_l",
+                 "lumbar_bending", "lumbar_rotation")
+
+
+def _refuse_full_body(path, d: dict) -> None:
+    """A full-body 3-D coordinates file would lose its out-of-plane angles here: refuse it."""
+    from .errors import OpenSimDataError
+
+    found = [c for c in _OUT_OF_PLANE if c in d]
+    if found:
+        raise OpenSimDataError(
+            f"{path} is a full-body 3-D coordinates file (it has {found[:4]}); the sagittal "
+            "reader would drop those angles. Read it with gdimitate.opensim.read_coordinates("
+            "path, Robot.from_osim(model.osim)) (gdimitate.gait.human_walk_3d() for the shipped "
+            "walk)")
 
 
 def _measured_base(robot, q, contact, d, t, belt_speed):

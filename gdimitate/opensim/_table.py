@@ -1,0 +1,124 @@
+"""The OpenSim storage table (``.mot``/``.sto``): header, column names, numbers, time.
+
+OpenSim writes two header styles, both read here: the 4.x one (``version=1``, ``nRows=…``,
+``nColumns=…``, ``inDegrees=yes|no``, ``endheader``) and the older one of OpenSim 1–2 and many
+lab exports (``name …``, ``datacolumns …``, ``datarows …``, ``range …``, ``endheader``; the
+angle unit, where given, as a sentence such as ``Angles are in degrees.``). Columns are tab
+separated (whitespace where a file has no tab); the first column must be ``time``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OpenSimDataError, TimeGridError
+
+__all__ = ["Table", "read_table"]
+
+
+@dataclass(frozen=True)
+class Table:
+    """One OpenSim storage table: ``path``; ``header`` (lower-cased ``key=value`` pairs);
+    ``header_text`` (the raw header lines); ``names`` (column names as written, ``time``
+    first); ``data`` ``(T, n)``; ``in_degrees`` (``True``/``False`` from the header's
+    ``inDegrees`` or an "Angles are in degrees/radians" sentence, ``None`` when the file
+    does not say)."""
+
+    path: Path
+    header: Mapping[str, str]
+    header_text: tuple[str, ...]
+    names: tuple[str, ...]
+    data: np.ndarray
+    in_degrees: bool | None
+
+    @property
+    def t(self) -> np.ndarray:
+        """Time ``(T,)`` [s]."""
+        return self.data[:, 0]
+
+    def column(self, name: str) -> np.ndarray:
+        """Values ``(T,)`` of a column by its name as written."""
+        return self.data[:, self.names.index(name)]
+
+
+def _split(line: str) -> list[str]:
+    parts = line.split("\t") if "\t" in line else line.split()
+    return [p.strip() for p in parts]
+
+
+def _in_degrees(header: Mapping[str, str], text: list[str], path: Path) -> bool | None:
+    flag = header.get("indegrees")
+    if flag is not None:
+        v = flag.strip().lower()
+        if v in ("yes", "true", "1"):
+            return True
+        if v in ("no", "false", "0"):
+            return False
+        raise OpenSimDataError(f"{path}: inDegrees={flag!r}; write inDegrees=yes or inDegrees=no")
+    for line in text:
+        m = re.search(r"angles\s+are\s+in\s+(degrees|radians)", line, re.IGNORECASE)
+        if m:
+            return m.group(1).lower() == "degrees"
+    return None
+
+
+def read_table(path: str | Path) -> Table:
+    """Read an OpenSim ``.mot``/``.sto`` file → :class:`Table`.
+
+    Raises :class:`~gdimitate.errors.OpenSimDataError` (no such file, no ``endheader``, no
+    ``time`` column, rows of the wrong length, non-numeric or NaN/inf values — with the row and
+    column) and :class:`~gdimitate.errors.TimeGridError` (time not strictly increasing).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise OpenSimDataError(f"no such OpenSim file: {path}")
+    lines = path.read_text(errors="replace").splitlines()
+    try:
+        end = next(i for i, ln in enumerate(lines) if ln.strip().lower() == "endheader")
+    except StopIteration:
+        raise OpenSimDataError(f"{path}: no 'endheader' line; not an OpenSim .mot/.sto "
+                               "file (its header must end with a line 'endheader')") from None
+    text = [ln.strip() for ln in lines[:end]]
+    header = {}
+    for ln in text:
+        if "=" in ln:
+            k, _, v = ln.partition("=")
+            header[k.strip().lower()] = v.strip()
+    body = [(i, ln) for i, ln in enumerate(lines[end + 1:], start=end + 2) if ln.strip()]
+    if not body:
+        raise OpenSimDataError(f"{path}: no column names after 'endheader'")
+    names = tuple(n for n in _split(body[0][1]) if n)
+    if not names or names[0].lower() != "time":
+        raise OpenSimDataError(f"{path}: the first column must be 'time'; got "
+                               f"{names[0] if names else 'nothing'!r}")
+    rows = []
+    for lineno, ln in body[1:]:
+        vals = [v for v in _split(ln) if v != ""]
+        if len(vals) != len(names):
+            raise OpenSimDataError(f"{path}, line {lineno}: {len(vals)} values for "
+                                   f"{len(names)} columns; every row needs one value per column")
+        try:
+            rows.append([float(v) for v in vals])
+        except ValueError as e:
+            raise OpenSimDataError(f"{path}, line {lineno}: not a number ({e})") from None
+    if len(rows) < 2:
+        raise OpenSimDataError(f"{path}: {len(rows)} data rows; at least 2 are needed")
+    data = np.array(rows)
+    bad = np.argwhere(~np.isfinite(data))
+    if bad.size:
+        r, c = bad[0]
+        raise OpenSimDataError(
+            f"{path}: column {names[c]!r} is NaN/inf at row {r} (t = {data[r, 0]:g} s) and "
+            f"{len(bad) - 1} more cells; fill the gaps (e.g. interpolate) or cut the rows")
+    steps = np.flatnonzero(np.diff(data[:, 0]) <= 0)
+    if steps.size:
+        i = int(steps[0])
+        raise TimeGridError(f"{path}: time must be strictly increasing; row {i + 1} has "
+                            f"t = {data[i + 1, 0]!r} after t = {data[i, 0]!r} "
+                            f"({steps.size} such rows): remove duplicated or unsorted rows")
+    return Table(path, header, tuple(text), names, data, _in_degrees(header, text, path))
