@@ -80,6 +80,12 @@ class ContactError(GdimitateError):
     ``contacts=`` explicitly."""
 
 
+class OsimError(URDFError):
+    """An OpenSim model (``.osim``) that cannot be converted to a URDF: malformed XML, a
+    missing body, a joint whose parent is unknown, an unsupported joint or function type, a
+    NaN mass, a coordinate that no joint uses. The message names the element and what to fix."""
+
+
 class OpenSimDataError(InvalidInputError):
     """An OpenSim data file (``.mot``/``.sto`` coordinates or forces, ``.trc`` markers, an
     ExternalLoads ``.xml``) that is malformed or inconsistent; the message names the file and
@@ -104,5 +110,58 @@ class CoordinateMismatchWarning(UserWarning):
     """File columns the model lacks, or model coordinates the file lacks (listed by name)."""
 
 
+class BVHError(GdimitateError, ValueError):
+    """A BVH motion-capture file that is missing or malformed (the message gives the line
+    number and what to fix), or a skeleton :func:`gdimitate.bvh.read_bvh` cannot convert."""
+
+
 class MarkerGapWarning(UserWarning):
     """Markers missing in some frames of a marker file (kept as NaN there, listed by name)."""
+
+
+class FileFormatError(InvalidInputError):
+    """A data file that is not what its name says (an ``.npz`` that is not a NumPy archive or
+    lacks keys, a binary ``.mot``, an empty file); the message names the file and what is
+    wrong with it."""
+
+
+class ResourceLimitError(InvalidInputError):
+    """An input whose size would exhaust memory or time (a URDF too large or too deep, a
+    motion whose time axis is implausible, too many harmonics or cycles); the message states
+    the limit (see :mod:`gdimitate.safety`)."""
+
+
+class URDFLimitError(URDFError, ResourceLimitError):
+    """A URDF too large, with too many links or a kinematic chain too deep to parse safely
+    (Pinocchio's parser crashes on a 5000-deep chain); the message states the limit."""
+
+
+class OutputError(GdimitateError):
+    """An output path that cannot be written (a folder that is a file, no permission)."""
+
+
+class MeshPathError(URDFError):
+    """A URDF mesh reference that points outside the folders it may read (the URDF's own
+    folder and the declared package directories), or a mesh file that is missing."""
+
+
+class GdimitateWarning(UserWarning):
+    """Base class of gdimitate's warnings."""
+
+
+class UnitsWarning(GdimitateWarning):
+    """A unit flag that the values seem to contradict (e.g. ``inDegrees=no`` with 60 rad)."""
+
+
+class SimulationError(GdimitateError):
+    """The physics check (:mod:`gdimitate.sim`) could not run as asked."""
+
+
+class SimModelError(SimulationError):
+    """A robot that cannot be turned into a MuJoCo model (unsupported joint, massless moving
+    link, no flat-foot contacts, bad model options)."""
+
+
+class PlanError(SimulationError, InvalidInputError):
+    """A plan handed to :func:`gdimitate.sim.simulate` that does not fit the robot or the plan
+    contract (shapes, time grid, stance schedule, wrenches)."""
