@@ -211,7 +211,9 @@ class AuditReport:
     (largest |component| of the base rows, and its knot); ``penetration``: the deepest sole
     corner of all feet; ``velocity_consistency`` [rad/s, m/s]; ``knot_feasible`` ``(T,)``: every
     per-knot check holds at that knot (forward differences count at their first knot);
-    ``tolerances``; ``cone_half_angle`` [rad].
+    ``tau`` ``(T, nv)`` [N·m, N]: the recomputed ``rnea(q, v, a) − Σ_c J_cᵀ w_c`` (the base
+    rows are the residual, the others the joint torques); ``tolerances``; ``cone_half_angle``
+    [rad].
     """
 
     feasible: bool
@@ -224,6 +226,7 @@ class AuditReport:
     penetration: Penetration
     velocity_consistency: Worst
     knot_feasible: np.ndarray
+    tau: np.ndarray
     tolerances: AuditTolerances = field(default_factory=AuditTolerances)
     cone_half_angle: float = 0.0
 
@@ -251,8 +254,8 @@ class AuditReport:
         raise UnknownNameError("joint", name, [j.name for j in self.joints])
 
     def to_dict(self) -> dict:
-        """Everything as plain JSON types (NaN and inf become ``None``)."""
-        return _json({f.name: getattr(self, f.name) for f in fields(self)})
+        """Everything but ``tau`` as plain JSON types (NaN and inf become ``None``)."""
+        return _json({f.name: getattr(self, f.name) for f in fields(self) if f.name != "tau"})
 
     def summary(self, only_failed: bool = False) -> str:
         """A text table: one line per check (value, bound, unit, worst knot, status)."""
