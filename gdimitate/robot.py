@@ -17,7 +17,8 @@ from __future__ import annotations
 import math
 import re
 import tempfile
-from collections.abc import Mapping
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +35,8 @@ from .errors import (
     URDFError,
 )
 from .library import LIBRARY, library_entry, list_robots
+from .meshes import confine_meshes
+from .safety import MAX_URDF_BYTES, check_urdf_bounds, parse_xml, read_text_bounded
 from .urdfgen import PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
 
 __all__ = ["Leg", "Robot", "PLANAR_BASE"]
@@ -104,6 +107,105 @@ _ROLE_PATTERNS = {
 }
 
 
+#: Joints of library robots whose subtrees are massless on purpose (Romeo's hands: every
+#: finger link has mass 0); see :func:`check_urdf_physics`.
+MASSLESS_PRESETS: dict[str, tuple[str, ...]] = {
+    "romeo": tuple(f"{s}{j}" for s in "LR" for j in ("Hand", "Finger21", "Finger31", "Thumb1")),
+}
+#: Principal moments of inertia down to −(INERTIA_TOL + 1e-9·trace) [kg·m²] count as zero, and
+#: the triangle inequality may fail by INERTIA_TOL + 1e-6·trace (rounding in CAD exports).
+INERTIA_TOL = 1e-12
+
+
+def _inertial(link: ET.Element, source: object) -> tuple[float, np.ndarray]:
+    """``(mass [kg], 3×3 rotational inertia [kg·m²])`` of a URDF ``<link>``, checked."""
+    name = link.get("name")
+    el = link.find("inertial")
+    if el is None:
+        return 0.0, np.zeros((3, 3))
+
+    def num(node: ET.Element | None, key: str, what: str) -> float:
+        try:
+            v = float(node.get(key))  # type: ignore[union-attr, arg-type]
+        except (AttributeError, TypeError, ValueError):
+            raise URDFError(f"{source}: link {name!r}: {what} is missing or not a number"
+                            ) from None
+        if not math.isfinite(v):
+            raise URDFError(f"{source}: link {name!r}: {what} is {v} (must be finite)")
+        return v
+
+    m = num(el.find("mass"), "value", "<mass value>")
+    if m < 0:
+        raise URDFError(f"{source}: link {name!r} has mass {m:g} kg; a mass must be >= 0")
+    i = el.find("inertia")
+    c = {k: num(i, k, f"<inertia {k}>") for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")}
+    origin = el.find("origin")
+    for key in ("xyz", "rpy"):
+        text = origin.get(key) if origin is not None else None
+        try:
+            ok = text is None or all(math.isfinite(float(v)) for v in text.split())
+        except ValueError:
+            ok = False
+        if not ok:
+            raise URDFError(f"{source}: link {name!r}: inertial origin {key}={text!r} must be "
+                            "three finite numbers")
+    inertia = np.array([[c["ixx"], c["ixy"], c["ixz"]], [c["ixy"], c["iyy"], c["iyz"]],
+                        [c["ixz"], c["iyz"], c["izz"]]])
+    ev = np.linalg.eigvalsh(inertia)
+    scale = float(abs(np.trace(inertia)))
+    if ev[0] < -(INERTIA_TOL + 1e-9 * scale):
+        raise URDFError(f"{source}: link {name!r}: inertia is not positive semi-definite "
+                        f"(principal moments {np.round(ev, 12).tolist()} kg·m²)")
+    if ev[0] + ev[1] < ev[2] - (INERTIA_TOL + 1e-6 * scale):
+        raise URDFError(f"{source}: link {name!r}: principal moments {np.round(ev, 12).tolist()}"
+                        " kg·m² break the triangle inequality I1 + I2 >= I3 (no body has them)")
+    return m, inertia
+
+
+def check_urdf_physics(root: ET.Element, source: object,
+                       massless_joints: Iterable[str] = ()) -> None:
+    """Refuse a URDF whose inertial data no body can have, naming the link: a NaN, infinite
+    or negative mass; an inertia that is not positive semi-definite (a point mass, all moments
+    zero, is accepted: real models use them for sensors) or breaks the triangle inequality; a
+    moving joint whose whole subtree is massless (it moves nothing, so the joint-space inertia
+    matrix is singular) unless the joint, or one above it, is in ``massless_joints``; a robot
+    of total mass 0. Massless links on fixed joints (frames, soles) are fine."""
+    mass = {str(lk.get("name")): _inertial(lk, source)[0] for lk in root.findall("link")}
+    children: dict[str, list[tuple[str, str, str]]] = {}
+    has_parent = set()
+    for j in root.findall("joint"):
+        p, c = j.find("parent"), j.find("child")
+        if p is None or c is None:
+            continue
+        children.setdefault(str(p.get("link")), []).append(
+            (str(j.get("name")), str(j.get("type")), str(c.get("link"))))
+        has_parent.add(str(c.get("link")))
+    roots = [lk for lk in mass if lk not in has_parent]
+    order: list[str] = []  # links, parents before children (iterative: chains may be deep)
+    stack = list(roots)
+    while stack:
+        lk = stack.pop()
+        order.append(lk)
+        stack.extend(c for _, _, c in children.get(lk, ()))
+    below = dict(mass)
+    for lk in reversed(order):
+        below[lk] = mass.get(lk, 0.0) + sum(below.get(c, 0.0) for _, _, c in children.get(lk, ()))
+    if roots and sum(below.get(r, 0.0) for r in roots) <= 0:
+        raise URDFError(f"{source}: the robot's total mass is 0 kg")
+    allowed = set(massless_joints)
+    exempt: set[str] = set()
+    for lk in order:
+        for jname, jtype, c in children.get(lk, ()):
+            if lk in exempt or jname in allowed:
+                exempt.add(c)
+            elif jtype != "fixed" and below.get(c, 0.0) <= 0:
+                raise URDFError(
+                    f"{source}: link {c!r} hangs on the moving joint {jname!r} ({jtype}) with "
+                    "no mass on it or below it, so the joint moves nothing; give the link a "
+                    "mass and inertia, make the joint fixed, or pass "
+                    f"massless_joints=({jname!r},) if that is intended")
+
+
 class Robot:
     """A robot model (Pinocchio) with its legs described for sagittal imitation.
 
@@ -157,38 +259,62 @@ class Robot:
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_urdf(cls, path: str | Path, legs: Mapping[str, Mapping[str, str | None]] | None = None,
-                  *, name: str | None = None, package_dir: str | Path | None = None,
+                  *, name: str | None = None,
+                  package_dir: str | Path | Sequence[str | Path] | None = None,
                   floating: bool | None = None,
-                  contacts: Mapping[str, SoleContact | Mapping] | None = None) -> Robot:
+                  contacts: Mapping[str, SoleContact | Mapping] | None = None,
+                  massless_joints: Iterable[str] = ()) -> Robot:
         """Load a URDF. ``legs``: ``{"left": {"hip":…, "knee":…, "ankle":…, "sole":…},
         "right": {…}}`` (joint/frame names), auto-detected from names when omitted.
 
         ``floating``: add a free-flyer root joint (default: yes, unless the URDF already has
-        our planar base joints). ``package_dir``: folder resolving ``package://`` meshes.
-        ``contacts``: sole rectangles overriding the measured ones (see :class:`Robot`).
+        our planar base joints). ``package_dir``: folder (or folders) resolving
+        ``package://`` meshes (default: the URDF's folder). ``contacts``: sole rectangles
+        overriding the measured ones (see :class:`Robot`). ``massless_joints``: moving joints
+        whose subtree may be massless (see :func:`check_urdf_physics`).
+
+        Before Pinocchio reads the file it is checked (``docs/security.md``): its size, link
+        count and depth (:mod:`gdimitate.safety`), its inertial data
+        (:func:`check_urdf_physics`), and every mesh reference, which must resolve inside the
+        URDF's folder or a package directory (:func:`gdimitate.meshes.confine_meshes`).
+
+        Raises:
+            URDFError: naming the file and the link or mesh at fault
+                (:class:`~gdimitate.errors.MeshPathError`,
+                :class:`~gdimitate.errors.URDFLimitError` for the specific cases).
         """
         path = Path(path)
         if not path.is_file():
             raise URDFError(f"URDF file not found: {path}")
-        text = path.read_text(errors="replace")
+        root = parse_xml(read_text_bounded(path, MAX_URDF_BYTES, "URDF"), path)
+        check_urdf_bounds(root, path)
+        check_urdf_physics(root, path, massless_joints)
         if floating is None:
-            floating = not all(f'name="{b}"' in text for b in PLANAR_BASE)
-        pkg = [str(package_dir)] if package_dir else [str(path.parent)]
+            joints = {j.get("name") for j in root.findall("joint")}
+            floating = not all(b in joints for b in PLANAR_BASE)
+        if package_dir is None:
+            pkgs = [path.parent]
+        elif isinstance(package_dir, str | Path):
+            pkgs = [Path(package_dir)]
+        else:
+            pkgs = [Path(d) for d in package_dir]
+        confine_meshes(root, path, pkgs)
+        xml = ET.tostring(root, encoding="unicode")
         try:
-            if floating:
-                model, collision, visual = pin.buildModelsFromUrdf(
-                    str(path), pkg, pin.JointModelFreeFlyer())
-            else:
-                model, collision, visual = pin.buildModelsFromUrdf(str(path), pkg)
-        except Exception as e:  # Pinocchio raises ValueError/RuntimeError on bad files/meshes
-            try:
-                model = (pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer()) if floating
-                         else pin.buildModelFromUrdf(str(path)))
-                visual = collision = None
-            except Exception:
-                raise URDFError(f"cannot read URDF {path}: {e}") from None
-        return cls(name or model.name or path.stem, model, visual, legs,
-                   Path(pkg[0]), path, contacts=contacts, collision_model=collision)
+            model = (pin.buildModelFromXML(xml, pin.JointModelFreeFlyer()) if floating
+                     else pin.buildModelFromXML(xml))
+        except Exception as e:  # Pinocchio raises ValueError/RuntimeError on bad files
+            raise URDFError(f"cannot read URDF {path}: {e}") from None
+        geoms = []
+        for kind in (pin.GeometryType.VISUAL, pin.GeometryType.COLLISION):
+            try:  # every mesh path is absolute now: Pinocchio searches no folder
+                geoms.append(pin.buildGeomFromUrdfString(model, xml, kind, package_dirs=[]))
+            except Exception as e:
+                raise URDFError(f"{path}: cannot load its {kind.name.lower()} meshes: {e}"
+                                ) from None
+        return cls(name or model.name or path.stem, model, geoms[0], legs,
+                   pkgs[0] if pkgs else None, path, contacts=contacts,
+                   collision_model=geoms[1])
 
     @classmethod
     def from_spec(cls, spec: PlanarBipedSpec) -> Robot:
@@ -213,7 +339,7 @@ class Robot:
             raise UnknownRobotError(name, list_robots())
         path, pkg = library_entry(name)
         return cls.from_urdf(path, LEG_PRESETS.get(name), name=name, package_dir=pkg,
-                             floating=True)
+                             floating=True, massless_joints=MASSLESS_PRESETS.get(name, ()))
 
     # ------------------------------------------------------------------ leg detection
     def _resolve_leg_names(self, legs) -> dict[str, dict[str, str | None]]:

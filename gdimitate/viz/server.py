@@ -2,10 +2,15 @@
 
 ``meshcat.Visualizer()`` spawns its server with stdout/stderr piped and never read: once a
 browser disconnects mid-transfer the server's tracebacks fill the pipe and every later call
-blocks forever (DESIGN §10). Here the server's output goes to a log file (or ``/dev/null``),
-the ports are chosen by us (a free one, or the one asked for, with a clear error if it is
-taken), every request on the zmq socket has a timeout, and :meth:`MeshcatServer.close` (also
-run at interpreter exit) terminates the process.
+blocks forever. Here the server's output goes to a log file (or ``/dev/null``), the ports are
+chosen by us (a free one, or the one asked for, with a clear error if it is taken), every
+request on the zmq socket has a timeout, and :meth:`MeshcatServer.close` (also run at
+interpreter exit) terminates the process and deletes its temporary log.
+
+Both sockets listen on 127.0.0.1 only (meshcat's own server puts its web page on every
+interface); ``host=`` opens the web page to other machines on purpose. The server process
+watches its parent and exits when the parent is gone, so it never outlives us, even after a
+SIGKILL; a start interrupted by Ctrl-C or SIGTERM stops the half-started process.
 """
 
 from __future__ import annotations
@@ -26,7 +31,8 @@ from meshcat.visualizer import ViewerWindow
 
 from ..errors import ViewerError
 
-__all__ = ["MeshcatServer", "PortInUseError", "connect", "free_port", "port_in_use"]
+__all__ = ["MeshcatServer", "PortInUseError", "check_port", "connect", "free_port",
+           "port_in_use"]
 
 _SERVE_SCRIPT = Path(__file__).with_name("_serve.py")
 _LOCALHOST = "127.0.0.1"
@@ -43,13 +49,28 @@ class PortInUseError(ViewerError):
         )
 
 
-def port_in_use(port: int) -> bool:
-    """Whether a TCP ``port`` cannot be bound on all interfaces (as meshcat's web server does)."""
-    for host in ("", _LOCALHOST):
+def check_port(port: object, what: str = "web") -> int:
+    """``port`` as an int if it is a TCP port number 1–65535, else :class:`ViewerError`."""
+    if isinstance(port, bool) or not isinstance(port, int | str) and not hasattr(port,
+                                                                                 "__index__"):
+        raise ViewerError(f"{what} port must be an integer 1-65535; got {port!r}")
+    try:
+        p = int(port)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ViewerError(f"{what} port must be an integer 1-65535; got {port!r}") from None
+    if not 1 <= p <= 65535:
+        raise ViewerError(f"{what} port must be in 1-65535; got {p}")
+    return p
+
+
+def port_in_use(port: int, host: str = _LOCALHOST) -> bool:
+    """Whether TCP ``port`` cannot be bound on ``host`` (and on 127.0.0.1)."""
+    port = check_port(port)
+    for h in dict.fromkeys((host, _LOCALHOST)):
         with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
             s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             try:
-                s.bind((host, port))
+                s.bind((h, port))
             except OSError:
                 return True
     return False
@@ -159,8 +180,9 @@ class MeshcatServer:
     """
 
     def __init__(self, proc: subprocess.Popen, web_url: str, zmq_url: str, port: int,
-                 log_path: Path | None, owns_log: bool):
+                 log_path: Path | None, owns_log: bool, host: str = _LOCALHOST):
         self.proc = proc
+        self.host = host
         self.web_url = web_url
         self.zmq_url = zmq_url
         self.port = port
@@ -170,54 +192,63 @@ class MeshcatServer:
 
     @classmethod
     def start(cls, port: int | None = None, *, zmq_port: int | None = None,
-              log: str | os.PathLike | None = "auto", timeout_s: float = 20.0,
-              ) -> MeshcatServer:
+              host: str = _LOCALHOST, log: str | os.PathLike | None = "auto",
+              timeout_s: float = 20.0) -> MeshcatServer:
         """Start a server and wait (at most ``timeout_s`` s) until it listens.
 
         Args:
-            port: web port; ``None`` picks a free one. If the port is taken,
+            port: web port 1–65535; ``None`` picks a free one. If the port is taken,
                 :class:`PortInUseError` is raised at once.
-            zmq_port: port of the zmq command socket; ``None`` picks a free one.
+            zmq_port: port of the zmq command socket (always on 127.0.0.1); ``None`` picks a
+                free one.
+            host: address the web page listens on: ``"127.0.0.1"`` (default, this machine
+                only); ``"0.0.0.0"`` or an interface's address serves other machines too.
             log: file for the server's output; ``"auto"`` (a temporary file, deleted by
                 :meth:`close`) or ``None`` (``/dev/null``).
             timeout_s: how long to wait for the process to come up.
         """
-        for p, what in ((port, "web"), (zmq_port, "zmq")):
-            if p is not None and port_in_use(int(p)):
-                raise PortInUseError(int(p), what)
+        if port is not None:
+            port = check_port(port, "web")
+        if zmq_port is not None:
+            zmq_port = check_port(zmq_port, "zmq")
+        for p, what, h in ((port, "web", host), (zmq_port, "zmq", _LOCALHOST)):
+            if p is not None and port_in_use(p, h):
+                raise PortInUseError(p, what)
         attempts = 1 if (port is not None and zmq_port is not None) else 3
         last = ""
         for _ in range(attempts):
-            web_p = int(port) if port is not None else free_port()
-            zmq_p = int(zmq_port) if zmq_port is not None else free_port()
-            server = cls._spawn(web_p, zmq_p, log, timeout_s)
+            web_p = port if port is not None else free_port()
+            zmq_p = zmq_port if zmq_port is not None else free_port()
+            server = cls._spawn(web_p, zmq_p, log, timeout_s, host)
             if isinstance(server, MeshcatServer):
                 return server
             last = server
-            if "cannot bind" in last and port is not None and port_in_use(int(port)):
-                raise PortInUseError(int(port))
+            if "cannot bind" in last and port is not None and port_in_use(port, host):
+                raise PortInUseError(port)
         raise ViewerError(f"the meshcat server did not start: {last}")
 
     @classmethod
-    def _spawn(cls, web_p: int, zmq_p: int, log: str | os.PathLike | None, timeout_s: float
-               ) -> MeshcatServer | str:
+    def _spawn(cls, web_p: int, zmq_p: int, log: str | os.PathLike | None, timeout_s: float,
+               host: str = _LOCALHOST) -> MeshcatServer | str:
         owns_log = log == "auto"
-        if owns_log:
-            fd, name = tempfile.mkstemp(prefix="gdimitate-meshcat-", suffix=".log")
-            os.close(fd)
-            log_path: Path | None = Path(name)
-        else:
-            log_path = Path(log) if log is not None else None
-        # The ready lines are read from a file, so output never fills a pipe.
-        out = open(log_path, "wb") if log_path is not None else None  # noqa: SIM115
-        ready = tempfile.NamedTemporaryFile(prefix="gdimitate-meshcat-ready-", delete=False)
-        ready.close()
-        ready_path = Path(ready.name)
+        log_path: Path | None = None if owns_log or log is None else Path(log)
+        out = ready_path = proc = None
+        ok = False
         try:
+            if owns_log:
+                fd, name = tempfile.mkstemp(prefix="gdimitate-meshcat-", suffix=".log")
+                os.close(fd)
+                log_path = Path(name)
+            # The ready lines are read from a file, so output never fills a pipe.
+            out = open(log_path, "wb") if log_path is not None else None  # noqa: SIM115
+            fd, name = tempfile.mkstemp(prefix="gdimitate-meshcat-ready-")
+            os.close(fd)
+            ready_path = Path(name)
             with open(ready_path, "wb") as ready_out:
                 proc = subprocess.Popen(
                     [sys.executable, "-u", str(_SERVE_SCRIPT),
-                     "--zmq-url", f"tcp://{_LOCALHOST}:{zmq_p}", "--port", str(web_p)],
+                     "--zmq-url", f"tcp://{_LOCALHOST}:{zmq_p}", "--port", str(web_p),
+                     "--host", str(host), "--parent-pid", str(os.getpid())],
                     stdout=ready_out, stderr=out if out is not None else subprocess.DEVNULL,
                     stdin=subprocess.DEVNULL, start_new_session=True,
                 )
@@ -239,19 +270,36 @@ class MeshcatServer:
                             f"{text.strip()} {err.strip()}").strip()
                 time.sleep(0.05)
             else:
-                _stop(proc)
                 return f"no answer within {timeout_s:g} s"
-        finally:
+            # Later output of the process (tornado's tracebacks) goes to the log only.
+            server = cls(proc, web_url, zmq_url, web_p, log_path, owns_log, host)
+            ok = True
+            return server
+        finally:  # a failed start, or Ctrl-C/SIGTERM while waiting: leave nothing behind
             if out is not None:
                 out.close()
-            ready_path.unlink(missing_ok=True)
-        # Later output of the process (tornado's tracebacks) goes to the log only.
-        return cls(proc, web_url, zmq_url, web_p, log_path, owns_log)
+            if ready_path is not None:
+                ready_path.unlink(missing_ok=True)
+            if not ok:
+                if proc is not None:
+                    _stop(proc)
+                if owns_log and log_path is not None:
+                    log_path.unlink(missing_ok=True)
 
     @property
     def alive(self) -> bool:
         """Whether the server process is still running."""
         return self.proc.poll() is None
+
+    def check_alive(self) -> None:
+        """Raise :class:`ViewerError` (with the end of its log) if the server has exited."""
+        if self.alive:
+            return
+        tail = ""
+        if self.log_path is not None and self.log_path.is_file():
+            tail = self.log_path.read_text(errors="replace").strip()[-1500:]
+        raise ViewerError(f"the meshcat server (pid {self.proc.pid}) exited with status "
+                          f"{self.proc.returncode}" + (f"; its log ends:\n{tail}" if tail else ""))
 
     def visualizer(self, timeout_s: float = 30.0) -> meshcat.Visualizer:
         """A new ``meshcat.Visualizer`` connected to this server (see :func:`connect`)."""
