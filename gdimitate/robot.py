@@ -317,6 +317,27 @@ class Robot:
                    collision_model=geoms[1])
 
     @classmethod
+    def from_osim(cls, path: str | Path, *, name: str | None = None) -> Robot:
+        """An OpenSim model (``.osim``, 3.x or 4.x) converted by
+        :func:`gdimitate.opensim.convert_osim` (URDF in a temporary folder, kept as
+        :attr:`urdf_path`) and loaded with a free-flyer. Joint names are the OpenSim coordinate
+        names; the legs (hip flexion, knee and ankle joints from the model's topology, the
+        sole frame under the ankle) and the sole rectangles (the foot boxes) are passed
+        explicitly. The conversion report is kept as ``robot.osim``
+        (:class:`~gdimitate.opensim.OsimConversion`). Raises
+        :class:`~gdimitate.errors.OsimError` for a model that cannot be converted."""
+        from .opensim import convert_osim
+
+        conv = convert_osim(path)
+        legs = {s: {k: conv.legs[s][k] for k in ("hip", "knee", "ankle", "sole")} for s in SIDES}
+        contacts = {s: {"frame": conv.legs[s]["contact"], "half_length": conv.soles[s][0],
+                        "half_width": conv.soles[s][1]} for s in SIDES}
+        robot = cls.from_urdf(conv.urdf, legs, name=name or conv.model.name, floating=True,
+                              contacts=contacts)
+        robot.osim = conv
+        return robot
+
+    @classmethod
     def from_spec(cls, spec: PlanarBipedSpec) -> Robot:
         """Build one of our planar bipeds from its spec (the same text ``urdf/`` holds)."""
         xml = planar_biped_urdf(spec)
