@@ -9,7 +9,8 @@ import numpy as np
 
 from .errors import InvalidInputError
 
-__all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path"]
+__all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
+           "human_walk_3d_folder"]
 
 
 def human_walk_path() -> Path:
@@ -176,3 +177,41 @@ def human_walk(height: float = 1.75):
     folder = human_walk_path().parent
     return read_opensim(human_walk_path(), height=height,
                         grf=folder / "walk_gait1018_subject01_grf.mot")
+
+
+def human_walk_3d_folder() -> Path:
+    """Folder of the shipped full-body 3-D walk (OpenSim subject01 walk1: ``subject01.osim``,
+    ``subject01_walk1_ik.mot``, ``subject01_walk1_grf.mot`` + ``.xml``, ``subject01_walk1.trc``,
+    OpenSim's own ``std_subject01_InverseDynamics.sto``; README.txt, LICENSE.txt, NOTICE)."""
+    return Path(str(resources.files("gdimitate") / "data" / "gait" / "opensim_subject01_walk1_3d"))
+
+
+def human_walk_3d(overground: bool = True):
+    """The shipped full-body 3-D treadmill walk → ``(robot, motion, forces)``.
+
+    ``robot``: :meth:`Robot.from_osim` of the subject's scaled OpenSim model (free-flyer
+    pelvis, 72.6 kg); ``motion``: its inverse-kinematics angles (60 Hz, t = 0.5–4.0 s, 211
+    frames) read by :func:`gdimitate.opensim.read_coordinates`, ``contact`` the measured stance
+    (vertical force > 20 N); ``forces``: the measured ground reaction forces of both feet on
+    the motion's times (:func:`gdimitate.opensim.read_grf` with the trial's ExternalLoads).
+
+    ``overground`` (default ``True``): the treadmill trial turned overground — the belt speed,
+    estimated from the stance feet, times t added to the pelvis x and to the centres of
+    pressure (:func:`gdimitate.opensim.treadmill_to_overground`); ``forces.frame_note`` says
+    which was done and the speed. ``False`` keeps the treadmill kinematics (as OpenSim's own
+    inverse dynamics of this trial used them).
+    """
+    from .opensim.coordinates import read_coordinates
+    from .opensim.grf import read_grf
+    from .opensim.treadmill import treadmill_to_overground
+    from .robot import Robot
+
+    folder = human_walk_3d_folder()
+    robot = Robot.from_osim(folder / "subject01.osim")
+    motion = read_coordinates(folder / "subject01_walk1_ik.mot", robot)
+    forces = read_grf(folder / "subject01_walk1_grf.mot", robot,
+                      folder / "subject01_walk1_grf.xml", t=motion.t)
+    motion = motion.replace(contact=forces.contact)
+    if overground:
+        motion, forces = treadmill_to_overground(robot, motion, forces)
+    return robot, motion, forces

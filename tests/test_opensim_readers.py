@@ -5,7 +5,6 @@ markers."""
 from __future__ import annotations
 
 import functools
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -109,6 +108,7 @@ def test_columns_the_model_lacks_are_listed(tmp_path):
     np.testing.assert_allclose(m.column("knee_angle_r"), np.radians(10 * t), atol=1e-12)
 
 
+@pytest.mark.filterwarnings("ignore::gdimitate.errors.CoordinateMismatchWarning")
 def test_unit_flag_contradicting_values(tmp_path):
     t = np.linspace(0, 1, 11)
     p = write_table(tmp_path / "bad.mot", ["time", "knee_angle_r", "hip_flexion_r"],
@@ -283,7 +283,8 @@ def test_two_plates_on_one_foot_combine(tmp_path):
                                                 ("c", "calcn_l", "3_")])
     xml.write_text(xml.read_text().replace("<torque_identifier>3_ground_torque_</torque_"
                                            "identifier>", ""))
-    cf = read_grf(p, biped(), xml)
+    with pytest.warns(CoordinateMismatchWarning, match="3_ground_force_v.*free torque"):
+        cf = read_grf(p, biped(), xml)
     cop = (w[:, None] * p1 + (1 - w)[:, None] * p2) @ Y_UP.T
     np.testing.assert_allclose(cf["right"].cop[:, [0, 1]], cop[:, [0, 1]], atol=1e-12)
     np.testing.assert_allclose(cf["right"].force[:, 2], fy, atol=1e-9)
@@ -401,8 +402,150 @@ def test_sagittal_reader_refuses_full_body_files(tmp_path):
         read_opensim(p)
 
 
-def _quiet(fn, *args, **kw):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", CoordinateMismatchWarning)
-        return fn(*args, **kw)
 
+# ====================================================================== the shipped 3-D walk
+WALK = Path(__file__).parent.parent / "gdimitate" / "data" / "gait" / "opensim_subject01_walk1_3d"
+LEG_MOMENTS = [f"{c}_{s}" for c in ("hip_flexion", "hip_adduction", "knee_angle", "ankle_angle")
+               for s in "rl"]
+
+
+@functools.cache
+def treadmill_walk():
+    """(robot, motion, forces) of the shipped trial, NOT turned overground (OpenSim's inverse
+    dynamics used the treadmill kinematics)."""
+    from gdimitate.gait import human_walk_3d
+
+    return human_walk_3d(overground=False)
+
+
+def opensim_id_comparison():
+    """Pinocchio RNEA of the converted model on the IK angles (6 Hz low-pass, as the trial's
+    InverseDynamics setup), measured forces applied at their centres of pressure plus free
+    torques on the ExternalLoads bodies, against OpenSim's own result
+    ``std_subject01_InverseDynamics.sto``: ``{coordinate: (r, rmse [N·m], range [N·m])}``."""
+    import pinocchio as pin
+
+    from gdimitate.motion import differentiate
+    from gdimitate.opensim._table import read_table
+
+    robot, motion, forces = treadmill_walk()
+    m = differentiate(robot.model, motion, cutoff_hz=6)
+    bodies = {("right" if s.body.endswith("_r") else "left"): s.body
+              for s in read_external_loads(WALK / "subject01_walk1_grf.xml")}
+    assert bodies == {"right": "calcn_r", "left": "calcn_l"}
+    model, data = robot.model, robot.model.createData()
+    tau = np.empty((m.T, model.nv))
+    for k in range(m.T):
+        pin.forwardKinematics(model, data, m.q[k])
+        fext = pin.StdVec_Force()
+        for _ in range(model.njoints):
+            fext.append(pin.Force.Zero())
+        for side, body in bodies.items():
+            f = forces[side]
+            if not f.contact[k]:
+                continue
+            jid = model.frames[model.getFrameId(body)].parentJoint
+            w = pin.Force(f.force[k], np.cross(f.cop[k], f.force[k]) + f.torque[k])  # at 0
+            fext[jid] = fext[jid] + data.oMi[jid].actInv(w)
+        tau[k] = pin.rnea(model, data, m.q[k], m.v[k], m.a[k], fext)
+    ref = read_table(WALK / "std_subject01_InverseDynamics.sto")
+    sel = (m.t >= ref.t[0]) & (m.t <= ref.t[-1])
+    out = {}
+    for c in LEG_MOMENTS:
+        r_ = np.interp(m.t[sel], ref.t, ref.column(f"{c}_moment"))
+        ours = tau[sel, robot.idx_v(c)]
+        out[c] = (float(np.corrcoef(r_, ours)[0, 1]), float(np.sqrt(np.mean((ours - r_) ** 2))),
+                  float(np.ptp(r_)))
+    return out, int(sel.sum())
+
+
+def test_inverse_dynamics_against_opensim():
+    res, n = opensim_id_comparison()
+    assert n >= 60  # t = 0.5–1.6 s at 60 Hz
+    for c, (r, rmse, rng) in res.items():
+        assert r >= 0.95, f"{c}: correlation {r:.3f}"
+        assert rmse <= 0.10 * rng, f"{c}: RMSE {rmse:.2f} N·m over a range of {rng:.1f} N·m"
+
+
+def marker_distances():
+    """Model marker frames (the .osim MarkerSet in the converted URDF) against the measured
+    TRC markers at the common times 0.5–2.5 s: ``{marker: (T,) distance [m]}``."""
+    import pinocchio as pin
+
+    robot, motion, _ = treadmill_walk()
+    mk = read_trc(WALK / "subject01_walk1.trc")
+    data = robot.model.createData()
+    names = [f"{s}.{p}" for s in "RL" for p in ("Heel", "Toe.Tip", "Toe.Lat", "Toe.Med")]
+    out = {n: [] for n in names}
+    for k, tk in enumerate(motion.t):
+        j = int(np.argmin(np.abs(mk.t - tk)))
+        if abs(mk.t[j] - tk) > 2e-3:  # the TRC's times are rounded to 1 ms
+            continue
+        pin.framesForwardKinematics(robot.model, data, motion.q[k])
+        for n in names:
+            x = data.oMf[robot.frame_id(n)].translation
+            out[n].append(float(np.linalg.norm(x - mk[n][j])))
+    return {n: np.array(v) for n, v in out.items()}
+
+
+def test_model_markers_follow_measured_markers():
+    d = marker_distances()
+    for n, v in d.items():
+        assert v.size >= 120, n  # 0.5–2.5 s at 60 Hz
+        assert v.max() <= 0.03, f"{n}: {100 * v.max():.1f} cm from the measured marker"
+
+
+def test_human_walk_3d_overground():
+    from gdimitate.gait import human_walk_3d
+
+    robot, motion, forces = human_walk_3d()
+    assert "turned overground" in forces.frame_note
+    _, tread, tforces = treadmill_walk()
+    # heel strikes (vertical force > 20 N) as the data's README lists them, within a frame
+    on = {s: motion.t[1:][np.diff(motion.contact[s].astype(int)) == 1] for s in motion.contact}
+    np.testing.assert_allclose(on["right"], [0.62, 1.85, 3.08], atol=1 / 60 + 1e-9)
+    np.testing.assert_allclose(on["left"], [1.25, 2.46, 3.68], atol=1 / 60 + 1e-9)
+    for s in ("left", "right"):
+        np.testing.assert_array_equal(motion.contact[s], forces[s].contact)
+    # the belt speed against an independent estimate: the measured heel markers' backward
+    # speed in mid-stance (TRC, 0.5–2.5 s)
+    speed = float(forces.frame_note.split("belt speed ")[1].split(" m/s")[0])
+    mk = read_trc(WALK / "subject01_walk1.trc")
+    vm = []
+    for s, n in (("right", "R.Heel"), ("left", "L.Heel")):
+        stance = np.interp(mk.t, motion.t, tforces[s].contact.astype(float)) > 0.99
+        vm.append(-np.gradient(mk[n][:, 0], mk.t)[stance])
+    ref = float(np.median(np.concatenate(vm)))
+    assert 0.8 < speed < 2.0 and speed == pytest.approx(ref, rel=0.05)
+    # base x gained speed·(t − t0); the rest of q and the forces themselves are unchanged
+    from gdimitate.opensim.treadmill import belt_speed
+
+    exact = belt_speed(robot, tread, tforces.contact)
+    assert speed == pytest.approx(exact, abs=5e-4)  # the note rounds to 1 mm/s
+    np.testing.assert_allclose(motion.q[:, 0] - tread.q[:, 0], exact * (motion.t - motion.t[0]),
+                               atol=1e-12)
+    st = tforces["right"].contact
+    np.testing.assert_allclose(forces["right"].cop[st, 0] - tforces["right"].cop[st, 0],
+                               exact * (motion.t - motion.t[0])[st], atol=1e-12)
+    np.testing.assert_array_equal(forces["left"].force, tforces["left"].force)
+    np.testing.assert_array_equal(motion.q[:, 1:], tread.q[:, 1:])
+    # consistency: in stance the centre of pressure lies under the foot (between heel and toe
+    # markers' reach, ±0.2 m of the sole frame), for the overground kinematics and forces
+    import pinocchio as pin
+
+    data = robot.model.createData()
+    for s in ("left", "right"):
+        fid = robot.frame_id(robot.contacts[s].frame)
+        k = np.flatnonzero(forces[s].contact)
+        gap = []
+        for i in k:
+            pin.framesForwardKinematics(robot.model, data, motion.q[i])
+            gap.append(forces[s].cop[i, :2] - data.oMf[fid].translation[:2])
+        assert np.max(np.abs(gap)) < 0.2, s
+
+
+def test_sagittal_reader_refuses_the_shipped_3d_file():
+    from gdimitate.gait import read_opensim
+
+    with pytest.raises(OpenSimDataError, match="read_coordinates"):
+        read_opensim(WALK / "subject01_walk1_ik.mot")

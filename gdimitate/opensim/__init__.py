@@ -15,13 +15,26 @@ Model conversion (:mod:`.model`, :mod:`.joints`, :mod:`.urdf`)::
   root link in OUR world frame (x forward, y left, z up).
 * ``WORLD_FROM_OPENSIM`` (3×3): v_ours = WORLD_FROM_OPENSIM @ v_opensim (x = X, y = −Z,
   z = Y), for forces, centres of pressure and markers given in OpenSim's ground frame.
+
+Data files (:mod:`.coordinates`, :mod:`.grf`, :mod:`.trc`, :mod:`.treadmill`)::
+
+    motion = read_coordinates("walk_ik.mot", robot)        # -> Motion (rad, m; free-flyer q)
+    forces = read_grf("walk_grf.mot", robot, "walk_grf.xml", t=motion.t)  # -> ContactForces
+    markers = read_trc("walk.trc")                          # -> Markers (m, our world frame)
+    motion, forces = treadmill_to_overground(robot, motion.replace(contact=forces.contact),
+                                             forces)        # belt speed added back
 """
 
+from .coordinates import read_coordinates
+from .grf import CONTACT_THRESHOLD, ExternalForceSpec, read_external_loads, read_grf
 from .joints import WORLD_FROM_OPENSIM, Approximation, pelvis_to_freeflyer
 from .model import OsimModel, read_osim
+from .trc import Markers, read_trc
+from .treadmill import belt_speed, treadmill_to_overground
 from .urdf import EFFORT_LIMIT, VELOCITY_LIMIT, OsimConversion, convert_osim, opensim_to_urdf
 
 __all__ = [
+    "CONTACT_THRESHOLD",
     "EFFORT_LIMIT",
     "VELOCITY_LIMIT",
     "WORLD_FROM_OPENSIM",
@@ -32,4 +45,13 @@ __all__ = [
     "opensim_to_urdf",
     "pelvis_to_freeflyer",
     "read_osim",
+    # readers of motion, force and marker files
+    "ExternalForceSpec",
+    "Markers",
+    "belt_speed",
+    "read_coordinates",
+    "read_external_loads",
+    "read_grf",
+    "read_trc",
+    "treadmill_to_overground",
 ]

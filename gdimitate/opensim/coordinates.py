@@ -108,14 +108,19 @@ def _angle_scale(table: Table, values: np.ndarray, names: list[str]) -> float:
     return 1.0
 
 
-def read_coordinates(path: str | Path, robot) -> Motion:
+def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
     """Read an OpenSim coordinates file (``.mot``/``.sto``) onto ``robot``'s joints.
 
     ``robot``: a :class:`~gdimitate.Robot` whose 1-DoF joints are named after the coordinates
-    (e.g. from :meth:`~gdimitate.Robot.from_osim`). Returns a :class:`~gdimitate.Motion` with
-    ``t`` ``(T,)`` [s] (the file's times), ``q`` ``(T, nq)`` [rad, m] in Pinocchio order (the
-    free-flyer from the ground→pelvis coordinates where the robot has one) and an empty
-    contact schedule (fill it from measured forces, :func:`gdimitate.opensim.read_grf`).
+    (e.g. from :meth:`~gdimitate.Robot.from_osim`). ``osim``: the OpenSim model (``OsimModel``
+    or ``.osim`` path) whose ground joint the robot's free-flyer replaces — by default the one
+    ``Robot.from_osim`` read; without one (a robot from a plain URDF) the ground→pelvis
+    columns are listed as columns the model lacks and the base keeps its neutral pose.
+
+    Returns a :class:`~gdimitate.Motion`: ``t`` ``(T,)`` [s] (the file's times), ``q``
+    ``(T, nq)`` [rad, m] in Pinocchio order (free-flyer ``[x, y, z, qx, qy, qz, qw]`` in our
+    world frame from the ground→pelvis coordinates), and an empty contact schedule (fill it
+    from measured forces, :func:`gdimitate.opensim.read_grf`).
 
     Raises :class:`~gdimitate.errors.CoordinateMismatchError` (no column matches the model),
     :class:`~gdimitate.errors.UnitError` (unit flag contradicting the values),
@@ -127,23 +132,25 @@ def read_coordinates(path: str | Path, robot) -> Motion:
     table = read_table(path)
     cols, ignored = coordinate_columns(table)
     joints = robot_coordinates(robot)
-    root = _root_columns(robot, cols)
-    used = set(root.values())
-    matched = [c for c in cols if c in joints and c not in used]
-    if not matched and not root:
+    root = _root_joint(robot, osim)
+    root_kind = {c.name: c.motion_type for c in root[0].coordinates} if root else {}
+    root_in = [c for c in root_kind if c in cols]
+    matched = [c for c in cols if c in joints and c not in root_kind]
+    if not matched and not root_in:
         raise CoordinateMismatchError(
             f"{table.path}: none of its coordinates {sorted(cols)[:20]} is a joint of robot "
             f"{robot.name!r} (joints {sorted(joints)[:20]}); read it with the model it was "
             "made for (e.g. Robot.from_osim of the same .osim)")
-    extra = sorted(c for c in cols if c not in joints and c not in used)
-    absent = sorted(j for j in joints if j not in cols)
+    extra = sorted(c for c in cols if c not in joints and c not in root_kind)
+    absent = sorted(j for j in joints if j not in cols) + [c for c in root_kind if c not in cols]
     if extra or absent or ignored:
         warnings.warn(
             f"{table.path} on robot {robot.name!r}: file columns the model lacks (not used): "
             f"{extra}; model coordinates the file lacks (kept at the neutral pose): {absent}"
             + (f"; ignored non-coordinate state columns: {len(ignored)} ({ignored[:5]}…)"
                if ignored else ""), CoordinateMismatchWarning, stacklevel=2)
-    rot = [c for c in matched if joints[c] != "translational"] + _root_rotations(root)
+    rot = ([c for c in matched if joints[c] != "translational"]
+           + [c for c in root_in if root_kind[c] == "rotational"])
     scale = _angle_scale(table, table.data[:, [cols[c] for c in rot]], rot)
     q = np.tile(robot.neutral, (table.t.size, 1))
     for c in matched:
@@ -153,21 +160,33 @@ def read_coordinates(path: str | Path, robot) -> Motion:
             q[:, i], q[:, i + 1] = np.cos(x), np.sin(x)
         else:
             q[:, i] = x
-    if root:
-        q[:, :7] = _root_q(robot, table, cols, root, scale)
+    if root_in:
+        from .joints import pelvis_to_freeflyer
+
+        values = {c: table.data[:, cols[c]] * (scale if root_kind[c] == "rotational" else 1.0)
+                  for c in root_in}
+        q[:, :7] = pelvis_to_freeflyer(values, root[1])
     return robot_motion(robot, table.t.copy(), q, {})
 
 
 # ---------------------------------------------------------------------- the free-flyer
-def _root_columns(robot, cols: dict[str, int]) -> dict[str, str]:
-    """The ground→pelvis coordinates the robot's free-flyer stands for, when all are in the
-    file: ``{role: coordinate}``; empty for robots without a free-flyer."""
-    return {}
+def _root_joint(robot, osim):
+    """``(OpenSim ground joint, OsimModel)`` the robot's free-flyer replaces, or ``None``."""
+    if robot.base != "free":
+        return None
+    if osim is None:
+        osim = _robot_osim(robot)
+        if osim is None:
+            return None
+    from .joints import root_joint
+    from .model import OsimModel, read_osim
+
+    model = osim if isinstance(osim, OsimModel) else read_osim(osim)
+    return root_joint(model), model
 
 
-def _root_rotations(root: dict[str, str]) -> list[str]:
-    return []
-
-
-def _root_q(robot, table: Table, cols, root, scale) -> np.ndarray:
-    raise NotImplementedError
+def _robot_osim(robot):
+    """The OpenSim model a robot was converted from (``Robot.from_osim`` keeps the conversion
+    report as ``robot.osim``), or None."""
+    conv = getattr(robot, "osim", None)
+    return getattr(conv, "model", None)
