@@ -12,7 +12,7 @@ The pipeline (DESIGN §2)::
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import gait, metrics, optimal, oscillator, planar
+from . import gait, metrics, opensim, optimal, oscillator, planar
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
 from .cpg import CPGReplay, entrain
@@ -71,6 +71,7 @@ __all__ = [
     "gait",
     "list_robots",
     "metrics",
+    "opensim",
     "optimal",
     "oscillator",
     "paper_case",
