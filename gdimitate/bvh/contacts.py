@@ -1,0 +1,94 @@
+"""Foot contacts of a recorded motion from the feet's height and speed.
+
+A foot is in stance at a frame when the lowest corner of its sole rectangle is within
+``height`` of the floor and that corner moves horizontally slower than ``speed``; both
+thresholds are fractions of the skeleton's hip height (so they hold for any body size and
+unit): 0.04 × hip height ≈ 3.6 cm and 0.6 × hip height per second ≈ 0.54 m/s for an adult.
+The floor is estimated from the clip: the median over frames of the lower foot's lowest
+corner (a walk always has a foot on the floor). Swing gaps shorter than ``gap`` [s] between two
+stance runs are closed (marker jitter at a flat foot); stance runs shorter than ``min_stance``
+[s] are dropped (a swinging foot grazing the floor).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import InvalidInputError
+
+__all__ = ["ContactRule", "detect_contacts", "close_gaps"]
+
+
+@dataclass(frozen=True)
+class ContactRule:
+    """Thresholds of :func:`detect_contacts`: ``height`` and ``speed`` in hip heights and hip
+    heights per second [-, 1/s], ``gap`` and ``min_stance`` [s]."""
+
+    height: float = 0.04
+    speed: float = 0.6
+    gap: float = 0.05
+    min_stance: float = 0.05
+
+    def __post_init__(self) -> None:
+        for k in ("height", "speed"):
+            if not getattr(self, k) > 0:
+                raise InvalidInputError(f"ContactRule.{k} must be > 0; got {getattr(self, k)!r}")
+        for k in ("gap", "min_stance"):
+            if not getattr(self, k) >= 0:
+                raise InvalidInputError(f"ContactRule.{k} must be ≥ 0; got {getattr(self, k)!r}")
+
+
+def _runs(mask: np.ndarray, value: bool) -> list[tuple[int, int]]:
+    """Half-open index ranges where ``mask == value``."""
+    m = np.concatenate([[not value], mask == value, [not value]]).astype(int)
+    d = np.diff(m)
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
+def close_gaps(mask: np.ndarray, max_gap: int, min_run: int = 0) -> np.ndarray:
+    """``mask`` with False runs of at most ``max_gap`` frames between True runs set True, then
+    True runs shorter than ``min_run`` frames set False."""
+    out = np.asarray(mask, dtype=bool).copy()
+    for a, b in _runs(out, False):
+        if a > 0 and b < out.size and b - a <= max_gap:
+            out[a:b] = True
+    for a, b in _runs(out, True):
+        if b - a < min_run:
+            out[a:b] = False
+    return out
+
+
+def sole_corners(robot, q: np.ndarray) -> dict[str, np.ndarray]:
+    """World positions ``(T, 4, 3)`` [m] of each foot's sole corners for q ``(T, nq)``."""
+    out = {s: np.empty((q.shape[0], 4, 3)) for s in robot.contacts}
+    fids = {s: robot.frame_id(c.frame) for s, c in robot.contacts.items()}
+    corners = {s: c.corners() for s, c in robot.contacts.items()}
+    for k, qk in enumerate(q):
+        pin.framesForwardKinematics(robot.model, robot.data, qk)
+        for s, f in fids.items():
+            M = robot.data.oMf[f]
+            out[s][k] = corners[s] @ M.rotation.T + M.translation
+    return out
+
+
+def detect_contacts(robot, q: np.ndarray, t: np.ndarray, hip_height: float,
+                    rule: ContactRule = ContactRule()) -> tuple[dict[str, np.ndarray], float]:
+    """Stance masks ``{"left": (T,) bool, "right": (T,) bool}`` and the floor height [m] of a
+    motion ``q`` ``(T, nq)`` on times ``t`` ``(T,)`` [s] of ``robot`` (whose
+    :attr:`~gdimitate.robot.Robot.contacts` give the soles); ``hip_height`` [m] scales the
+    thresholds (see the module docstring)."""
+    pts = sole_corners(robot, q)
+    low = {s: p[..., 2].min(axis=1) for s, p in pts.items()}
+    floor = float(np.median(np.min(np.stack(list(low.values())), axis=0)))
+    dt = float(np.median(np.diff(t)))
+    out = {}
+    for s, p in pts.items():
+        vel = np.gradient(p[..., :2], t, axis=0)  # (T, 4, 2)
+        k = p[..., 2].argmin(axis=1)
+        speed = np.linalg.norm(vel[np.arange(len(t)), k], axis=1)
+        raw = (low[s] - floor < rule.height * hip_height) & (speed < rule.speed * hip_height)
+        out[s] = close_gaps(raw, int(round(rule.gap / dt)), int(round(rule.min_stance / dt)))
+    return out, floor
