@@ -246,11 +246,15 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
         joints.append(JointAudit(name, tw.value, tw.knot, eff, t_ratio, float(np.max(vj)),
                                  v_knot, vlim, v_ratio, pm.value, pm.knot))
 
-    # velocity consistency: forward difference inside [v_k, v_k+1] (any one-step scheme)
+    # velocity consistency: the forward difference of a one-step scheme (explicit, implicit or
+    # semi-implicit Euler, trapezoid) lies between the velocities at its two knots; central
+    # differences leave a third-order term, of the size h·|a_k+1 − a_k| / 2, allowed for.
     cons = np.zeros(T)
     if T > 1:
-        lo = np.minimum(motion.v[:-1], motion.v[1:])
-        hi = np.maximum(motion.v[:-1], motion.v[1:])
+        h = np.diff(motion.t)[:, None]
+        slack = 0.5 * h * np.abs(motion.a[1:] - motion.a[:-1])
+        lo = np.minimum(motion.v[:-1], motion.v[1:]) - slack
+        hi = np.maximum(motion.v[:-1], motion.v[1:]) + slack
         cons[:-1] = np.max(np.maximum(np.maximum(lo - fd, fd - hi), 0.0), axis=1)
     vscale = max(1.0, float(np.max(np.abs(motion.v))))
     vc = add(_make("velocity_consistency", cons, tol.velocity_consistency, "max", "rad/s",
@@ -289,16 +293,18 @@ def _foot(side, c: SoleContact, stance, w, pos, rot, target, half_angle, tol, we
     half = min(c.half_length, c.half_width)
     nan = np.full(T, np.nan)
     out = []
-    # cone: friction, CoP and yaw with the normal force floored at a tiny positive value, so
-    # that a pulling foot is reported by the normal-force check and a tangential force or a
-    # moment without normal force by the friction/CoP/yaw checks.
+    # cone: a pulling foot (f_z < −tol) is reported by the normal-force check alone (friction
+    # ratio and centre of pressure mean nothing there); elsewhere friction, CoP and yaw are
+    # evaluated with f_z floored at a tiny positive value, so that a tangential force or a
+    # moment without normal force fails them while a zero wrench passes.
     wf = w.copy()
     wf[:, 2] = np.maximum(wf[:, 2], max(tol.normal, 1e-9))
     m = cone_margin(c, wf)
     normal = np.where(stance, w[:, 2], nan)
-    ratio = np.where(stance, c.mu - m["friction"], nan)
-    cop = np.where(stance, m["cop"], nan)
-    yaw = np.where(stance, m["yaw"], nan)
+    pushing = stance & (w[:, 2] >= -tol.normal)
+    ratio = np.where(pushing, c.mu - m["friction"], nan)
+    cop = np.where(pushing, m["cop"], nan)
+    yaw = np.where(pushing, m["yaw"], nan)
     out.append(_make(f"normal:{side}", normal, -tol.normal, "min", "N", weight))
     out.append(_make(f"friction:{side}", ratio, c.mu + tol.friction, "max", "-", c.mu))
     out.append(_make(f"cop:{side}", cop, -tol.cop, "min", "m", half))

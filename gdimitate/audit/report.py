@@ -36,10 +36,12 @@ class AuditTolerances:
     - ``velocity`` [-]: fraction over a velocity limit (1e-2: 1 % over);
     - ``position`` [rad or m]: beyond a position limit;
     - ``velocity_consistency`` [rad/s or m/s]: distance of a forward difference of ``q`` from
-      the interval spanned by the velocities at its two knots;
+      the interval spanned by the velocities at its two knots (widened by ``h·|Δa| / 2``, the
+      third-order term central differences leave);
     - ``normal`` [N]: below zero normal force in stance;
     - ``friction`` [-]: friction ratio over μ; ``cop`` [m]: centre of pressure outside the
-      sole; ``yaw`` [N·m]: yaw moment beyond its bounds;
+      sole; ``yaw`` [N·m]: yaw moment beyond its bounds (these three where the foot does not
+      pull; a pulling foot fails ``normal``);
     - ``penetration`` [m]: a sole corner under the floor (z = 0);
     - ``slip`` [m], ``slip_rotation`` [rad]: a stance foot's drift from where its stance began;
     - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
