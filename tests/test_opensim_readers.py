@@ -323,6 +323,24 @@ def test_malformed_grf_files(tmp_path, bad):
         read_grf(p, biped())
 
 
+def test_grf_shipped_sagittal_file_numbered_convention():
+    """OpenSim's gait10dof18musc GRF file (``ground_force_*`` right, ``1_ground_force_*`` left)
+    against its own columns read with numpy."""
+    from gdimitate.gait import human_walk_path
+
+    p = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
+    lines = p.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.strip() == "endheader")
+    names = lines[i + 1].split("\t")
+    raw = np.loadtxt(lines[i + 2:])
+    col = {n: raw[:, k] for k, n in enumerate(names)}
+    cf = read_grf(p, biped())
+    for side, pre in (("right", ""), ("left", "1_")):
+        v = np.column_stack([col[f"{pre}ground_force_v{a}"] for a in "xyz"])
+        np.testing.assert_allclose(cf[side].force, v @ Y_UP.T, atol=1e-9)
+        np.testing.assert_array_equal(cf[side].contact, v[:, 1] > 20.0)
+
+
 # ====================================================================== TRC
 def _trc(path, t, names, xyz_lab, units="mm", drop=None):
     n = len(names)
@@ -418,7 +436,7 @@ def treadmill_walk():
     return human_walk_3d(overground=False)
 
 
-def opensim_id_comparison():
+def opensim_id_comparison(apply_forces: bool = True):
     """Pinocchio RNEA of the converted model on the IK angles (6 Hz low-pass, as the trial's
     InverseDynamics setup), measured forces applied at their centres of pressure plus free
     torques on the ExternalLoads bodies, against OpenSim's own result
@@ -442,7 +460,7 @@ def opensim_id_comparison():
             fext.append(pin.Force.Zero())
         for side, body in bodies.items():
             f = forces[side]
-            if not f.contact[k]:
+            if not (apply_forces and f.contact[k]):
                 continue
             jid = model.frames[model.getFrameId(body)].parentJoint
             w = pin.Force(f.force[k], np.cross(f.cop[k], f.force[k]) + f.torque[k])  # at 0
@@ -465,6 +483,10 @@ def test_inverse_dynamics_against_opensim():
     for c, (r, rmse, rng) in res.items():
         assert r >= 0.95, f"{c}: correlation {r:.3f}"
         assert rmse <= 0.10 * rng, f"{c}: RMSE {rmse:.2f} N·m over a range of {rng:.1f} N·m"
+    # negative control: without the measured forces the same criteria fail for every moment
+    bad, _ = opensim_id_comparison(apply_forces=False)
+    failing = [c for c, (r, rmse, rng) in bad.items() if r < 0.95 or rmse > 0.10 * rng]
+    assert failing == list(bad), failing
 
 
 def marker_distances():
@@ -542,6 +564,16 @@ def test_human_walk_3d_overground():
             pin.framesForwardKinematics(robot.model, data, motion.q[i])
             gap.append(forces[s].cop[i, :2] - data.oMf[fid].translation[:2])
         assert np.max(np.abs(gap)) < 0.2, s
+
+
+def test_overground_needs_forces_on_the_motion_times():
+    from gdimitate.errors import InvalidInputError
+    from gdimitate.opensim.treadmill import treadmill_to_overground
+
+    robot, motion, forces = treadmill_walk()
+    cf = read_grf(WALK / "subject01_walk1_grf.mot", robot, WALK / "subject01_walk1_grf.xml")
+    with pytest.raises(InvalidInputError, match="t=motion.t"):
+        treadmill_to_overground(robot, motion, cf)
 
 
 def test_sagittal_reader_refuses_the_shipped_3d_file():
