@@ -12,7 +12,7 @@ The pipeline (DESIGN §2)::
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import gait, metrics, opensim, optimal, oscillator, planar
+from . import bvh, gait, metrics, opensim, optimal, oscillator, planar
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
 from .cpg import CPGReplay, entrain
@@ -67,6 +67,7 @@ __all__ = [
     "ViewerError",
     "Weights",
     "adapt",
+    "bvh",
     "entrain",
     "gait",
     "list_robots",
