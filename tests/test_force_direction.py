@@ -10,7 +10,7 @@ import pytest
 import gdimitate as gd
 from gdimitate.contact import ContactForces, FootForces
 from gdimitate.errors import InvalidInputError, UnknownNameError
-from gdimitate.gait import human_walk_path, read_opensim
+from gdimitate.gait import human_walk_path, read_mot, read_opensim
 from gdimitate.metrics import ForceDirection, angle_between, force_direction
 from gdimitate.sagittal import joint_paths, leg_angles
 
@@ -90,3 +90,58 @@ def test_from_vectors_and_angle_between():
     assert np.isnan(d.sagittal[1]) and np.isnan(d.sagittal[2])  # zero vector, swing
     np.testing.assert_allclose(angle_between(np.array([1.0, 0, 0]), np.array([1.0, 1, 0])),
                                np.pi / 4)
+
+
+def _single_support(motion):
+    c = motion.contact
+    return {"left": c["left"] & ~c["right"], "right": c["right"] & ~c["left"]}
+
+
+@pytest.fixture(scope="module")
+def walk_3d():
+    return gd.gait.human_walk_3d()
+
+
+def _compare(est, meas, mask):
+    k = mask & np.isfinite(est) & np.isfinite(meas)
+    return float(np.corrcoef(est[k], meas[k])[0, 1]), _rmse_deg(est[k], meas[k]), int(k.sum())
+
+
+def test_dynamics_model_matches_the_measured_forces_of_the_3d_walk(walk_3d):
+    """The issue's check: the `dynamics` direction estimated from the kinematics alone (the
+    converted subject01 model, its IK angles, no force data) against the measured ground
+    reaction force, single support, per foot: sagittal correlation ≥ 0.9 and RMSE ≤ 5°
+    (measured here: left 0.967 / 1.5°, right 0.958 / 1.2°). The frontal angle is reported;
+    its bound is loose (RMSE ≤ 3°) because its range is only a few degrees."""
+    robot, motion, forces = walk_3d
+    est = force_direction(robot, motion, "dynamics")
+    meas = force_direction(robot, motion, "measured", forces=forces)
+    for s, mask in _single_support(motion).items():
+        corr, rmse, n = _compare(est[s].sagittal, meas[s].sagittal, mask)
+        assert n > 50
+        assert corr >= 0.9 and rmse <= 5.0, (s, corr, rmse)
+        _, frmse, _ = _compare(est[s].frontal, meas[s].frontal, mask)
+        assert frmse <= 3.0, (s, frmse)
+        # the estimate is a push: down into the floor
+        assert np.all(est[s].vector[mask & np.isfinite(est[s].vector[:, 2]), 2] < 0)
+
+
+def test_dynamics_model_on_the_planar_walk_per_foot(sagittal_walk):
+    """The planar special case (x, z, pitch base; 3-component wrenches): the per-foot
+    `dynamics` direction of the sagittal demonstrator against each foot's measured force
+    (`ground_force_*` is the right foot, `1_ground_force_*` the left; OpenSim Y up), single
+    support. Measured here: right 0.71 / 5.0°, left 0.875 / 3.1°. The bounds (correlation
+    ≥ 0.65, RMSE ≤ 5.5°) are a regression guard for a coarse body — a planar 10-DoF model with
+    Winter's mass fractions, no arms and no lateral motion — not the issue's criterion, which
+    the 3-D model meets above with margin."""
+    robot, motion = sagittal_walk
+    est = force_direction(robot, motion, "dynamics")
+    g = read_mot(GRF)
+    for s, prefix in (("right", ""), ("left", "1_")):
+        push = np.arctan2(-g[f"{prefix}ground_force_vx"], g[f"{prefix}ground_force_vy"])
+        meas = np.interp(motion.t, g["time"], push)
+        mask = _single_support(motion)[s]
+        mask[:5] = mask[-5:] = False  # the zero-phase filter's edges
+        corr, rmse, n = _compare(est[s].sagittal, meas, mask)
+        assert n > 20
+        assert corr >= 0.65 and rmse <= 5.5, (s, corr, rmse)
