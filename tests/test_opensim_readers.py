@@ -259,6 +259,11 @@ def test_grf_feet_from_external_loads(tmp_path):
     bad = _external_loads(tmp_path / "bad.xml", [("A", "femur_q", "1_"), ("B", "calcn_r", "2_")])
     with pytest.raises(ForceDataError, match="femur_q"):
         read_grf(p, biped(), bad)
+    evil = tmp_path / "evil.xml"
+    evil.write_text('<?xml version="1.0"?><!DOCTYPE x [<!ENTITY a "b">]>' + xml.read_text()
+                    .split("?>", 1)[1])
+    with pytest.raises(OpenSimDataError, match="DOCTYPE"):
+        read_grf(p, biped(), evil)
 
 
 def test_two_plates_on_one_foot_combine(tmp_path):

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OpenSimDataError, TimeGridError
+from ..errors import OpenSimDataError, ResourceLimitError, TimeGridError
+from ..safety import MAX_TABLE_BYTES, read_text_bounded
 
 __all__ = ["Table", "read_table"]
 
@@ -70,14 +71,18 @@ def _in_degrees(header: Mapping[str, str], text: list[str], path: Path) -> bool 
 def read_table(path: str | Path) -> Table:
     """Read an OpenSim ``.mot``/``.sto`` file → :class:`Table`.
 
-    Raises :class:`~gdimitate.errors.OpenSimDataError` (no such file, no ``endheader``, no
+    Raises :class:`~gdimitate.errors.OpenSimDataError` (no such file, not UTF-8 text, no
+    ``endheader``, no
     ``time`` column, rows of the wrong length, non-numeric or NaN/inf values — with the row and
-    column) and :class:`~gdimitate.errors.TimeGridError` (time not strictly increasing).
+    column), :class:`~gdimitate.errors.ResourceLimitError` (a file over
+    :data:`~gdimitate.safety.MAX_TABLE_BYTES`) and :class:`~gdimitate.errors.TimeGridError`
+    (time not strictly increasing).
     """
     path = Path(path)
     if not path.is_file():
         raise OpenSimDataError(f"no such OpenSim file: {path}")
-    lines = path.read_text(errors="replace").splitlines()
+    lines = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", OpenSimDataError,
+                              ResourceLimitError).splitlines()
     try:
         end = next(i for i, ln in enumerate(lines) if ln.strip().lower() == "endheader")
     except StopIteration:

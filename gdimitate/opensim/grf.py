@@ -42,7 +42,14 @@ import numpy as np
 import pinocchio as pin
 
 from ..contact import ContactForces, FootForces
-from ..errors import CoordinateMismatchWarning, ForceDataError, OpenSimDataError, UnitError
+from ..errors import (
+    CoordinateMismatchWarning,
+    ForceDataError,
+    OpenSimDataError,
+    ResourceLimitError,
+    UnitError,
+)
+from ..safety import MAX_TABLE_BYTES, parse_xml, read_text_bounded
 from ._table import Table, read_table
 
 __all__ = ["CONTACT_THRESHOLD", "ExternalForceSpec", "read_external_loads", "read_grf",
@@ -89,13 +96,9 @@ def read_external_loads(path: str | Path) -> tuple[ExternalForceSpec, ...]:
     path = Path(path)
     if not path.is_file():
         raise OpenSimDataError(f"no such ExternalLoads file: {path}")
-    text = path.read_text(errors="replace")
-    if "<!DOCTYPE" in text or "<!ENTITY" in text:
-        raise OpenSimDataError(f"{path}: DOCTYPE/ENTITY declarations are refused; remove them")
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as e:
-        raise OpenSimDataError(f"{path}: not well-formed XML ({e})") from None
+    text = read_text_bounded(path, MAX_TABLE_BYTES, "ExternalLoads file", OpenSimDataError,
+                             ResourceLimitError)
+    root = parse_xml(text, path, OpenSimDataError)
     out = []
     for el in root.iter("ExternalForce"):
         def get(tag: str, default: str = "", el: ET.Element = el) -> str:

@@ -21,8 +21,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MarkerGapWarning, OpenSimDataError, TimeGridError, UnitError
+from ..errors import (
+    MarkerGapWarning,
+    OpenSimDataError,
+    ResourceLimitError,
+    TimeGridError,
+    UnitError,
+)
 from ..motion import check_time
+from ..safety import MAX_TABLE_BYTES, read_text_bounded
 from .grf import ground_to_world
 
 __all__ = ["Markers", "read_trc"]
@@ -85,7 +92,8 @@ def read_trc(path: str | Path, *, up: str | None = None) -> Markers:
     path = Path(path)
     if not path.is_file():
         raise OpenSimDataError(f"no such TRC file: {path}")
-    lines = path.read_text(errors="replace").splitlines()
+    lines = read_text_bounded(path, MAX_TABLE_BYTES, "TRC file", OpenSimDataError,
+                              ResourceLimitError).splitlines()
     if len(lines) < 6 or not lines[0].startswith("PathFileType"):
         raise OpenSimDataError(f"{path}: not a TRC file (the first line must start with "
                                "'PathFileType' and five header lines precede the data)")
