@@ -243,7 +243,8 @@ def test_torque_over_its_limit(talos):
 def test_corners_under_the_floor(talos):
     """(a) The whole robot 5 mm down: every corner 5 mm under. (b) The robot pitched about
     the line through both sole centres so the toes dip 5 mm (X·sin θ = 5 mm) while the sole
-    origins stay on the floor: the audit measures corners, not frame origins."""
+    origins stay on the floor: the audit measures corners, not frame origins (and the heels,
+    5 mm up, break the flat contact)."""
     q = standing(talos)
     q[:, 2] -= 0.005
     motion, W = plan(talos, q)
@@ -267,9 +268,21 @@ def test_corners_under_the_floor(talos):
     for s in SIDES:
         assert data.oMf[talos.frame_id(talos.contacts[s].frame)].translation[2] == \
             pytest.approx(0.0, abs=1e-12)
-    assert rep.binding == ("penetration",)
+    assert set(rep.binding) == {"penetration", "contact_gap:left", "contact_gap:right"}
     assert rep.penetration.depth == pytest.approx(0.005, abs=1e-9)
     assert rep.penetration.corner in (0, 1)  # a front corner
+    assert rep.feet["right"].contact_gap.value == pytest.approx(0.005, abs=1e-9)  # heels up
+
+
+def test_stance_foot_above_the_floor(talos):
+    """The whole robot 5 mm up while its feet are in stance and loaded: contact_gap."""
+    q = standing(talos)
+    q[:, 2] += 0.005
+    motion, W = plan(talos, q)
+    rep = audit(talos, motion, W)
+    assert set(rep.binding) == {"contact_gap:left", "contact_gap:right"}
+    assert rep.feet["left"].contact_gap.value == pytest.approx(0.005, abs=1e-12)
+    assert rep.penetration.depth == pytest.approx(-0.005, abs=1e-12)
 
 
 def test_zigzag_beats_central_differences(talos):

@@ -324,6 +324,9 @@ def _foot(side, c: SoleContact, stance, w, pos, rot, target, half_angle, tol, we
     depth = -corners[:, :, 2]
     k, corner = np.unravel_index(int(np.argmax(depth)), depth.shape)
     pen = Penetration(float(depth[k, corner]), int(k), side, int(corner))
+    # a flat contact needs the whole sole on the floor: the highest corner of a stance foot
+    gap = np.where(stance, np.max(corners[:, :, 2], axis=1), nan)
+    out.append(_make(f"contact_gap:{side}", gap, tol.contact_gap, "max", "m", half))
     # force direction
     fda = None
     if target is not None:
@@ -355,5 +358,6 @@ def _foot(side, c: SoleContact, stance, w, pos, rot, target, half_angle, tol, we
         slip=Worst(get["slip"].value, get["slip"].knot),
         slip_rotation=Worst(get["slip_rotation"].value, get["slip_rotation"].knot),
         swing_wrench=Worst(get["swing_wrench"].value, get["swing_wrench"].knot),
+        contact_gap=Worst(get["contact_gap"].value, get["contact_gap"].knot),
         penetration=pen, force_direction=fda)
     return foot, out

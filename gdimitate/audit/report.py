@@ -43,6 +43,8 @@ class AuditTolerances:
       sole; ``yaw`` [N·m]: yaw moment beyond its bounds (these three where the foot does not
       pull; a pulling foot fails ``normal``);
     - ``penetration`` [m]: a sole corner under the floor (z = 0);
+    - ``contact_gap`` [m]: a stance foot's highest sole corner above the floor (a flat contact
+      — the wrench cone's premise — needs the whole sole on the floor);
     - ``slip`` [m], ``slip_rotation`` [rad]: a stance foot's drift from where its stance began;
     - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
     - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench.
@@ -58,6 +60,7 @@ class AuditTolerances:
     cop: float = 1e-6
     yaw: float = 1e-6
     penetration: float = 1e-3
+    contact_gap: float = 1e-3
     slip: float = 1e-3
     slip_rotation: float = 1e-3
     force_direction: float = 1e-3
@@ -163,8 +166,9 @@ class FootAudit:
     ``friction`` ratio |f_t|/f_z [-] against ``mu``, ``cop`` margin [m] (inside positive),
     ``yaw`` margin [N·m] (see :func:`gdimitate.contact.cone_margin`), ``slip`` [m] and
     ``slip_rotation`` [rad] (drift of the sole frame since the stance began), ``swing_wrench``
-    (largest |component| while in swing), ``penetration`` (this foot's deepest corner, all
-    knots), ``force_direction`` (None without a target)."""
+    (largest |component| while in swing), ``contact_gap`` [m] (highest sole corner above the
+    floor in stance), ``penetration`` (this foot's deepest corner, all knots),
+    ``force_direction`` (None without a target)."""
 
     side: str
     stance_knots: int
@@ -176,6 +180,7 @@ class FootAudit:
     slip: Worst
     slip_rotation: Worst
     swing_wrench: Worst
+    contact_gap: Worst
     penetration: Penetration
     force_direction: ForceDirectionAudit | None
 
