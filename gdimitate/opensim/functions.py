@@ -1,5 +1,6 @@
 """OpenSim's one-variable functions (``Constant``, ``LinearFunction``, ``SimmSpline``,
-``NaturalCubicSpline``, ``PiecewiseLinearFunction``, ``Polynomial``, ``MultiplierFunction``),
+``NaturalCubicSpline``, ``PiecewiseLinearFunction``, ``PolynomialFunction`` (also read under
+the name ``Polynomial``), ``MultiplierFunction``),
 evaluated as OpenSim evaluates them.
 
 ``SimmSpline`` is the cubic spline of Forsythe, Malcolm & Moler (*Computer Methods for
@@ -7,7 +8,7 @@ Mathematical Computations*, 1977, routine ``spline``): end conditions match the 
 derivatives of the cubics through the first and last four points; outside its knots it
 extrapolates linearly with the end slopes (opensim-core ``SimmSpline.cpp``). OpenSim reads a
 ``NaturalCubicSpline`` element as a ``SimmSpline`` (the older name), so both evaluate alike here.
-``PiecewiseLinearFunction`` extrapolates with its end segments' slopes; ``Polynomial``'s
+``PiecewiseLinearFunction`` extrapolates with its end segments' slopes; a polynomial's
 coefficients are in descending powers. The test suite compares these against OpenSim itself
 through the joint kinematics they drive.
 """
@@ -24,15 +25,16 @@ from ..errors import OsimError
 __all__ = ["Function", "parse_function", "SUPPORTED_FUNCTIONS"]
 
 SUPPORTED_FUNCTIONS = ("Constant", "LinearFunction", "SimmSpline", "NaturalCubicSpline",
-                       "PiecewiseLinearFunction", "Polynomial", "MultiplierFunction")
+                       "PiecewiseLinearFunction", "PolynomialFunction", "MultiplierFunction")
 
 
 @dataclass(frozen=True)
 class Function:
     """One OpenSim function of a single variable.
 
-    ``kind``: one of :data:`SUPPORTED_FUNCTIONS` (``NaturalCubicSpline`` stored as
-    ``SimmSpline``); ``x``, ``y``: knots (splines, piecewise linear); ``coefficients``:
+    ``kind``: ``"Constant"``, ``"LinearFunction"``, ``"SimmSpline"`` (also for
+    ``NaturalCubicSpline``), ``"PiecewiseLinearFunction"``, ``"Polynomial"`` or
+    ``"MultiplierFunction"``; ``x``, ``y``: knots (splines, piecewise linear); ``coefficients``:
     ``(slope, intercept)`` of a ``LinearFunction``, descending powers of a ``Polynomial``, or
     ``(value,)`` of a ``Constant``; ``scale`` and ``inner`` for a ``MultiplierFunction``.
     """
@@ -161,8 +163,8 @@ def parse_function(el: ET.Element, where: str) -> Function:
             raise OsimError(f"{where}: LinearFunction needs 2 coefficients (slope intercept), "
                             f"got {len(c)}")
         return Function("LinearFunction", coefficients=c)
-    if kind == "Polynomial":
-        c = _numbers(el.find("coefficients"), f"{where} Polynomial")
+    if kind in ("PolynomialFunction", "Polynomial"):
+        c = _numbers(el.find("coefficients"), f"{where} {kind}")
         if not c:
             raise OsimError(f"{where}: Polynomial has no coefficients")
         return Function("Polynomial", coefficients=c)

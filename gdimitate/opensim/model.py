@@ -70,8 +70,9 @@ class OsimBody:
 @dataclass(frozen=True)
 class OsimCoordinate:
     """A generalised coordinate: ``motion_type`` ``"rotational"`` [rad], ``"translational"``
-    [m] or ``"coupled"``; ``default`` value; ``range`` (lower, upper); the ``joint`` defining
-    it."""
+    [m] or ``"coupled"`` (from the file, or, where a 4.x file omits it, translational when
+    the coordinate drives only translations); ``default`` value; ``range`` (lower, upper);
+    the ``joint`` defining it."""
 
     name: str
     joint: str
@@ -79,6 +80,7 @@ class OsimCoordinate:
     default: float
     range: tuple[float, float]
     locked: bool = False
+    explicit_type: bool = True
 
 
 @dataclass(frozen=True)
@@ -262,12 +264,13 @@ def _coordinates(joint_el: ET.Element, joint: str, where: str) -> list[OsimCoord
     for c in els:
         name = c.get("name")
         rng = _vec(c, "range", 2, f"{where} coordinate {name!r}", default=(-math.pi, math.pi))
-        mt = (_text(c, "motion_type") or "rotational").lower()
+        mt = (_text(c, "motion_type") or "").lower()
         default = float(_text(c, "default_value", "0"))
         if not math.isfinite(default):
             raise OsimError(f"{where}: coordinate {name!r} has default_value {default}")
-        out.append(OsimCoordinate(name, joint, mt, default, (float(rng[0]), float(rng[1])),
-                                  (_text(c, "locked", "false") or "").lower() == "true"))
+        out.append(OsimCoordinate(name, joint, mt or "rotational", default,
+                                  (float(rng[0]), float(rng[1])),
+                                  (_text(c, "locked", "false") or "").lower() == "true", bool(mt)))
     return out
 
 
@@ -372,6 +375,12 @@ def _joint(el: ET.Element, where: str, child: str | None, v3: bool):
                             f"{len(coords)}")
         axes = [TransformAxis(f"{k}{i + 1}", k, np.asarray(a, dtype=float), c.name, _IDENTITY)
                 for i, ((k, a), c) in enumerate(zip(std, coords))]
+    kinds = {}
+    for a in axes:  # OpenSim 4 files omit motion_type: a coordinate driving only
+        kinds.setdefault(a.coordinate, set()).add(a.kind)  # translations is translational
+    coords = [c if c.explicit_type or kinds.get(c.name) != {"translation"} else
+              OsimCoordinate(c.name, c.joint, "translational", c.default, c.range, c.locked)
+              for c in coords]
     names = {c.name for c in coords}
     for a in axes:
         if a.coordinate is not None and a.coordinate not in names:
