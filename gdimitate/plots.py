@@ -1,21 +1,25 @@
-"""Matplotlib figures of demonstrator vs imitator(s), normalised by leg length (Agg backend)."""
+"""Matplotlib figures of demonstrator vs imitator(s), normalised by leg length.
+
+The module leaves matplotlib's backend alone: in Jupyter figures show inline, on a machine
+without a display matplotlib falls back to Agg by itself (or set ``MPLBACKEND=Agg``).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg", force=False)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from . import metrics
+from .metrics import ForceDirection
+from .motion import Motion
+from .robot import Robot
+from .sagittal import leg_angles
 
-from . import metrics  # noqa: E402
-from .motion import Motion  # noqa: E402
-from .robot import Robot  # noqa: E402
-from .sagittal import leg_angles  # noqa: E402
-
-__all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument"]
+__all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
+           "plot_force_directions"]
 
 Track = tuple[str, Robot, Motion]  # (label, robot, motion)
 STYLES = ["-", "--", ":", "-."]
@@ -117,4 +121,34 @@ def plot_eq1_argument(t: np.ndarray, arguments: dict[str, np.ndarray], title: st
     ax.set_ylabel("Eq. (1) argument")
     ax.legend(fontsize=8)
     ax.set_title(title)
+    return _save(fig, path)
+
+
+def plot_force_directions(t: np.ndarray, directions: Mapping[str, Mapping[str, ForceDirection]],
+                          contact: Mapping[str, np.ndarray] | None = None, title: str = "",
+                          path: Path | None = None):
+    """Sagittal and frontal force-direction angles [deg] of each foot over time ``t`` ``(T,)``
+    [s]: ``directions`` maps a label (e.g. "measured", "dynamics", "imitator") to
+    :func:`gdimitate.metrics.force_direction`'s result on that time grid. ``contact``
+    (``{side: (T,) bool}``) shades single support."""
+    fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex=True)
+    for j, side in enumerate(("left", "right")):
+        for i, (what, label) in enumerate((("sagittal", "sagittal [deg] (+ forward)"),
+                                           ("frontal", "frontal [deg] (+ left)"))):
+            a = ax[i, j]
+            for k, (name, fd) in enumerate(directions.items()):
+                a.plot(t, np.degrees(getattr(fd[side], what)), STYLES[k % len(STYLES)],
+                       label=name)
+            if contact is not None:
+                other = "right" if side == "left" else "left"
+                ss = np.asarray(contact[side], bool) & ~np.asarray(contact[other], bool)
+                a.fill_between(t, 0, 1, where=ss, color="0.9", transform=a.get_xaxis_transform(),
+                               zorder=0, label="single support" if i == j == 0 else None)
+            a.set_ylabel(label)
+            a.set_title(f"{side} foot" if i == 0 else "")
+            a.grid(alpha=0.3)
+        ax[1, j].set_xlabel("t [s]")
+    ax[0, 0].legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
     return _save(fig, path)
