@@ -14,15 +14,23 @@ Each transform axis is classified:
 * **coupled**: any other function (splines such as the gait2354 knee translation, the walker
   knee's spline rotations, patella coordinates, slopes ≠ ±1) — not representable in a URDF.
 
-Coupled axes are approximated. Rotations, and functions of coordinates that have no exact axis
-in the same joint, are held at the value they take at the coordinates' default values.
-Coupled *translations* of a coordinate that drives an exact rotation of the joint (a knee
-whose centre of rotation slides with flexion) are replaced by the best fixed centre of
-rotation: the child origin is modelled as ``p + R(q)·d`` with constant ``p``, ``d`` [m] fitted
-by least squares to the true path over the coordinates' ranges, which turns a rolling-sliding
-knee into a hinge about a fixed axis. :class:`Approximation` records, per joint, the largest
-error of the child body origin [m] and orientation [rad] over the coordinates' whole ranges
-(the tests compare both against OpenSim).
+Coupled axes are approximated, keeping every URDF joint value equal to its coordinate:
+
+* coupled *rotations* of the coordinate q of the joint's one exact rotation (a walker knee,
+  whose ab/adduction and axial rotation are splines of the flexion angle) are replaced,
+  together with that rotation, by a revolute joint about the best fixed axis:
+  A·R(axis, q)·B with constant rotations A, B and unit axis fitted by least squares (rotation
+  vectors of the error) over q's range;
+* coupled *translations* of a coordinate that drives an exact rotation of the joint (a knee
+  whose centre of rotation slides with flexion) are replaced by the best fixed centre of
+  rotation: the child origin is modelled as ``p + R(q)·d`` with constant ``p``, ``d`` [m]
+  fitted by least squares to the true path over the coordinates' ranges;
+* everything else (functions of a coordinate with no exact axis in the joint, slopes ≠ ±1,
+  coupled rotations in joints with several exact rotations) is held at its value at the
+  coordinates' default values.
+
+:class:`Approximation` records, per joint, the largest error of the child body origin [m] and
+orientation [rad] over the coordinates' whole ranges (the tests compare both against OpenSim).
 
 Measured (tests/test_opensim_model.py, OpenSim 4.6 as reference):
 
@@ -30,12 +38,11 @@ Measured (tests/test_opensim_model.py, OpenSim 4.6 as reference):
   within 3.2 mm of the spline knee over its whole range (−120°…+10°), and within 1.6 mm at
   every frame of the subject's 211-frame walking IK; orientations are exact. The whole-body
   centre of mass stays within 0.17 mm. (A translation held at the default knee angle would be
-  13 mm off at 70° of flexion.)
-* Rajagopal-style walker knee (rotations about the other two axes also splines of the knee
-  angle): those rotations are held at their value at the default angle, so the shank's
-  orientation is off by the largest coupled rotation over the range (6.4° for the synthetic
-  test model, whose couplings are 0.05 and 0.1 rad at full flexion) and distal bodies move by
-  that angle times their distance.
+  17 mm off at 70° of flexion.)
+* Rajagopal-style walker knee (the synthetic test model's knee: ab/adduction 0.05·sin(q/1.3)
+  and axial rotation 0.1·q/2.09 rad, translation splines): fixed axis and centre within 0.9°
+  and 5.5 mm over 0–120° (holding the coupled rotations at their default-angle values instead
+  would be 6.4° off).
 * Coordinates with no exact axis (a patella's ``knee_angle_r_beta``, a slope-0.5 rotation):
   the body is welded at the default value; the error is reported, the coordinate has no URDF
   joint.
@@ -48,6 +55,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ..errors import OsimError
@@ -86,7 +94,8 @@ class Approximation:
     """How a joint's coupled axes were approximated and how far off that is.
 
     ``coupled``: the transform-axis names approximated; ``coordinates``: the coordinates
-    swept to measure the error; ``method``: ``"fixed-centre fit"`` or ``"held at default"``;
+    swept to measure the error; ``method``: ``"fixed-axis fit"``, ``"fixed-centre fit"``,
+    both joined by ``" + "``, or ``"held at default"``;
     ``max_position_error`` [m] of the child body origin and ``max_rotation_error`` [rad] of
     its orientation, over the coordinates' ranges.
     """
@@ -164,8 +173,9 @@ def _classify(joint: OsimJoint, claimed: set[str]):
     return out
 
 
-def _build(joint: OsimJoint, kinds, held: Mapping[str, float], p_fit, d_fit):
-    """Steps and tail of the approximating chain; coupled axes at their ``held`` values."""
+def _build(joint: OsimJoint, kinds, held: Mapping[str, float], p_fit, d_fit, axis_fit=None):
+    """Steps and tail of the approximating chain; coupled axes at their ``held`` values, or,
+    with ``axis_fit`` = (A, axis, B), all rotations replaced by A·R(axis, q)·B."""
     pending = joint.parent_offset
     tvec = np.asarray(p_fit, float).copy()
     steps: list[Step] = []
@@ -183,6 +193,12 @@ def _build(joint: OsimJoint, kinds, held: Mapping[str, float], p_fit, d_fit):
         if k[0] == "exact":
             steps.append(Step("prismatic", a.coordinate, pending, k[1] * a.axis))
             pending = (np.eye(3), np.zeros(3))
+    if axis_fit is not None:
+        A, axis, B = axis_fit
+        c = next(a.coordinate for a, k in rots if k[0] == "exact")
+        steps.append(Step("revolute", c, _compose(pending, (A, np.zeros(3))), axis))
+        pending = (B, np.zeros(3))
+        rots = []
     for a, k in rots:
         if k[0] == "constant":
             pending = _compose(pending, (rotations(a.axis, k[1]), np.zeros(3)))
@@ -226,6 +242,48 @@ def _rotation_angle(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
     return 2.0 * np.arcsin(np.clip(f / (2.0 * np.sqrt(2.0)), 0.0, 1.0))
 
 
+def _fit_axis(joint: OsimJoint, kinds, held: Mapping[str, float]):
+    """(A, axis, B) with A·R(axis, q)·B ≈ R₁R₂R₃(q) (least squares over q's range) for a
+    joint whose one exact rotation's coordinate q also drives its coupled rotations (a walker
+    knee); ``None`` for other joints."""
+    rots = [(a, k) for a, k in zip(joint.axes, kinds) if a.kind == "rotation"]
+    exact = [a for a, k in rots if k[0] == "exact"]
+    coupled = [a for a, k in rots if k[0] == "coupled"]
+    if len(exact) != 1 or not coupled or any(a.coordinate != exact[0].coordinate
+                                             for a in coupled):
+        return None
+    coord = next(c for c in joint.coordinates if c.name == exact[0].coordinate)
+    q = np.linspace(coord.range[0], coord.range[1], 201)
+    R_true = np.broadcast_to(np.eye(3), (len(q), 3, 3))
+    A0, B0, axis0, after = np.eye(3), np.eye(3), None, False
+    for a, k in rots:
+        R_true = R_true @ rotations(a.axis, a.function(q))
+        value = {"constant": lambda k=k: k[1], "coupled": lambda a=a: held[a.name],
+                 "exact": lambda k=k: k[2]}[k[0]]()
+        if k[0] == "exact":
+            A0, axis0, after = A0 @ rotations(a.axis, value), k[1] * a.axis, True
+        elif after:
+            B0 = B0 @ rotations(a.axis, value)
+        else:
+            A0 = A0 @ rotations(a.axis, value)
+    e1 = np.cross(axis0, [1.0, 0, 0] if abs(axis0[0]) < 0.9 else [0, 1.0, 0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(axis0, e1)
+
+    def unpack(x):
+        ax = axis0 + x[3] * e1 + x[4] * e2
+        return (A0 @ Rotation.from_rotvec(x[:3]).as_matrix(), ax / np.linalg.norm(ax),
+                Rotation.from_rotvec(x[5:]).as_matrix() @ B0)
+
+    def residual(x):
+        A, ax, B = unpack(x)
+        R = A @ rotations(ax, q) @ B
+        return Rotation.from_matrix(np.swapaxes(R_true, 1, 2) @ R).as_rotvec().ravel()
+
+    sol = least_squares(residual, np.zeros(8), xtol=1e-12, ftol=1e-12)
+    return unpack(sol.x)
+
+
 def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
     """Classify ``joint``'s axes (claiming exact coordinates in ``claimed``), approximate the
     coupled ones and measure the error over the coordinates' ranges."""
@@ -243,10 +301,13 @@ def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
     grid = _grid(swept)
     n = len(next(iter(grid.values())))
     R_true, p_true = joint_transform(joint, grid, n)
-    p_fit, d_fit, method = zero, zero, "held at default"
+    p_fit, d_fit, methods = zero, zero, []
+    axis_fit = _fit_axis(joint, kinds, held)
+    if axis_fit is not None:
+        methods.append("fixed-axis fit")
     if riding:
         # fit p, d in  p + T_exact(q) + R(q)·d  ≈  true child origin (F frame), over the sweep
-        steps0, tail0 = _build(joint, kinds, held, zero, zero)
+        steps0, tail0 = _build(joint, kinds, held, zero, zero, axis_fit)
         Xf = _inverse(joint.parent_offset)
         Rt_F, pt_F = _compose((np.broadcast_to(Xf[0], (n, 3, 3)),
                                np.broadcast_to(Xf[1], (n, 3))), (R_true, p_true))
@@ -257,8 +318,10 @@ def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
         R_pre = R0 @ joint.child_offset[0]
         A = np.concatenate([np.broadcast_to(np.eye(3), (n, 3, 3)), R_pre], axis=2)
         sol, *_ = np.linalg.lstsq(A.reshape(-1, 6), (pt_F - p0).reshape(-1), rcond=None)
-        p_fit, d_fit, method = sol[:3], sol[3:], "fixed-centre fit"
-    steps, tail = _build(joint, kinds, held, p_fit, d_fit)
+        p_fit, d_fit = sol[:3], sol[3:]
+        methods.append("fixed-centre fit")
+    method = " + ".join(methods) or "held at default"
+    steps, tail = _build(joint, kinds, held, p_fit, d_fit, axis_fit)
     R_apx, p_apx = chain_transform(steps, tail, grid, n)
     approx = Approximation(
         joint.name, tuple(a.name for a in coupled), tuple(c.name for c in swept), method,
