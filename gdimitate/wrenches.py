@@ -133,7 +133,8 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
     stance (``motion.contact``):
 
     - ``method="cone"``: a small QP (DAQP). First ``min Σ‖w̃_c‖²`` s.t. ``Σ_c A_c w_c = b``,
-      each ``w_c`` in its foot's contact wrench cone (16 rows) and ``f_z ≥ f_min`` [N]
+      each ``w_c`` in its foot's contact wrench cone (16 rows; in 3-D 8 more inscribing the
+      friction circle ``‖f_t‖ ≤ μ f_z``, within 8 % of μ) and ``f_z ≥ f_min`` [N]
       (``w̃``: forces over the body weight ``m·g``, moments over ``m·g`` × the sole's
       half-length). Where the cones cannot meet ``b`` exactly, the least residual instead:
       ``min ‖r̃‖² + 1e-6·Σ‖w̃_c‖²`` with ``r = b − Σ A_c w_c`` (forces over ``m·g``, moments over
@@ -161,8 +162,8 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
     fids = {s: robot.frame_id(contacts[s].frame) for s in sides}
     scale = {s: np.array([weight] * 3 + [weight * contacts[s].half_length] * 3)[comps]
              for s in sides}
-    cones = {s: wrench_cone(contacts[s].half_length, contacts[s].half_width,
-                            contacts[s].mu)[:, comps] * scale[s] for s in sides}
+    cones = {s: _cone_rows(contacts[s], planar=robot.base == "planar")[:, comps] * scale[s]
+             for s in sides}
     out = {s: np.zeros((T, 6)) for s in sides}
     residual = np.zeros((T, 6))
     net = np.zeros((T, 6))
@@ -198,6 +199,20 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
         residual[k] = _base_wrench(robot, data, b - explained)
         exact[k] = ok
     return WrenchEstimate(out, residual, net, exact, method, spent)
+
+
+def _cone_rows(c: SoleContact, planar: bool) -> np.ndarray:
+    """``(16, 6)`` contact wrench cone rows (Caron et al.; square friction pyramids), plus, in
+    3-D, 8 rows of the regular octagon inscribed in the friction circle ``‖f_t‖ ≤ μ f_z`` (the
+    pyramid alone admits ‖f_t‖ up to √2·μ f_z; the audit checks the circle)."""
+    A = wrench_cone(c.half_length, c.half_width, c.mu)
+    if planar:  # f_y = 0: |f_x| ≤ μ f_z is the circle
+        return A
+    th = np.arange(8) * np.pi / 4
+    octagon = np.zeros((8, 6))
+    octagon[:, 0], octagon[:, 1] = np.cos(th), np.sin(th)
+    octagon[:, 2] = -c.mu * np.cos(np.pi / 8)
+    return np.vstack([A, octagon])
 
 
 def _moment_rows(robot, bd: list[int]) -> np.ndarray:

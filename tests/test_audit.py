@@ -441,3 +441,29 @@ def test_velocity_consistency_of_honest_schemes(talos):
     central = differentiate(talos.model, motion.replace(v=None, a=None))
     motion, W = plan(talos, q, v=central.v, a=central.a)
     assert audit(talos, motion, W).check("velocity_consistency").passed
+
+
+def test_cone_checks_agree_with_the_cone_matrix(talos):
+    """200 random wrenches on the left foot (dynamically consistent plans): the audit's
+    normal, friction, CoP and yaw checks pass a knot exactly when Caron et al.'s 16 rows, the
+    Coulomb circle ‖f_t‖ ≤ μ f_z and f_z ≥ 0 hold (wrenches within 1e-4·m·g of the boundary
+    left out, where the tolerances decide)."""
+    rng = np.random.default_rng(7)
+    T = 200
+    c = talos.contacts["left"]
+    motion, W = plan(talos, standing(talos, T))
+    F = W["left"][0, 2]
+    scale = np.array([F, F, F, F * c.half_length, F * c.half_width, F * c.half_length])
+    W["left"] = W["left"] + rng.normal(0, 0.5, (T, 6)) * scale
+    A = c.cone()
+    w = W["left"]
+    rows = np.c_[w @ A.T, -w[:, 2], np.hypot(w[:, 0], w[:, 1]) - c.mu * w[:, 2]]
+    keep = np.min(np.abs(rows), axis=1) > 1e-4 * talos.mass * G
+    inside = np.all(rows <= 0, axis=1)
+    assert 20 < inside[keep].sum() < keep.sum() - 20  # both kinds present
+    motion, W = plan(talos, standing(talos, T), W=W)
+    rep = audit(talos, motion, W)
+    ok = np.logical_and.reduce([rep.check_knots(f"{n}:left")
+                                for n in ("normal", "friction", "cop", "yaw")])
+    np.testing.assert_array_equal(ok[keep], inside[keep])
+    assert rep.check("friction:left").failures == np.sum(~rep.check_knots("friction:left"))

@@ -167,6 +167,37 @@ def test_pulling_foot_cone_vs_lstsq(talos):
     assert np.all(np.abs(cone.residual[:, 2]) > 100.0)  # the weight it cannot pull up
 
 
+def test_diagonal_friction_inside_the_pyramid_but_not_the_circle(talos):
+    """A single-support wrench with f_x = f_y = 0.8·μ·f_z (‖f_t‖ = 1.13·μ·f_z: inside the
+    cone's square pyramid, outside Coulomb's circle) cannot be explained; the estimate stays
+    inside the circle, so the audit's friction check passes on it."""
+    rng = np.random.default_rng(5)
+    T = 4
+    contact = {"left": np.ones(T, bool), "right": np.zeros(T, bool)}
+    motion, _ = synthetic(talos, contact, rng, T=T)  # random states …
+    mu = talos.contacts["left"].mu
+    W = {"left": np.tile([0.8 * mu, 0.8 * mu, 1, 0, 0, 0], (T, 1)) * talos.mass * 9.81,
+         "right": np.zeros((T, 6))}
+    model, data = talos.model, talos.model.createData()
+    a = motion.a.copy()
+    for k in range(T):  # … re-balanced for the diagonal wrench
+        pin.computeJointJacobians(model, data, motion.q[k])
+        pin.updateFramePlacements(model, data)
+        g = pin.getFrameJacobian(model, data, talos.frame_id(talos.contacts["left"].frame),
+                                 pin.LOCAL).T @ W["left"][k]
+        M = pin.crba(model, data, motion.q[k])
+        M = np.triu(M) + np.triu(M, 1).T
+        h = pin.rnea(model, data, motion.q[k], motion.v[k], np.zeros(model.nv))
+        a[k, :6] = np.linalg.solve(M[:6, :6], g[:6] - h[:6] - M[:6, 6:] @ a[k, 6:])
+    motion = motion.replace(a=a)
+    assert np.all(W["left"] @ talos.contacts["left"].cone().T <= 0)  # in the pyramid CWC
+    est = estimate_wrenches(talos, motion)
+    assert not est.exact.any()
+    rep = audit(talos, motion, est.wrenches)
+    assert rep.check("friction:left").passed
+    assert not audit(talos, motion, W).check("friction:left").passed
+
+
 # ---------------------------------------------------------------------- measured data
 def _sagittal_push(robot, motion, est):
     """Per knot, the sagittal angle [rad] of the stance foot's push on the ground (single

@@ -1,5 +1,9 @@
 """The audit's computations: Pinocchio recomputation of dynamics, limits, contacts and floor.
 
+Friction is checked against Coulomb's circular cone ``‖f_t‖ ≤ μ f_z`` (the 16-row contact
+wrench cone's square pyramids admit up to √2·μ); centre of pressure and yaw moment against
+Caron et al.'s closed forms (:func:`gdimitate.contact.cone_margin`).
+
 Every check turns a per-knot quantity into a :class:`~.report.Check` (its worst value and knot,
 pass/fail against the bound with tolerance, and a dimensionless violation that orders the
 binding list). The violation scales: body weight ``m·g`` for forces and base residuals, the
@@ -114,7 +118,8 @@ def _make(name: str, x: np.ndarray, bound: float, sense: str, unit: str, scale: 
         excess = bound - x[k]
     passed = bool(ok.all())
     viol = 0.0 if passed else float(max(excess, 0.0) / scale)
-    return Check(name, float(x[k]), float(bound), k, passed, viol, unit, sense), ok
+    return (Check(name, float(x[k]), float(bound), k, passed, viol, unit, sense,
+                  int((~ok).sum())), ok)
 
 
 def _worst(x: np.ndarray, sense: str = "max") -> Worst:
@@ -283,7 +288,8 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
         feet=feet, joints=tuple(joints), unlimited=tuple(unlimited),
         base_residual=Worst(base_check.value, base_check.knot), penetration=pen,
         velocity_consistency=Worst(vc.value, vc.knot),
-        knot_feasible=np.logical_and.reduce(masks), tau=tau, tolerances=tol,
+        knot_feasible=np.logical_and.reduce(masks), tau=tau, knot_checks=np.array(masks),
+        tolerances=tol,
         cone_half_angle=float(cone_half_angle))
 
 

@@ -92,7 +92,8 @@ class Check:
     tolerance included (``sense`` ``"max"``: value ≤ bound; ``"min"``: value ≥ bound); ``knot``:
     where the worst value is (−1 where the check has no knots, e.g. a foot never in stance);
     ``passed``; ``violation`` ≥ 0: how far past the bound, made dimensionless by a stated
-    scale (0 when passed) — it orders :attr:`AuditReport.binding`.
+    scale (0 when passed) — it orders :attr:`AuditReport.binding`; ``failures``: at how many
+    knots it fails (:meth:`AuditReport.check_knots` says which).
     """
 
     name: str
@@ -103,6 +104,7 @@ class Check:
     violation: float
     unit: str
     sense: str
+    failures: int = 0
 
 
 @dataclass(frozen=True)
@@ -219,8 +221,9 @@ class AuditReport:
     corner of all feet; ``velocity_consistency`` [rad/s, m/s]; ``knot_feasible`` ``(T,)``: every
     per-knot check holds at that knot (forward differences count at their first knot);
     ``tau`` ``(T, nv)`` [N·m, N]: the recomputed ``rnea(q, v, a) − Σ_c J_cᵀ w_c`` (the base
-    rows are the residual, the others the joint torques); ``tolerances``; ``cone_half_angle``
-    [rad].
+    rows are the residual, the others the joint torques); ``knot_checks`` ``(n_checks, T)``
+    bool: each check's per-knot pass flags, rows in ``checks`` order; ``tolerances``;
+    ``cone_half_angle`` [rad].
     """
 
     feasible: bool
@@ -234,6 +237,7 @@ class AuditReport:
     velocity_consistency: Worst
     knot_feasible: np.ndarray
     tau: np.ndarray
+    knot_checks: np.ndarray
     tolerances: AuditTolerances = field(default_factory=AuditTolerances)
     cone_half_angle: float = 0.0
 
@@ -251,6 +255,11 @@ class AuditReport:
                 return c
         raise UnknownNameError("check", name, [c.name for c in self.checks])
 
+    def check_knots(self, name: str) -> np.ndarray:
+        """``(T,)`` bool: the knots where check ``name`` holds."""
+        self.check(name)
+        return self.knot_checks[[c.name for c in self.checks].index(name)]
+
     def joint(self, name: str) -> JointAudit:
         """The :class:`JointAudit` of joint ``name``."""
         from ..errors import UnknownNameError
@@ -261,8 +270,10 @@ class AuditReport:
         raise UnknownNameError("joint", name, [j.name for j in self.joints])
 
     def to_dict(self) -> dict:
-        """Everything but ``tau`` as plain JSON types (NaN and inf become ``None``)."""
-        return _json({f.name: getattr(self, f.name) for f in fields(self) if f.name != "tau"})
+        """Everything but the arrays ``tau`` and ``knot_checks`` as plain JSON types (NaN and
+        inf become ``None``)."""
+        return _json({f.name: getattr(self, f.name) for f in fields(self)
+                      if f.name not in ("tau", "knot_checks")})
 
     def summary(self, only_failed: bool = False) -> str:
         """A text table: one line per check (value, bound, unit, worst knot, status)."""
