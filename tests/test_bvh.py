@@ -283,8 +283,12 @@ def test_synthetic_fk_units_orders_rates(tmp_path, key):
     assert not info.skipped_first_frame
     np.testing.assert_allclose(np.diff(motion.t), dt, rtol=1e-12)
     check_fk(robot, motion, joints, values, C_Z if up == "z" else C_Y, scale)
-    # angles in radians, unwrapped: consecutive frames never jump by more than π
+    # angles in radians, unwrapped: consecutive frames never jump by more than π; the base
+    # quaternion keeps its sign while the yaw crosses ±180°
     assert np.all(np.abs(np.diff(motion.q[:, 7:], axis=0)) < math.pi)
+    quat = motion.q[:, 3:7]
+    assert np.all(np.sum(quat[1:] * quat[:-1], axis=1) > 0)
+    np.testing.assert_allclose(np.linalg.norm(quat, axis=1), 1.0, atol=1e-12)
 
 
 def test_explicit_scale_and_tpose(tmp_path):
@@ -364,6 +368,9 @@ def test_legs_soles_and_contact_frames():
         assert leg.sole == f"{s}_sole" and robot.contacts[s].frame == f"{s}_sole_contact"
         c = robot.contacts[s]
         assert c.half_width == pytest.approx(0.35 * c.half_length, rel=1e-12)
+        assert 0.2 < 2 * c.half_length < 0.3  # an adult's foot, ankle to toe tip [m]
+    # a shape per segment for the viewer: bones + one box per foot
+    assert robot.visual_model is not None and robot.visual_model.ngeoms >= 25
     # at the zero pose (all channels 0, base upright) each sole plane is at the height of the
     # foot's lowest point (toe joint / toe end), the two sole frames on it
     m, d = robot.model, robot.data
@@ -374,13 +381,19 @@ def test_legs_soles_and_contact_frames():
         pts = [d.oMf[m.getFrameId(n)].translation[2]
                for n in (f"{side}Foot", f"{side}ToeBase", f"{side}ToeBase_end")]
         assert min(pts) == pytest.approx(sole, abs=1e-12)
-        # the leg's sole frame is under the ankle, the contact frame ahead of it by half a sole
+        # the leg's sole frame is under the ankle; the rectangle's front edge under the toe
+        # tip, its rear edge behind the ankle by 0.25 × the ankle-to-toe-tip distance
         ankle = d.oMf[m.getFrameId(f"{side}Foot")].translation
+        tip = d.oMf[m.getFrameId(f"{side}ToeBase_end")].translation
         below = d.oMf[m.getFrameId(f"{s}_sole")].translation
         np.testing.assert_allclose(below[:2], ankle[:2], atol=1e-12)
-        centre = d.oMf[m.getFrameId(f"{s}_sole_contact")].translation
-        assert np.linalg.norm(centre - below) == pytest.approx(robot.contacts[s].half_length,
-                                                               rel=1e-12)
+        M = d.oMf[m.getFrameId(f"{s}_sole_contact")]
+        hl = robot.contacts[s].half_length
+        front = M.translation + hl * M.rotation[:, 0]
+        rear = M.translation - hl * M.rotation[:, 0]
+        np.testing.assert_allclose(front[:2], tip[:2], atol=1e-12)
+        ahead = np.linalg.norm(tip[:2] - ankle[:2])
+        assert np.linalg.norm(rear[:2] - ankle[:2]) == pytest.approx(0.25 * ahead, rel=1e-9)
     # the Robot's grounded neutral pose stands the lower sole centre on z = 0
     pin.framesForwardKinematics(m, d, robot.neutral)
     z = [d.oMf[m.getFrameId(f"{s}_sole_contact")].translation[2] for s in ("left", "right")]
@@ -415,6 +428,10 @@ def test_cmu_contacts_cadence():
     assert abs(len(strikes) - 2.85 * 109 / 60) <= 1
     cadence = 60.0 / (np.diff([i for i, _ in strikes]).mean() * motion.dt)
     assert cadence == pytest.approx(109.0, rel=0.05)  # README: cadence ~109 steps/min
+    # README: ~1.18 m/s overground; BVH +Z (the subject's facing) is our +x
+    travel = motion.q[-1, :3] - motion.q[0, :3]
+    assert travel[0] / motion.t[-1] == pytest.approx(1.18, abs=0.03)
+    assert abs(travel[1]) < 0.05 * travel[0]
     duty = (L.mean() + R.mean()) / 2
     assert 0.55 < duty < 0.70  # stance ≈ 60 % of the gait cycle in adult walking
 
@@ -518,3 +535,59 @@ def test_malformed_files(tmp_path):
     with pytest.raises(BVHError, match="no such BVH file"):
         read_bvh(tmp_path / "missing.bvh")
     assert issubclass(BVHError, gd.GdimitateError)
+
+
+# ----------------------------------------------------------------------------- tests: variety
+@pytest.mark.parametrize("seed", range(4))
+def test_random_channel_layouts(tmp_path, seed):
+    """Random per-joint channel subsets and orders (0–3 rotations, a joint with CHANNELS 0,
+    position channels on a joint), a random root channel permutation, two End Sites."""
+    rng = np.random.default_rng(100 + seed)
+    joints = skeleton_m()
+    legs = {"UpLeg", "Leg", "Foot"}
+    for j in joints[1:]:
+        bare = j[0].replace("Left", "").replace("Right", "")
+        n = 3 if bare in legs else int(rng.integers(0, 4))  # legs keep a lateral channel
+        j[3] = [f"{a}rotation" for a in rng.permutation(list("XYZ"))[:n]]
+        if bare in legs and "Xrotation" not in j[3]:
+            j[3][0] = "Xrotation"
+    joints[-1][3] = []  # RightHand: CHANNELS 0
+    joints[-3][3] = ["Yposition"] + joints[-3][3]  # a position channel on RightArm
+    head = [j[0] for j in joints].index("Head")
+    joints[head][4].append([0.05, 0.05, 0.02])
+    root = list(rng.permutation(ROOT_6))
+    scale = [1.0, 0.01, 0.0254, 0.056444][seed]
+    joints = to_file_units(joints, scale)
+    values = synthetic_values(joints, 25, 1 / 90, root, scale, seed=seed)
+    path = tmp_path / "random.bvh"
+    write_bvh(path, joints, root, values, 1 / 90)
+    robot, motion = read_bvh(path)
+    assert robot.bvh_info.scale == scale
+    ref = [[n, p, o, root if p is None else ch, e] for n, p, o, ch, e in joints]
+    check_fk(robot, motion, ref, values, C_Y, scale)
+    assert "RightHand_fixed" in [f.name for f in robot.model.frames]
+    assert "Head_end2" in [f.name for f in robot.model.frames]
+
+
+@pytest.mark.filterwarnings("ignore:.*segments not in the anthropometric table")
+def test_legs_by_name_or_given(tmp_path):
+    joints = skeleton_m()
+    rename = {"LeftUpLeg": "A1", "LeftLeg": "A2", "LeftFoot": "A3", "LeftToeBase": "A4"}
+    for j in joints:
+        j[0] = rename.get(j[0], j[0])
+        j[1] = rename.get(j[1], j[1])
+    values = synthetic_values(joints, 10, 0.01, ROOT_6, 1.0)
+    path = tmp_path / "odd.bvh"
+    write_bvh(path, joints, ROOT_6, values, 0.01)
+    with pytest.raises(gd.LegDetectionError, match="legs="):
+        read_bvh(path)
+    legs = {"left": {"hip": "A1", "knee": "A2", "ankle": "A3", "toe": "A4"},
+            "right": {"hip": "RightUpLeg", "knee": "RightLeg", "ankle": "RightFoot"}}
+    with pytest.warns(UserWarning, match="A1"):  # A1…A4 are not in the segment table
+        robot, motion = read_bvh(path, legs=legs)
+    assert robot.legs["left"].knee.startswith("A2_")
+    assert robot.legs["right"].hip == "RightUpLeg_Xrotation"
+    with pytest.raises(BVHError, match="up="):
+        read_bvh(path, legs=legs, up="x")
+    with pytest.raises(gd.InvalidInputError, match="contacts="):
+        read_bvh(path, legs=legs, contacts={"left": np.ones(3, bool), "right": np.ones(3, bool)})

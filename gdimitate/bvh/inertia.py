@@ -9,9 +9,14 @@ and uses the table's radii of gyration times the segment length; a group of seve
 (e.g. the trunk of ``Hips``, ``LowerBack``, ``Spine``, ``Spine1``) puts each link's centre of
 mass at its midpoint, with the group's radii times the link's length. Links whose names match
 no segment get a share of the body mass equal to their share of the skeleton's total link
-length (a warning names them). Zero-length links and the intermediate links of multi-channel
-joints get :data:`TINY_MASS` and :data:`TINY_INERTIA` (MuJoCo needs positive masses for moving
-bodies); the rest is scaled so that the total is exactly the body mass.
+length, as rods with the shank's radii of gyration (a warning names them). Zero-length links
+and the intermediate links of multi-channel joints get :data:`TINY_MASS` and
+:data:`TINY_INERTIA` (MuJoCo needs positive masses for moving bodies); the rest is scaled so
+that the total is exactly the body mass.
+
+The inertia's principal axes: the segment's direction (longitudinal), the antero-posterior
+axis (the skeleton's forward, orthogonalised; the table's "sagittal" radius is read as the
+radius about it) and the medio-lateral axis ("transverse"), at the zero pose.
 """
 
 from __future__ import annotations
@@ -76,8 +81,8 @@ def segment_inertias(bvh: BVHFile, C: np.ndarray, scale: float, mass: float,
         vecs.append(np.array(v) * scale if v else np.zeros((0, 3)))
     length = np.array([np.linalg.norm(v, axis=1).max() if len(v) else 0.0 for v in vecs])
     seg = [match_segment(j.name) for j in bvh.joints]
-    unmatched = tuple(j.name for j, s in zip(bvh.joints, seg) if s is None and
-                      length[bvh.joints.index(j)] > 0)
+    unmatched_idx = [i for i in range(J) if seg[i] is None and length[i] > 0]
+    unmatched = tuple(bvh.joints[i].name for i in unmatched_idx)
     if unmatched:
         warnings.warn(f"{bvh.path}: segments not in the anthropometric table (mass by length "
                       f"instead): {list(unmatched)}", stacklevel=3)
@@ -86,30 +91,26 @@ def segment_inertias(bvh: BVHFile, C: np.ndarray, scale: float, mass: float,
         if s is not None and length[i] > 0:
             key = (s, side_of(bvh.joints[i].name) if DE_LEVA_MALE[s].paired else None)
             groups.setdefault(key, []).append(i)
-    massless = [i for i in range(J) if length[i] == 0]
     if not groups and not unmatched:
         raise BVHError(f"{bvh.path}: every link has zero length; no mass can be placed")
-    budget = mass - TINY_MASS * (len(massless) + n_tiny_extra)
-    total_len = length.sum()
-    m_unmatched = budget * sum(length[bvh.joints.index(bvh.joint(n))] for n in unmatched) / (
-        total_len or 1.0)
-    frac = {k: DE_LEVA_MALE[k[0]].mass for k in groups}
-    fsum = sum(frac.values())
+    n_massless = int(np.sum(length == 0))
+    budget = mass - TINY_MASS * (n_massless + n_tiny_extra)
+    L_unmatched = float(length[unmatched_idx].sum())
+    m_unmatched = budget * L_unmatched / float(length.sum())
+    fsum = sum(DE_LEVA_MALE[k[0]].mass for k in groups)
     out: list[LinkInertia] = [tiny() for _ in range(J)]
     for key, members in groups.items():
         row = DE_LEVA_MALE[key[0]]
-        M = (budget - m_unmatched) * frac[key] / fsum
+        M = (budget - m_unmatched) * row.mass / fsum
         L = length[members]
         single = len(members) == 1
         for i, Li in zip(members, L):
             out[i] = _link(vecs[i], M * Li / L.sum(), row.com if single else 0.5,
                            (row.r_sagittal, row.r_transverse, row.r_longitudinal), Li, C, key[0])
-    for n in unmatched:
-        i = bvh.joints.index(bvh.joint(n))
-        r = DE_LEVA_MALE["shank"]  # a limb-like rod
-        out[i] = _link(vecs[i], m_unmatched * length[i] / sum(length[bvh.joints.index(
-            bvh.joint(u))] for u in unmatched), 0.5, (r.r_sagittal, r.r_transverse,
-                                                      r.r_longitudinal), length[i], C, None)
+    rod = DE_LEVA_MALE["shank"]  # unmatched links: limb-like rods
+    for i in unmatched_idx:
+        out[i] = _link(vecs[i], m_unmatched * length[i] / L_unmatched, 0.5,
+                       (rod.r_sagittal, rod.r_transverse, rod.r_longitudinal), length[i], C, None)
     return out, unmatched
 
 

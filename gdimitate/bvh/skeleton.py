@@ -185,7 +185,7 @@ class Sole:
     ``centre`` ``(3,)`` of the sole rectangle, ``below_ankle`` ``(3,)`` the sole plane's point
     under the ankle (the rectangle's rear edge), ``rotation`` ``(3, 3)`` (columns: the sole's
     forward, left and up axes),
-    ``length`` heel to toe end [m], ``width`` [m] = :data:`SOLE_WIDTH_RATIO` × length,
+    ``length`` heel to toe tip [m], ``width`` [m] = :data:`SOLE_WIDTH_RATIO` × length,
     ``height`` ankle above the sole plane [m]."""
 
     centre: np.ndarray
@@ -196,6 +196,10 @@ class Sole:
     height: float
 
 
+#: How far the heel lies behind the ankle, as a fraction of the ankle-to-toe-tip distance [-]:
+#: a skeleton has no heel point, and in adult feet about a fifth of the foot's length (heel to
+#: toe tip) lies behind the ankle joint centre, i.e. 0.25 of what lies ahead of it.
+HEEL_RATIO = 0.25
 #: Sole width / sole length [-] (an adult's foot: ~0.10 m wide at ~0.26 m long ≈ 0.38; the
 #: rectangle's width is kept a little inside the forefoot's).
 SOLE_WIDTH_RATIO = 0.35
@@ -203,9 +207,10 @@ SOLE_WIDTH_RATIO = 0.35
 
 def measure_sole(bvh: BVHFile, leg: LegChain, C: np.ndarray, scale: float) -> Sole:
     """The sole rectangle of ``leg`` at the zero pose: the plane through the lowest point of
-    the foot (ankle, toe joint, End Sites below the ankle), from under the ankle (a BVH
-    skeleton has no heel point) to the foot's most distal point (the toe's End Site, else the
-    toe joint, else the foot's own End Site)."""
+    the foot (ankle, toe joint, End Sites below the ankle), from the heel (:data:`HEEL_RATIO`
+    of the ankle-to-toe-tip distance behind the ankle: a BVH skeleton has no heel point) to the
+    foot's most distal point (the toe's End Site, else the toe joint, else the foot's own End
+    Site), along the horizontal direction from the ankle to that point."""
     pos, ends = zero_pose(bvh)
     up = C.T @ np.array([0.0, 0.0, 1.0])
     a = pos[leg.ankle]
@@ -223,9 +228,10 @@ def measure_sole(bvh: BVHFile, leg: LegChain, C: np.ndarray, scale: float) -> So
                        "zero pose; a sole needs a horizontal foot (toe End Site ahead of the "
                        "ankle)")
     fwd /= length
-    heel = a - (a @ up - low) * up
-    toe = heel + fwd * length
+    below = a - (a @ up - low) * up
+    heel, toe = below - fwd * HEEL_RATIO * length, below + fwd * length
+    total = (1 + HEEL_RATIO) * length * scale
     R = np.column_stack([fwd, np.cross(up, fwd), up])
-    return Sole(centre=(heel + toe) / 2 * scale - a * scale, below_ankle=(heel - a) * scale,
-                rotation=R, length=length * scale,
-                width=SOLE_WIDTH_RATIO * length * scale, height=float(a @ up - low) * scale)
+    return Sole(centre=(heel + toe) / 2 * scale - a * scale, below_ankle=(below - a) * scale,
+                rotation=R, length=total, width=SOLE_WIDTH_RATIO * total,
+                height=float(a @ up - low) * scale)
