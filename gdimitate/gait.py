@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import re
+import warnings
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidInputError
+from .errors import FileFormatError, InvalidInputError, ResourceLimitError, UnitsWarning
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
            "human_walk_3d_folder"]
@@ -24,24 +26,40 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
 
     Column names are shortened to their coordinate name (``/jointset/hip_r/hip_flexion_r/value``
     → ``hip_flexion_r``). Angles stay in the file's unit (the header's ``inDegrees`` tells);
-    the key ``"__in_degrees__"`` holds that flag as a 0-d boolean array.
+    the key ``"__in_degrees__"`` holds that flag as a 0-d boolean array. A flag that the
+    angle-like columns contradict (``inDegrees=no`` with values beyond 2π, ``yes`` with every
+    angle within ±π°) gives a :class:`~gdimitate.errors.UnitsWarning`.
+
+    Raises:
+        FileFormatError: not text (a binary file), no column names, no rows, repeated column
+            names; InvalidInputError: no ``endheader``, a malformed numeric table.
     """
+    from .safety import MAX_TABLE_BYTES, read_text_bounded
+
     path = Path(path)
     if not path.is_file():
         raise InvalidInputError(f"no such OpenSim file: {path}")
-    lines = path.read_text().splitlines()
+    lines = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", FileFormatError,
+                              ResourceLimitError).splitlines()
     try:
         end = next(i for i, line in enumerate(lines) if line.strip().lower() == "endheader")
     except StopIteration:
         raise InvalidInputError(f"{path}: no 'endheader' line; not an OpenSim .mot/.sto") from None
-    in_degrees = any(
-        line.replace(" ", "").lower() == "indegrees=yes" for line in lines[:end]
-    )
+    flags = {line.replace(" ", "").strip().lower() for line in lines[:end]}
+    in_degrees = "indegrees=yes" in flags
+    if end + 1 >= len(lines) or not lines[end + 1].strip():
+        raise FileFormatError(f"{path}: no column names after 'endheader'")
     names = lines[end + 1].split("\t") if "\t" in lines[end + 1] else lines[end + 1].split()
     names = [n.strip() for n in names if n.strip()]
     short = [n.split("/")[-2] if n.endswith("/value") else n.split("/")[-1] for n in names]
+    twice = sorted({n for n in short if short.count(n) > 1})
+    if twice:
+        raise FileFormatError(f"{path}: repeated column names {twice}")
+    rows = [line for line in lines[end + 2:] if line.strip()]
+    if not rows:
+        raise FileFormatError(f"{path}: no rows of numbers after the column names")
     try:
-        data = np.loadtxt(lines[end + 2 :], ndmin=2)
+        data = np.loadtxt(rows, ndmin=2)
     except ValueError as e:
         raise InvalidInputError(f"{path}: malformed numeric table ({e})") from None
     if data.shape[1] != len(short):
@@ -49,8 +67,32 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
             f"{path}: {len(short)} column names but {data.shape[1]} columns of numbers"
         )
     out = {n: data[:, i].copy() for i, n in enumerate(short)}
+    if "indegrees=yes" in flags or "indegrees=no" in flags:
+        _check_degrees_flag(path, out, in_degrees)
     out["__in_degrees__"] = np.asarray(in_degrees)
     return out
+
+
+#: Columns that are not angles (time, translations, forces, torques, points, speeds).
+_NOT_ANGLE = re.compile(r"^time$|_t[xyz]$|_[vp][xyz]$|force|torque|moment|speed|activation",
+                        re.IGNORECASE)
+
+
+def _check_degrees_flag(path: Path, table: dict[str, np.ndarray], in_degrees: bool) -> None:
+    """Warn when the angle-like columns contradict the ``inDegrees`` flag."""
+    angles = [a for n, a in table.items() if not _NOT_ANGLE.search(n)]
+    finite = [a[np.isfinite(a)] for a in angles]
+    big = max((float(np.abs(a).max()) for a in finite if a.size), default=0.0)
+    if not angles or big == 0.0:
+        return
+    if not in_degrees and big > 2 * np.pi:
+        warnings.warn(f"{path}: inDegrees=no, but angle columns reach {big:.3g} (> 2π rad); "
+                      "are they in degrees? Fix the header's inDegrees flag.", UnitsWarning,
+                      stacklevel=3)
+    elif in_degrees and big < np.pi:
+        warnings.warn(f"{path}: inDegrees=yes, but every angle column stays within ±{big:.3g}°"
+                      " (a motion in radians?). Fix the header's inDegrees flag.",
+                      UnitsWarning, stacklevel=3)
 
 
 def _grf_contact(grf_path: Path, t: np.ndarray, threshold: float) -> tuple[dict, float]:

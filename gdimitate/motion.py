@@ -140,8 +140,17 @@ class Motion:
 
     @classmethod
     def from_npz(cls, path) -> Motion:
-        """Load what :meth:`to_npz` wrote."""
-        with np.load(path) as z:
+        """Load what :meth:`to_npz` wrote.
+
+        Raises:
+            FileFormatError: no such file, not an NPZ archive (empty, a CSV renamed ``.npz``,
+                pickled objects, larger than :data:`gdimitate.safety.MAX_NPZ_BYTES` unpacked)
+                or a key missing; the message names the file.
+            InvalidInputError: arrays that do not make a valid motion.
+        """
+        from .safety import open_npz
+
+        with open_npz(path, ("t", "q", "joint_names", "joint_nq", "base_nq")) as z:
             contact = {k[8:]: z[k] for k in z.files if k.startswith("contact_")}
             return cls(t=z["t"], joint_names=tuple(str(s) for s in z["joint_names"]), q=z["q"],
                        contact=contact, base_nq=int(z["base_nq"]),

@@ -22,19 +22,32 @@ __all__ = ["Eq1Result", "eq1", "fk2", "ik2", "ROUNDOFF"]
 ROUNDOFF = 1e-12
 
 
+def _real_array(a, name: str) -> np.ndarray:
+    """``a`` as a float array if it holds real numbers (bool, int, float); strings, complex
+    numbers and objects raise :class:`InvalidInputError` (NumPy would parse ``"0.3"`` or drop
+    an imaginary part silently)."""
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "biuf":
+        raise InvalidInputError(f"{name} must be real numbers [rad or m]; got {arr.dtype} "
+                                f"values ({a!r:.60})")
+    return arr.astype(float)
+
+
 def _lengths(pair, what: str) -> tuple[float, float]:
     try:
-        l1, l2 = (float(v) for v in pair)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{what} must be a pair (thigh, shank) in metres; got {pair!r}"
-                                ) from None
+        arr = _real_array(pair, what)
+    except InvalidInputError:
+        arr = None
+    if arr is None or arr.shape != (2,):
+        raise InvalidInputError(f"{what} must be a pair (thigh, shank) in metres; got {pair!r}")
+    l1, l2 = float(arr[0]), float(arr[1])
     if not (np.isfinite(l1) and np.isfinite(l2) and l1 > 0 and l2 > 0):
         raise InvalidInputError(f"{what} lengths must be finite and positive; got {(l1, l2)}")
     return l1, l2
 
 
 def _angles(*arrays, names):
-    out = [np.asarray(a, dtype=float) for a in arrays]
+    out = [_real_array(a, n) for a, n in zip(arrays, names)]
     try:
         shape = np.broadcast_shapes(*(a.shape for a in out))
     except ValueError:

@@ -9,6 +9,7 @@ Bounds (module constants, documented in ``docs/security.md``):
 - Motions: a median sample interval of at most :data:`MAX_SAMPLE_INTERVAL_S` and at least
   :data:`MIN_SAMPLE_INTERVAL_S`, a duration of at most :data:`MAX_MOTION_DURATION_S` (a time
   axis in milliseconds read as seconds is refused, not integrated for 2500 "seconds").
+- NPZ files: at most :data:`MAX_NPZ_BYTES` unpacked, no pickled objects (:func:`open_npz`).
 - Oscillators: at most :data:`MAX_HARMONICS` harmonics, :data:`MAX_CYCLES` teaching or free
   cycles, :data:`MAX_SIM_STEPS` integration steps per run and :data:`MAX_OUTPUT_SAMPLES`
   output frames, all checked before any array is allocated.
@@ -25,20 +26,31 @@ import os
 import re
 import secrets
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
+import zipfile
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from .errors import GdimitateError, OutputError, ResourceLimitError, URDFError, URDFLimitError
+from .errors import (
+    FileFormatError,
+    GdimitateError,
+    InvalidInputError,
+    OutputError,
+    ResourceLimitError,
+    URDFError,
+    URDFLimitError,
+)
 
 __all__ = [
     "MAX_CYCLES",
     "MAX_HARMONICS",
     "MAX_MOTION_DURATION_S",
+    "MAX_NPZ_BYTES",
     "MAX_OUTPUT_SAMPLES",
     "MAX_SAMPLE_INTERVAL_S",
     "MAX_SIM_STEPS",
+    "MAX_TABLE_BYTES",
     "MAX_URDF_BYTES",
     "MAX_URDF_DEPTH",
     "MAX_URDF_LINKS",
@@ -49,6 +61,7 @@ __all__ = [
     "check_steps",
     "check_time_axis",
     "check_urdf_bounds",
+    "open_npz",
     "parse_xml",
     "prepare_output_dir",
     "read_text_bounded",
@@ -77,35 +90,47 @@ MAX_CYCLES = 1000
 MAX_SIM_STEPS = 1_000_000
 #: Most frames of a generated (replayed) motion.
 MAX_OUTPUT_SAMPLES = 1_000_000
+#: Largest text table (``.mot``/``.sto``) read [bytes].
+MAX_TABLE_BYTES = 512 * 2**20
+#: Largest unpacked content of an ``.npz`` file read [bytes] (a compressed archive can
+#: unpack to far more than its size on disk).
+MAX_NPZ_BYTES = 2 * 2**30
 
 
 # ---------------------------------------------------------------------------------- numbers
 def check_positive(name: str, value: object, *, upper: float | None = None,
-                   error: type[GdimitateError] = ResourceLimitError) -> float:
-    """``value`` as a float if it is a finite real number > 0 (and ≤ ``upper``), else
-    ``error`` naming ``name``."""
-    if isinstance(value, bool | str | bytes) or np.iscomplexobj(value):
-        raise error(f"{name} must be a real number; got {value!r}")
+                   zero: bool = False,
+                   error: type[GdimitateError] = InvalidInputError) -> float:
+    """``value`` as a float if it is a finite real number > 0 (≥ 0 with ``zero=True``);
+    else ``error`` naming ``name``. Above ``upper``: :class:`ResourceLimitError` stating the
+    limit."""
+    bad = isinstance(value, bool | str | bytes) or np.iscomplexobj(value)
     try:
         v = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise error(f"{name} must be a real number; got {value!r}") from None
-    if not np.isfinite(v) or v <= 0:
-        raise error(f"{name} must be a finite number > 0; got {value!r}")
+        bad = True
+    if bad:
+        raise error(f"{name} must be a real number; got {value!r}")
+    if not np.isfinite(v) or v < 0 or (v == 0 and not zero):
+        raise error(f"{name} must be a finite number {'>=' if zero else '>'} 0; got {value!r}")
     if upper is not None and v > upper:
-        raise error(f"{name} = {v:g} exceeds the limit {upper:g}")
+        raise ResourceLimitError(f"{name} = {v:g} exceeds the limit {upper:g}")
     return v
 
 
 def check_count(name: str, value: object, lo: int, hi: int,
-                error: type[GdimitateError] = ResourceLimitError) -> int:
-    """``value`` as an int if it is an integer in ``[lo, hi]``, else ``error`` naming it."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        if not (isinstance(value, float) and value.is_integer()):
-            raise error(f"{name} must be an integer; got {value!r}")
+                error: type[GdimitateError] = InvalidInputError) -> int:
+    """``value`` as an int if it is an integer in ``[lo, hi]``: else ``error`` (not an
+    integer, below ``lo``) or :class:`ResourceLimitError` (above ``hi``) naming it."""
+    integral = isinstance(value, int | np.integer) or (
+        isinstance(value, float | np.floating) and float(value).is_integer())
+    if isinstance(value, bool) or not integral:
+        raise error(f"{name} must be an integer; got {value!r}")
     v = int(value)  # type: ignore[arg-type]
-    if not lo <= v <= hi:
-        raise error(f"{name} must be in [{lo}, {hi}]; got {v}")
+    if v < lo:
+        raise error(f"{name} must be >= {lo}; got {v}")
+    if v > hi:
+        raise ResourceLimitError(f"{name} = {v} exceeds the limit {hi}")
     return v
 
 
@@ -142,15 +167,17 @@ def check_time_axis(t: np.ndarray, what: str = "motion") -> None:
 
 # ---------------------------------------------------------------------------------- XML
 def read_text_bounded(path: Path, max_bytes: int, what: str,
-                      error: type[GdimitateError] = URDFError) -> str:
+                      error: type[GdimitateError] = URDFError,
+                      limit_error: type[GdimitateError] = URDFLimitError) -> str:
     """The UTF-8 text of ``path`` if it holds at most ``max_bytes`` bytes (checked before
-    reading); else :class:`URDFLimitError`/``error`` naming the file."""
+    reading); else ``limit_error`` (too large) or ``error`` (unreadable, not UTF-8) naming the
+    file."""
     try:
         size = path.stat().st_size
     except OSError as e:
         raise error(f"cannot read {what} {path}: {e.strerror or e}") from None
     if size > max_bytes:
-        raise URDFLimitError(f"{what} {path} has {size:,} bytes; the limit is {max_bytes:,}")
+        raise limit_error(f"{what} {path} has {size:,} bytes; the limit is {max_bytes:,}")
     try:
         data = path.read_bytes()
     except OSError as e:
@@ -298,3 +325,66 @@ def removed_on_failure(folder: str | os.PathLike) -> Iterator[Path]:
             with contextlib.suppress(OSError):
                 p.rmdir()
         raise
+
+
+def _looks_like(head: bytes) -> str:
+    if head.startswith(b"\x93NUMPY"):
+        return "a single NumPy .npy array"
+    if head.startswith(b"\x80"):
+        return "a Python pickle"
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError:
+        return "binary data"
+    return "text (a CSV or other table?)" if text.isprintable() or "\n" in text else "binary data"
+
+
+@contextlib.contextmanager
+def open_npz(path: str | os.PathLike, required: Sequence[str] = ()
+             ) -> Iterator[np.lib.npyio.NpzFile]:
+    """Open an ``.npz`` archive for reading (no pickled objects) and check that it holds the
+    ``required`` keys; errors while the block reads it become :class:`FileFormatError` naming
+    the file (gdimitate's own errors pass through).
+
+    Raises:
+        FileFormatError: no such file, an empty file, not a zip archive (a CSV renamed
+            ``.npz``, a ``.npy``), a corrupt archive, more than :data:`MAX_NPZ_BYTES`
+            unpacked, pickled object arrays, missing keys.
+    """
+    p = Path(path).expanduser()
+    if not p.is_file():
+        raise FileFormatError(f"no such NPZ file: {p}")
+    try:
+        with open(p, "rb") as f:
+            head = f.read(64)
+        if not head:
+            raise FileFormatError(f"{p} is empty (0 bytes); not an NPZ archive")
+        if not head.startswith(b"PK"):
+            raise FileFormatError(f"{p} is not an NPZ archive (a zip of .npy arrays, as written "
+                                  f"by Motion.to_npz); it looks like {_looks_like(head)}")
+        with zipfile.ZipFile(p) as zf:
+            unpacked = sum(i.file_size for i in zf.infolist())
+        if unpacked > MAX_NPZ_BYTES:
+            raise FileFormatError(f"{p} unpacks to {unpacked:,} bytes; the limit is "
+                                  f"{MAX_NPZ_BYTES:,}")
+        z = np.load(p, allow_pickle=False)
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as e:
+        if isinstance(e, GdimitateError):
+            raise
+        raise FileFormatError(f"{p} is not a readable NPZ archive: {e}") from None
+    with z:
+        missing = [k for k in required if k not in z.files]
+        if missing:
+            raise FileFormatError(f"{p} lacks the keys {missing} (it has {sorted(z.files)}); "
+                                  "was it written by Motion.to_npz?")
+        try:
+            yield z
+        except GdimitateError:
+            raise
+        except ValueError as e:
+            if "pickle" in str(e):
+                raise FileFormatError(f"{p} holds pickled Python objects, which are not loaded "
+                                      "(only plain arrays are)") from None
+            raise FileFormatError(f"{p}: {e}") from None
+        except (TypeError, KeyError, IndexError, zipfile.BadZipFile, OSError, EOFError) as e:
+            raise FileFormatError(f"{p}: malformed content ({type(e).__name__}: {e})") from None

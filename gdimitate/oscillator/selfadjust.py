@@ -33,6 +33,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..errors import OscillatorError
+from ..safety import MAX_CYCLES, MAX_HARMONICS, check_count, check_positive, check_steps
 from .adaptive import adapt_frequency
 from .analysis import measured_frequency
 from .bank import MatsuokaBank
@@ -137,9 +138,12 @@ class SelfAdjustResult:
         tied to the teacher's clock ``t``). Integrated on a ``dt`` grid and interpolated.
         """
         t_out = np.asarray(t_out, dtype=float)
-        if t_out.ndim != 1 or t_out.size < 2 or np.any(np.diff(t_out) <= 0):
-            raise OscillatorError("t_out must be 1-D, strictly increasing, with >= 2 points")
-        steps = int(np.ceil((t_out[-1] - t_out[0]) / dt))
+        if t_out.ndim != 1 or t_out.size < 2 or not np.all(np.isfinite(t_out)) \
+                or np.any(np.diff(t_out) <= 0):
+            raise OscillatorError("t_out must be 1-D, finite, strictly increasing, with >= 2 "
+                                  "points")
+        dt = check_positive("dt", dt, error=OscillatorError)
+        steps = check_steps(np.ceil((t_out[-1] - t_out[0]) / dt), "replay")
         t = t_out[0] + dt * np.arange(steps + 1)
         bank = self.bank()
         if teach_until is None:
@@ -152,7 +156,11 @@ class SelfAdjustResult:
         fine = np.stack(
             [[np.interp(t_out, t, states[a, :, j]) for j in range(self.n)] for a in range(4)]
         )  # (4, n, T_out)
-        return self.read_out(np.moveaxis(fine, -1, 1))
+        out = self.read_out(np.moveaxis(fine, -1, 1))
+        if not np.all(np.isfinite(out)):
+            raise OscillatorError("the replay is not finite (overflow): the network's scale "
+                                  "is too large; rescale the targets (e.g. to radians)")
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (round-trips through :meth:`from_dict`)."""
@@ -231,6 +239,37 @@ def _fit_readout(F: np.ndarray, ref: np.ndarray, ridge: float) -> tuple[np.ndarr
     return gain, offset
 
 
+def _check_options(*, harmonics, frequency, initial_frequency, ratio, b, w, input_gain,
+                   lock_margin, coupling_gain, readout, teach_cycles, free_cycles, adapt_rate,
+                   dt, ridge) -> None:
+    """Validate :func:`self_adjust`'s options before any work (OscillatorError names the
+    option; ResourceLimitError states a bound of :mod:`gdimitate.safety`)."""
+    E = OscillatorError
+    check_count("harmonics", harmonics, 1, MAX_HARMONICS, E)
+    check_count("teach_cycles", teach_cycles, 9, MAX_CYCLES, E)
+    check_count("free_cycles", free_cycles, 3, MAX_CYCLES, E)
+    for name, v in (("frequency", frequency), ("initial_frequency", initial_frequency)):
+        if v is not None:
+            check_positive(name, v, error=E)
+    ratio = check_positive("ratio (tau_r/tau_a)", ratio, error=E)
+    b = check_positive("b", b, zero=True, error=E)
+    w = check_positive("w", w, error=E)
+    if not 1 + ratio < w < 1 + b:
+        raise E(f"ratio = {ratio:g}, b = {b:g}, w = {w:g} cannot oscillate: Matsuoka's "
+                f"condition needs 1 + ratio < w < 1 + b, i.e. {1 + ratio:g} < w < {1 + b:g}")
+    if input_gain is not None:
+        check_positive("input_gain", input_gain, zero=True, error=E)
+    if not check_positive("lock_margin", lock_margin, error=E) < 1:
+        raise E(f"lock_margin must be in (0, 1); got {lock_margin!r}")
+    check_positive("coupling_gain", coupling_gain, zero=True, error=E)
+    if readout not in ("network", "own", "output"):
+        raise E(f"readout must be 'network', 'own' or 'output', got {readout!r}")
+    if not check_positive("adapt_rate", adapt_rate, error=E) <= 1:
+        raise E(f"adapt_rate must be in (0, 1]; got {adapt_rate!r}")
+    check_positive("dt", dt, error=E)
+    check_positive("ridge", ridge, zero=True, error=E)
+
+
 def self_adjust(
     t: np.ndarray,
     targets: np.ndarray,
@@ -272,19 +311,34 @@ def self_adjust(
 
     Returns:
         :class:`SelfAdjustResult` with ``.report`` per joint.
+
+    Raises:
+        OscillatorError: a bad option (NaN, zero or negative where it must be positive, a
+            ratio/b/w without a limit cycle), targets that cannot be taught (constant,
+            too short) or whose scale overflows the integration.
+        ResourceLimitError: more than :data:`~gdimitate.safety.MAX_HARMONICS` harmonics or
+            :data:`~gdimitate.safety.MAX_CYCLES` cycles, or a run of more than
+            :data:`~gdimitate.safety.MAX_SIM_STEPS` steps (checked before integrating).
     """
     t, x = check_targets(t, targets)
     n = x.shape[1]
     names = tuple(joint_names) if joint_names is not None else tuple(f"joint{j}" for j in range(n))
     if len(names) != n:
         raise OscillatorError(f"{len(names)} joint_names for {n} target columns")
-    if teach_cycles < 9 or free_cycles < 3:
-        raise OscillatorError("need teach_cycles >= 9 and free_cycles >= 3")
+    _check_options(harmonics=harmonics, frequency=frequency, initial_frequency=initial_frequency,
+                   ratio=ratio, b=b, w=w, input_gain=input_gain, lock_margin=lock_margin,
+                   coupling_gain=coupling_gain, readout=readout, teach_cycles=teach_cycles,
+                   free_cycles=free_cycles, adapt_rate=adapt_rate, dt=dt, ridge=ridge)
     teacher = fit_teacher(t, x, harmonics=harmonics, frequency=frequency)
     fT = teacher.frequency
+    slowest = min(fT, initial_frequency or fT)
+    check_steps((22 + teach_cycles + free_cycles) / (slowest * dt),
+                f"self_adjust at {fT:.3g} Hz with dt = {dt:g} s")
     one = teacher(np.linspace(0, 1 / fT, 2000, endpoint=False))
     mean = one.mean(axis=0)
     amp = np.ptp(one, axis=0) / 2
+    if not (np.all(np.isfinite(one)) and np.all(np.isfinite(amp))):
+        raise OscillatorError("the targets' scale overflows the teaching signal; rescale them")
     # per joint: closed-form time constants for fT, s for the amplitude
     tau_a = np.sqrt(((ratio + 1) * b - ratio * w) / (ratio * w)) / (2 * np.pi * fT)
     unit1 = MatsuokaParams(tau_r=ratio * tau_a, tau_a=tau_a, b=b, w=w, s=1.0)
@@ -310,6 +364,9 @@ def self_adjust(
     run = adapt_frequency(unit, coupling, f_unit, g_of,
                           initial_frequency=initial_frequency or fT, teach_cycles=teach_cycles,
                           free_cycles=free_cycles, dt=dt, rate=adapt_rate, x0=x0)
+    if not np.all(np.isfinite(run.states)):
+        raise OscillatorError("the network's states overflowed (s = "
+                              f"{np.max(s):.3g}); rescale the targets (e.g. to radians)")
     # read-out: fit on the middle third of teaching; align the free run to the teacher by one
     # common time shift; refit on both (entrained middle third + free cycles 2..6)
     tt = run.t
@@ -331,6 +388,9 @@ def self_adjust(
     both = fit_w | free_fit
     target = np.where(free_fit[:, None], ref_free, ref)
     gain, offset = _fit_readout(F[both], target[both], ridge)
+    if not (np.all(np.isfinite(gain)) and np.all(np.isfinite(offset))):
+        raise OscillatorError("the read-out fit overflowed (targets' amplitude up to "
+                              f"{np.max(amp):.3g}); rescale the targets (e.g. to radians)")
     params = unit.time_scaled(f_unit / run.frequency)
     result = SelfAdjustResult(
         joint_names=names, params=params,

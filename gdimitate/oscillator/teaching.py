@@ -17,6 +17,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..errors import OscillatorError
+from ..safety import MAX_HARMONICS, check_count
 
 __all__ = ["FourierTeacher", "fit_teacher", "check_targets"]
 
@@ -109,9 +110,10 @@ def fit_teacher(
             peak (the clip must hold at least about one cycle).
     """
     t, x = check_targets(t, targets)
-    H = int(harmonics)
-    if H < 1:
-        raise OscillatorError(f"harmonics must be >= 1, got {harmonics}")
+    H = check_count("harmonics", harmonics, 1, MAX_HARMONICS, OscillatorError)
+    if 2 * H + 1 > t.size:
+        raise OscillatorError(f"harmonics = {H} needs at least {2 * H + 1} samples (the fit has "
+                              f"{2 * H + 1} coefficients per joint); the clip has {t.size}")
 
     def resid(f: float, h: int = H) -> float:
         A = _basis(t, f, h)

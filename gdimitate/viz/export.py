@@ -12,7 +12,8 @@ import os
 import re
 from pathlib import Path
 
-from ..errors import ViewerError
+from ..errors import OutputError, ViewerError
+from ..safety import atomic_write
 
 __all__ = ["check_writable", "inline_html", "network_references", "write_html"]
 
@@ -58,16 +59,18 @@ def check_writable(path: str | os.PathLike) -> Path:
 
 
 def write_html(html: str, path: str | os.PathLike) -> Path:
-    """Write ``html`` to ``path`` (UTF-8); return the absolute path.
+    """Write ``html`` to ``path`` (UTF-8) through a temporary file in the same folder that is
+    renamed into place once complete; return the absolute path.
 
     Raises:
         ViewerError: if the folder does not exist or the file cannot be written.
     """
     p = check_writable(path)
-    try:
-        p.write_text(html, encoding="utf-8")
-    except OSError as e:
-        raise ViewerError(f"cannot write HTML to {p}: {e.strerror or e}") from e
+    try:  # a temporary name, renamed when complete: Ctrl-C never leaves half a page
+        with atomic_write(p) as tmp:
+            tmp.write_text(html, encoding="utf-8")
+    except OutputError as e:
+        raise ViewerError(f"cannot write HTML to {p}: {e}") from e
     return p.resolve()
 
 

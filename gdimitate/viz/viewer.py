@@ -147,19 +147,24 @@ class Viewer:
     # -- lifecycle -----------------------------------------------------------------------
     @classmethod
     def start(cls, port: int | None = None, open_browser: bool = False, *,
-              style: Style | None = None, quiet: bool = False, timeout_s: float = 30.0
-              ) -> Viewer:
+              style: Style | None = None, quiet: bool = False, timeout_s: float = 30.0,
+              host: str = "127.0.0.1") -> Viewer:
         """Start our own meshcat server (see :class:`MeshcatServer`) and connect to it.
 
         Args:
-            port: web port; ``None`` picks a free one. A taken port raises
+            port: web port 1–65535; ``None`` picks a free one. A taken port raises
                 :class:`~gdimitate.viz.server.PortInUseError` (a :class:`ViewerError`).
             open_browser: open :attr:`url` in the system's browser (never blocks).
             style: sizes and colours of the decorations.
             quiet: do not print the URL.
             timeout_s: limit for the server start and for every request [s].
+            host: address the page listens on (default: this machine only; ``"0.0.0.0"``
+                serves the whole network — on purpose only).
+
+        Ctrl-C or SIGTERM during the start stops the half-started server; the server also
+        exits by itself when this process is gone.
         """
-        server = MeshcatServer.start(port, timeout_s=timeout_s)
+        server = MeshcatServer.start(port, timeout_s=timeout_s, host=host)
         try:
             viewer = cls(server.visualizer(timeout_s), server, style)
             viewer.clear()
@@ -185,6 +190,12 @@ class Viewer:
     def url(self) -> str:
         """The live page of the server, e.g. ``http://127.0.0.1:7001/static/``."""
         return self.vis.url()
+
+    def check_alive(self) -> None:
+        """Raise :class:`ViewerError` (with the end of the server's log) if the server this
+        viewer started has exited; nothing for a viewer on someone else's server."""
+        if self.server is not None:
+            self.server.check_alive()
 
     def close(self) -> None:
         """Close the connection and stop the server if this viewer started it."""
