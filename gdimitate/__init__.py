@@ -12,7 +12,7 @@ The pipeline (DESIGN §2)::
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import bvh, gait, metrics, opensim, optimal, oscillator, planar
+from . import bvh, gait, metrics, opensim, oscillator, planar, retarget
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
 from .cpg import CPGReplay, entrain
@@ -32,7 +32,7 @@ from .errors import (
 )
 from .library import list_robots
 from .motion import Motion
-from .optimal import Limits, StreamingAdaptor, Weights
+from .retarget import Limits, StreamingAdaptor, Weights
 from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
 from .robot import Leg, Robot
 from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
@@ -73,10 +73,10 @@ __all__ = [
     "list_robots",
     "metrics",
     "opensim",
-    "optimal",
     "oscillator",
     "paper_case",
     "planar",
+    "retarget",
     "self_adjust",
     "walking_motion",
 ]

@@ -1,20 +1,28 @@
 """``adapt``: regenerate a demonstrated motion for an imitator robot.
 
-Methods: ``"analytic"`` — the paper's Eq. (1) per leg (DESIGN §4); ``"copy"`` — the paper's
-"without adaptor" baseline (same planar joint angles); ``"optimal"`` — the CasADi trajectory
-optimisation of DESIGN §6 (see :mod:`gdimitate.optimal`). Every method returns an
-:class:`AdaptedMotion` whose report says what was and was not achieved.
+Methods: ``"analytic"`` — the paper's Eq. (1) per leg (docs/design.md §4); ``"copy"`` — the
+paper's "without adaptor" baseline (same planar joint angles); ``"optimal"`` — the whole-body,
+contact-consistent trajectory optimisation (:mod:`gdimitate.retarget`). Every method returns an
+:class:`AdaptedMotion`: the motion, a kinematic comparison with the demonstration
+(:class:`AdaptationReport`) and, for the optimal method, the contact wrenches, the contacts
+used, the solver's account and the independent physical audit (:func:`gdimitate.audit.audit`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .errors import InvalidInputError, LegMatchError, UnknownNameError
-from .metrics import foot_heights, force_direction, hip_height_ratio, joint_limit_margins
+from .metrics import (
+    angle_down,
+    foot_heights,
+    force_direction,
+    hip_height_ratio,
+    joint_limit_margins,
+)
 from .motion import Motion
 from .planar import eq1
 from .robot import SIDES, Robot
@@ -35,10 +43,9 @@ class AdaptationReport:
     swing), and its max; ``hip_height_ratio_error_max``: max |hip-over-ankle height / leg
     length − the demonstrator's| over all frames; ``joint_limit_violation``: per joint the
     largest excursion beyond a position limit [rad] (only joints that violate), and its max;
-    ``ground_penetration_max``: deepest any sole goes below the ground z = 0 [m].
-    Optimal-method fields (``solver``, ``torque_ratio_max`` — per driven joint max
-    |τ|/τ_limit —, ``infeasible_constraint`` — ``None`` or what could not be met) are filled by
-    :mod:`gdimitate.optimal`.
+    ``ground_penetration_max``: deepest any sole frame goes below the ground z = 0 [m]. The
+    physical checks (torques, cones, every sole corner) are the audit's
+    (:attr:`AdaptedMotion.audit`).
     """
 
     method: str
@@ -51,10 +58,6 @@ class AdaptationReport:
     joint_limit_violation: dict[str, float]
     joint_limit_violation_max: float
     ground_penetration_max: float = 0.0
-    solver: dict[str, Any] = field(default_factory=dict)
-    extra: dict[str, Any] = field(default_factory=dict)
-    torque_ratio_max: dict[str, float] = field(default_factory=dict)
-    infeasible_constraint: str | None = None
 
     @property
     def all_feasible(self) -> bool:
@@ -75,10 +78,6 @@ class AdaptationReport:
             "joint_limit_violation_rad": dict(self.joint_limit_violation),
             "ground_penetration_max_m": self.ground_penetration_max,
             "feasible": {s: m.astype(int).tolist() for s, m in self.feasible.items()},
-            "solver": _jsonable(self.solver),
-            "torque_ratio_max": _jsonable(self.torque_ratio_max),
-            "infeasible_constraint": _jsonable(self.infeasible_constraint),
-            **{k: _jsonable(v) for k, v in self.extra.items()},
         }
 
 
@@ -101,11 +100,38 @@ def _jsonable(v: Any) -> Any:
 
 @dataclass(frozen=True)
 class AdaptedMotion:
-    """The imitator's :class:`Motion` plus the :class:`AdaptationReport`."""
+    """An adaptation's result.
+
+    - ``motion``: the imitator's :class:`Motion` (the optimal method fills ``v``, ``a``
+      ``(T, nv)`` in Pinocchio's conventions and ``contact`` with the schedule it used);
+    - ``report``: the kinematic comparison with the demonstration (:class:`AdaptationReport`);
+    - ``robot``: the imitator;
+    - ``wrenches`` (optimal only): ``{"left": (T, 6), "right": (T, 6)}`` — ``[f; τ]`` [N, N·m]
+      the ground applies to each foot, in its sole frame at the frame's origin (zeros in
+      swing; planar models: f_y = τ_x = τ_z = 0);
+    - ``contacts`` (optimal only): ``{"left": SoleContact, "right": SoleContact}`` used;
+    - ``audit`` (optimal only): :class:`gdimitate.audit.AuditReport` recomputed from
+      ``motion`` and ``wrenches`` with Pinocchio (``audit.feasible``, ``audit.binding``);
+    - ``solver`` (optimal only): :class:`gdimitate.retarget.SolverInfo`;
+    - ``force_model``: the force-direction model of the goal.
+    """
 
     motion: Motion
     report: AdaptationReport
     robot: Robot
+    wrenches: dict[str, np.ndarray] | None = None
+    contacts: dict[str, Any] | None = None
+    audit: Any = None
+    solver: Any = None
+    force_model: str = "segment"
+
+    @property
+    def feasible(self) -> bool:
+        """The audit's verdict (optimal method); for Eq. (1) and joint copying, whether every
+        frame was reachable and within the position limits."""
+        if self.audit is not None:
+            return bool(self.audit.feasible)
+        return self.report.all_feasible
 
 
 def _nanmax_abs(arrs) -> float:
@@ -114,11 +140,23 @@ def _nanmax_abs(arrs) -> float:
 
 
 def compare(demonstrator: Robot, demo: Motion, imitator: Robot, motion: Motion, method: str,
-            feasible: dict[str, np.ndarray], force: str = "segment") -> AdaptationReport:
-    """Measure an imitator motion against the demonstration (used by every method)."""
-    fd_m = force_direction(demonstrator, demo, force)
-    fd_r = force_direction(imitator, motion, force)
-    err = {s: fd_r[s].sagittal - fd_m[s].sagittal for s in SIDES}
+            feasible: dict[str, np.ndarray], force: str = "segment",
+            push_m: dict[str, np.ndarray] | None = None,
+            push_r: dict[str, np.ndarray] | None = None) -> AdaptationReport:
+    """Measure an imitator motion against the demonstration (used by every method).
+
+    ``push_m``/``push_r``: ``{side: (T, 3)}`` push directions of the demonstrator/imitator
+    when they are not computed by ``force_direction(robot, motion, force)`` (measured forces,
+    an optimiser's wrenches)."""
+    if push_m is None:
+        fd_m = {s: f.sagittal for s, f in force_direction(demonstrator, demo, force).items()}
+    else:
+        fd_m = {s: angle_down(push_m[s]) for s in SIDES}
+    if push_r is None:
+        fd_r = {s: f.sagittal for s, f in force_direction(imitator, motion, force).items()}
+    else:
+        fd_r = {s: angle_down(push_r[s]) for s in SIDES}
+    err = {s: fd_r[s] - fd_m[s] for s in SIDES}
     hr_m = hip_height_ratio(demonstrator, demo)
     hr_r = hip_height_ratio(imitator, motion)
     viol = {}
@@ -159,26 +197,34 @@ def _check_pair(motion: Motion, demonstrator: Robot, imitator: Robot) -> None:
             raise InvalidInputError(f"motion.contact has no {s!r} schedule")
 
 
-def adapt(motion: Motion, demonstrator: Robot, imitator: Robot, method: str = "analytic",
-          force: str = "segment", **options) -> AdaptedMotion:
-    """Regenerate ``motion`` (of ``demonstrator``) for ``imitator``.
+def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "analytic",
+          force: str = "segment", forces=None, rate: float | None = None,
+          **options) -> AdaptedMotion:
+    """Regenerate ``demo`` (a motion of ``demonstrator``) for ``imitator``.
 
     ``method``: ``"analytic"`` (Eq. 1), ``"copy"`` (same planar joint angles — the paper's
-    baseline) or ``"optimal"`` (trajectory optimisation; ``options`` go to
-    :func:`gdimitate.optimal.adapt_optimal`). ``force``: the force-direction model the report
-    (and the optimal method's constraint) uses: ``"segment"``, ``"com"`` or ``"grf"``.
-    The imitator keeps the demonstrator's torso angle and ankle angles; its floating base is
-    placed so the stance foot stands on the ground without slipping.
+    baseline) or ``"optimal"`` (the whole-body optimal adaptor,
+    :func:`gdimitate.retarget.adapt_optimal`, which documents ``options``). ``force``: the
+    force-direction model — ``"segment"``, ``"com"``, ``"dynamics"`` or ``"measured"`` (which
+    needs ``forces``, the demonstrator's measured
+    :class:`~gdimitate.contact.ContactForces`). ``rate`` [knots/s]: the optimal method's knot
+    grid (default :data:`gdimitate.retarget.DEFAULT_RATE`). With Eq. (1) and joint copying
+    the imitator keeps the demonstrator's torso and ankle angles and its base is placed so
+    that the stance foot stands on the ground without slipping.
     """
     if method not in METHODS:
         raise UnknownNameError("method", method, METHODS)
-    _check_pair(motion, demonstrator, imitator)
+    _check_pair(demo, demonstrator, imitator)
+    motion = demo
     if method == "optimal":
-        from .optimal import adapt_optimal
+        from .retarget import adapt_optimal
 
-        return adapt_optimal(motion, demonstrator, imitator, force=force, **options)
-    if options:
-        raise InvalidInputError(f"method {method!r} takes no options; got {sorted(options)}")
+        return adapt_optimal(demo, demonstrator, imitator, force=force, forces=forces,
+                             rate=rate, **options)
+    if options or forces is not None or rate is not None:
+        given = sorted(options) + [k for k, v in (("forces", forces), ("rate", rate))
+                                   if v is not None]
+        raise InvalidInputError(f"method {method!r} takes no options; got {given}")
     torso, angles = leg_angles(demonstrator, motion.q)
     new, feasible = {}, {}
     for s in SIDES:

@@ -7,7 +7,10 @@ joint placements, joint axes, inertias and frames, the expressions the optimiser
   Jacobian in Pinocchio's ``LOCAL_WORLD_ALIGNED`` convention (rows: linear, angular);
 - centre of mass ``(3,)``, its acceleration ``(3,)`` and the centroidal momentum rate ``(6,)``;
 - inverse dynamics (recursive Newton-Euler) ``(nv,)``, with or without contact wrenches at
-  named frames.
+  named frames;
+- the configuration update ``q ⊕ dv`` (Pinocchio's ``integrate``): additive for 1-DoF joints,
+  a rotation of ``[cos, sin]`` for continuous joints, the SE(3) exponential map for the
+  free-flyer (quaternion product) and the SE(2) one for planar joints.
 
 Conventions are Pinocchio's, exactly: ``q`` of a free-flyer is ``[x, y, z, qx, qy, qz, qw]``,
 its ``v`` and ``a`` are the spatial velocity and acceleration of the base in the base's LOCAL
@@ -97,6 +100,61 @@ def _quat_rotation(x: ca.SX, y: ca.SX, z: ca.SX, w: ca.SX) -> ca.SX:
     )
 
 
+def _series(th2: ca.SX, exact: Callable[[ca.SX], ca.SX], taylor: Sequence[float],
+            eps: float = 1e-6) -> ca.SX:
+    """A smooth function of ``θ²``: ``exact(θ²)`` away from 0, its Taylor polynomial
+    (coefficients of 1, θ², θ⁴, ...) below ``eps``; the exact branch sees a safe argument there so
+    that neither branch nor its derivative produces NaN."""
+    safe = ca.if_else(th2 < eps, ca.SX(1.0), th2)
+    poly = sum(c * th2**i for i, c in enumerate(taylor))
+    return ca.if_else(th2 < eps, poly, exact(safe))
+
+
+def _quat_mul(a: ca.SX, b: ca.SX) -> ca.SX:
+    """Hamilton product of quaternions ``(x, y, z, w)``."""
+    av, aw, bv, bw = a[:3], a[3], b[:3], b[3]
+    return ca.vertcat(aw * bv + bw * av + _cross(av, bv), aw * bw - ca.dot(av, bv))
+
+
+def _skew(w: ca.SX) -> ca.SX:
+    z = ca.SX(0)
+    return ca.vertcat(ca.horzcat(z, -w[2], w[1]), ca.horzcat(w[2], z, -w[0]),
+                      ca.horzcat(-w[1], w[0], z))
+
+
+def _se3_integrate(q: ca.SX, dv: ca.SX) -> ca.SX:
+    """Free-flyer ``q ⊕ dv``: ``M · exp6(dv)`` with ``dv = [v; ω]`` in the local frame; the
+    quaternion part ``quat ⊗ exp3(ω)`` (Pinocchio, ``JointModelFreeFlyer::integrate``)."""
+    v, w = dv[:3], dv[3:]
+    th2 = ca.dot(w, w)
+    # exp3 as a quaternion: (sin(θ/2)/θ · ω, cos(θ/2))
+    sh = _series(th2, lambda x: ca.sin(ca.sqrt(x) / 2) / ca.sqrt(x), (0.5, -1 / 48, 1 / 3840))
+    ch = _series(th2, lambda x: ca.cos(ca.sqrt(x) / 2), (1.0, -1 / 8, 1 / 384))
+    quat = _quat_mul(q[3:7], ca.vertcat(sh * w, ch))
+    # V(ω) = I + (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×²
+    b = _series(th2, lambda x: (1 - ca.cos(ca.sqrt(x))) / x, (0.5, -1 / 24, 1 / 720))
+    c = _series(th2, lambda x: (ca.sqrt(x) - ca.sin(ca.sqrt(x))) / (x * ca.sqrt(x)),
+                (1 / 6, -1 / 120, 1 / 5040))
+    W = _skew(w)
+    step = v + b * ca.mtimes(W, v) + c * ca.mtimes(W, ca.mtimes(W, v))
+    R = _quat_rotation(q[3], q[4], q[5], q[6])
+    return ca.vertcat(q[:3] + ca.mtimes(R, step), quat)
+
+
+def _se2_integrate(q: ca.SX, dv: ca.SX) -> ca.SX:
+    """Planar joint ``q = [x, y, cos, sin] ⊕ dv = [vx, vy, ω]`` (local): SE(2) exponential."""
+    vx, vy, w = dv[0], dv[1], dv[2]
+    th2 = w * w
+    s_over = _series(th2, lambda x: ca.sin(ca.sqrt(x)) / ca.sqrt(x), (1.0, -1 / 6, 1 / 120))
+    c_over = _series(th2, lambda x: (1 - ca.cos(ca.sqrt(x))) / x, (0.5, -1 / 24, 1 / 720))
+    lx = s_over * vx - c_over * w * vy
+    ly = c_over * w * vx + s_over * vy
+    c0, s0 = q[2], q[3]
+    cw, sw = ca.cos(w), ca.sin(w)
+    return ca.vertcat(q[0] + c0 * lx - s0 * ly, q[1] + s0 * lx + c0 * ly,
+                      c0 * cw - s0 * sw, s0 * cw + c0 * sw)
+
+
 def _fname(prefix: str, name: str) -> str:
     """A valid CasADi function name built from a frame name."""
     return prefix + "_" + re.sub(r"\W", "_", name)
@@ -157,6 +215,11 @@ class SymbolicModel:
         self.centroidal_momentum_rate = ca.Function(
             "centroidal_momentum_rate", [self.q, self.v, self.a], [self._dhg],
             ["q", "v", "a"], ["dhg"])
+        self.integrate = ca.Function("integrate", [self.q, self.v], [self._integrate()],
+                                     ["q", "dv"], ["q_next"])
+        """``casadi.Function`` ``(q (nq,), dv (nv,)) -> (nq,)``: ``q ⊕ dv`` exactly as
+        Pinocchio's ``integrate`` (a free-flyer's ``dv`` is a twist in the base's LOCAL frame,
+        linear first)."""
 
     # ------------------------------------------------------------------ construction
     def _joint(self, jid: int) -> tuple[Placement, ca.SX, ca.SX, ca.SX]:
@@ -292,6 +355,28 @@ class SymbolicModel:
             jm = self.model.joints[i]
             out[jm.idx_v: jm.idx_v + jm.nv] = tau[i]
         return out
+
+    # ------------------------------------------------------------------ integration
+    def _integrate(self) -> ca.SX:
+        """``q ⊕ v`` per joint (the symbols ``self.q``, ``self.v`` read as ``q`` and ``dv``)."""
+        out = []
+        for jid in range(1, self.model.njoints):
+            jm = self.model.joints[jid]
+            kind = jm.shortname()
+            q = self.q[jm.idx_q: jm.idx_q + jm.nq]
+            dv = self.v[jm.idx_v: jm.idx_v + jm.nv]
+            if kind in _REVOLUTE or kind in _PRISMATIC:
+                out.append(q + dv)
+            elif kind in _REVOLUTE_UB:
+                c, s_ = ca.cos(dv[0]), ca.sin(dv[0])
+                out.append(ca.vertcat(q[0] * c - q[1] * s_, q[1] * c + q[0] * s_))
+            elif kind == "JointModelFreeFlyer":
+                out.append(_se3_integrate(q, dv))
+            elif kind == "JointModelPlanar":
+                out.append(_se2_integrate(q, dv))
+            else:  # pragma: no cover - _joint() rejected it already
+                raise UnsupportedJointError(kind)
+        return ca.vertcat(*out)
 
     # ------------------------------------------------------------------ frames
     def frame_id(self, name: str) -> int:

@@ -1,0 +1,46 @@
+"""The whole-body, contact-consistent optimal adaptor (docs/design.md §6).
+
+One formulation, assembled from named parts and shared by the trajectory mode
+(:func:`adapt_optimal`, what ``gdimitate.adapt(..., method="optimal")`` runs) and the streaming
+mode (:class:`StreamingAdaptor`, ``mode="per_frame"``):
+
+- decision variables per knot (:mod:`.knot`): the imitator's full configuration ``q``, its
+  velocity ``v`` and acceleration ``a`` (Pinocchio's conventions), one contact wrench per foot
+  in its sole frame (6-D; planar models 3-D) and elastic slacks (0 unless the fallback runs);
+- tasks (:mod:`.tasks`): scaled keypoints and segment orientations through a body map
+  (:mod:`.bodymap`), joint similarity, smoothness, wrench regularisation;
+- constraints (:mod:`.constraints`): integration, dynamics with every joint's torque limit,
+  joint position and velocity limits, flat-foot contact, the contact wrench cone of each sole
+  rectangle, swing clearance of every sole corner, the force direction (the goal);
+- one knot's functions mapped over the knots and the NLP cached per problem shape
+  (:mod:`.problem`); IPOPT; the least-infeasible (elastic, L1) fallback; Ctrl-C stops a solve
+  (:mod:`.interrupt`); the report recomputed by :func:`gdimitate.audit.audit`.
+"""
+
+from .bodymap import BodyMap, UnmappedJointsWarning, body_map
+from .params import DEFAULT_RATE, Contact, Limits, Weights
+from .problem import clear_cache
+from .solve import MODES, OPTIONS, SolverInfo, Unmet, adapt_optimal
+from .streaming import FrameResult, StreamingAdaptor
+from .targets import Targets, resample, schedule
+
+__all__ = [
+    "BodyMap",
+    "Contact",
+    "DEFAULT_RATE",
+    "FrameResult",
+    "Limits",
+    "MODES",
+    "OPTIONS",
+    "SolverInfo",
+    "StreamingAdaptor",
+    "Targets",
+    "UnmappedJointsWarning",
+    "Unmet",
+    "Weights",
+    "adapt_optimal",
+    "body_map",
+    "clear_cache",
+    "resample",
+    "schedule",
+]

@@ -1,0 +1,44 @@
+"""Swing clearance: every corner of a swing foot's sole rectangle at least ``clearance``
+above the floor z = 0 (swing: not in the demonstration's stance; under Eq. (1)'s ``"anchor"``
+rule a second stance foot is neither a contact nor held above the floor). Rows: corner
+heights / leg length (planar models: the front and back edge). Relaxable."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ...robot import SIDES
+from ..knot import Knot
+
+NAME = "swing"
+RELAX = True
+
+
+def rows_per_side(planar: bool) -> int:
+    return 2 if planar else 4
+
+
+def corners(k: Knot, side: str) -> list[ca.SX]:
+    """World heights of the sole corners (front-left, front-right, back-right, back-left)."""
+    X, Y = k.P(f"sole_{side}")[0], k.P(f"sole_{side}")[1]
+    p, R = k.sole_p[side], k.sole_R[side]
+    pts = [(X, 0), (-X, 0)] if k.planar else [(X, Y), (X, -Y), (-X, -Y), (-X, Y)]
+    return [p[2] + R[2, 0] * cx + R[2, 1] * cy for cx, cy in pts]
+
+
+def expr(k: Knot) -> ca.SX:
+    L = k.leg["left"].length
+    out = []
+    for s in SIDES:
+        z = ca.vertcat(*corners(k, s)) / L
+        out.append(z + k.slack(z.shape[0]))
+    return ca.vertcat(*out)
+
+
+def bounds(spec) -> tuple[np.ndarray, np.ndarray]:
+    n = rows_per_side(spec.planar)
+    lo = np.full((spec.T, 2 * n), -np.inf)
+    for i, s in enumerate(SIDES):
+        lo[spec.swing[s], i * n:(i + 1) * n] = spec.clearance / spec.leg_length
+    return lo, np.full_like(lo, np.inf)

@@ -1,0 +1,104 @@
+"""Ctrl-C during a solve, and progress lines.
+
+CasADi's IPOPT swallows SIGINT (the solve runs to its end and the process exits 0). Around each
+solve :func:`guard` installs a Python SIGINT handler that only sets a flag; the solver's
+iteration callback (:class:`Progress`, IPOPT's intermediate callback through CasADi's
+``iteration_callback``) sees the flag and asks IPOPT to stop; :func:`guard` then raises
+``KeyboardInterrupt`` after the solver has returned, so nothing is half-written. The callback
+also prints the iteration number, the objective and the largest constraint violation every
+``every`` iterations when progress is on.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+import time
+from contextlib import contextmanager
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["Progress", "guard"]
+
+
+class _State:
+    interrupted = False
+    verbose = False
+    lbg: np.ndarray | None = None
+    ubg: np.ndarray | None = None
+    every = 10
+    t0 = 0.0
+    label = ""
+
+
+STATE = _State()
+
+
+class Progress(ca.Callback):
+    """IPOPT iteration callback: progress lines and the stop request (module docstring)."""
+
+    def __init__(self, name: str, nx: int, ng: int, np_: int):
+        ca.Callback.__init__(self)
+        self._nx, self._ng, self._np = nx, ng, np_
+        self._it = 0
+        self.construct(name, {})
+
+    def get_n_in(self) -> int:
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_name_in(self, i: int) -> str:
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i: int) -> str:
+        return "ret"
+
+    def get_sparsity_in(self, i: int) -> ca.Sparsity:
+        n = ca.nlpsol_out(i)
+        size = {"f": 1, "x": self._nx, "lam_x": self._nx, "g": self._ng, "lam_g": self._ng,
+                "p": self._np, "lam_p": self._np}[n]
+        return ca.Sparsity.dense(size, 1)
+
+    def reset(self) -> None:
+        self._it = 0
+
+    def eval(self, arg):
+        self._it += 1
+        if STATE.verbose and (self._it == 1 or self._it % STATE.every == 0):
+            g = np.asarray(arg[ca.nlpsol_out().index("g")]).ravel()
+            viol = 0.0
+            if STATE.lbg is not None and g.size:
+                viol = float(np.max(np.maximum(STATE.lbg - g, 0) + np.maximum(g - STATE.ubg, 0)))
+            f = float(arg[ca.nlpsol_out().index("f")])
+            print(f"  {STATE.label} iter {self._it:4d}  cost {f:.4e}  constraint violation "
+                  f"{viol:.2e}  ({time.perf_counter() - STATE.t0:.1f} s)", file=sys.stderr,
+                  flush=True)
+        return [1 if STATE.interrupted else 0]
+
+
+@contextmanager
+def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = ""):
+    """Run a solve with the SIGINT flag handler installed (main thread only) and progress
+    settings; raises ``KeyboardInterrupt`` after the solve when Ctrl-C arrived."""
+    STATE.interrupted = False
+    STATE.verbose, STATE.lbg, STATE.ubg, STATE.label = verbose, lbg, ubg, label
+    STATE.t0 = time.perf_counter()
+    main = threading.current_thread() is threading.main_thread()
+    old = None
+    if main:
+        def handler(signum, frame):
+            STATE.interrupted = True
+
+        old = signal.signal(signal.SIGINT, handler)
+    try:
+        yield STATE
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, old)
+    if STATE.interrupted:
+        STATE.interrupted = False
+        raise KeyboardInterrupt("optimal adaptor: solve interrupted (Ctrl-C)")

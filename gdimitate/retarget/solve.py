@@ -1,0 +1,405 @@
+"""``adapt_optimal``: the whole-body trajectory mode — targets, warm start, the cached NLP,
+IPOPT, the least-infeasible fallback and the honest (recomputed) report."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact import ContactForces, SoleContact
+from ..errors import InvalidInputError, SolverError, UnknownNameError
+from ..metrics import FORCE_MODELS
+from ..motion import Motion
+from ..robot import SIDES, Robot
+from ..sagittal import robot_motion
+from . import problem as pb
+from .bodymap import body_map
+from .constraints import cone, contact, force, limits, swing
+from .initial import consistent_start, initial_q, initial_wrenches
+from .interrupt import guard
+from .knot import Flags, base_dofs
+from .params import DEFAULT_RATE, Contact, Limits, Weights
+from .targets import Targets, demonstration_targets, direction_frame, resample
+
+__all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "Numbers", "setup"]
+
+MODES = ("trajectory", "per_frame")
+OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
+           "tol", "ipopt", "verbose", "contacts")
+"""Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
+
+
+@dataclass(frozen=True)
+class Unmet:
+    """A constraint group the returned motion does not meet (optimiser's view; the audit is
+    the judge): ``name``, worst ``violation`` (in the row's own scaled units: torque/limit,
+    force/(m·g), height/leg length, rad, m) and its ``knot``."""
+
+    name: str
+    violation: float
+    knot: int
+
+
+@dataclass(frozen=True)
+class SolverInfo:
+    """How the optimiser ran: IPOPT's ``status``, ``success``, ``iterations``, ``time_s``
+    (solves only), ``build_s`` (0 when the NLP came from the cache), ``cached``, ``elastic``
+    (True when the hard problem failed and the least-infeasible solve ran), ``knots``,
+    ``variables`` (free ones), ``constraints`` (rows the schedule imposes) and ``unmet``."""
+
+    status: str
+    success: bool
+    iterations: int
+    time_s: float
+    build_s: float
+    cached: bool
+    elastic: bool
+    knots: int
+    variables: int
+    constraints: int
+    unmet: tuple[Unmet, ...] = ()
+
+
+@dataclass
+class Numbers:
+    """One demonstration's parameter matrix ``P`` ``(n_p, T)``, variable bounds and start
+    ``(n_x, T)``, row bounds, the resolved limits and the :class:`~.problem.Spec`."""
+
+    P: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    x0: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    spec: pb.Spec
+    lim: limits.Resolved
+
+
+def _contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:
+    cs = dict(imitator.require_contacts())
+    if given:
+        for s, c in dict(given).items():
+            if s not in SIDES:
+                raise InvalidInputError(f"contacts= keys must be 'left'/'right'; got {s!r}")
+            if not isinstance(c, SoleContact):
+                c = cs[s].replace(**dict(c))
+            if c.frame != cs[s].frame:
+                raise InvalidInputError(f"contacts[{s!r}] must keep the frame {cs[s].frame!r} "
+                                        "(pass a different frame through Robot(contacts=))")
+            cs[s] = c
+    if opts.mu is not None:
+        cs = {s: c.replace(mu=opts.mu) for s, c in cs.items()}
+    for s, c in cs.items():
+        if opts.cop_margin >= min(c.half_length, c.half_width):
+            raise InvalidInputError(f"cop_margin {opts.cop_margin} m leaves nothing of the "
+                                    f"{s} sole ({c.half_length:.3f} × {c.half_width:.3f} m)")
+    return cs
+
+
+def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: Weights,
+          lim_opts: Limits, copts: Contact, cs: dict[str, SoleContact],
+          q_start: np.ndarray | None = None) -> Numbers:
+    """Parameters, bounds and warm start of a demonstration for a compiled problem."""
+    k = c.knot
+    T = tg.T
+    lay, var = k.par, k.var
+    P = np.zeros((lay.size, T))
+    h = np.diff(tg.t)
+    P[lay["h"]] = np.r_[h[:1] if h.size else [1.0], h]
+    for s in SIDES:
+        P[lay[f"height_{s}"]] = tg.height[s]
+        P[lay[f"placement_{s}"]] = tg.placement[s].T
+        P[lay[f"shank_{s}"]] = tg.shank[s].T
+        P[lay[f"thigh_{s}"]] = tg.thigh[s].T
+        P[lay[f"foot_{s}"]] = tg.foot[s].transpose(0, 2, 1).reshape(T, 9).T
+        d = -tg.push[s]
+        e1, e2 = direction_frame(d, k.planar)
+        P[lay[f"d_{s}"]] = np.nan_to_num(d).T
+        P[lay[f"e1_{s}"]] = e1.T
+        P[lay[f"e2_{s}"]] = e2.T
+        X, Y, mu = cs[s].half_length, cs[s].half_width, cs[s].mu
+        m = copts.cop_margin
+        P[lay[f"sole_{s}"]] = np.array([X, Y, mu, X - m, Y - m])[:, None]
+    if c.segment_frames:
+        P[lay["torso"]] = np.concatenate([tg.segments[:, i].transpose(0, 2, 1).reshape(T, 9)
+                                          for i in range(len(c.segment_frames))], axis=1).T
+    lim = limits.resolve(imitator, k.act_idx, lim_opts)
+    P[lay["joint_target"]] = tg.joints.T
+    jw = np.where(tg.mapped, w.joints, w.posture) * ~lim.frozen
+    P[lay["joint_weight"]] = np.sqrt(jw)[:, None]  # residuals carry √weight
+    with np.errstate(divide="ignore"):
+        P[lay["inv_effort"]] = np.where(np.isfinite(lim.effort), 1.0 / lim.effort, 0.0)[:, None]
+    P[lay["weights"]] = np.r_[np.sqrt([w.height, w.placement, w.shank, w.thigh, w.torso,
+                                        w.smoothness, w.wrench, w.foot]), w.elastic][:, None]
+    P[lay["tan2"]] = math.tan(copts.cone_half_angle) ** 2
+    P[lay["f_min"]] = copts.f_min
+    # ---- variable bounds
+    lbx = np.full((var.size, T), -np.inf)
+    ubx = np.full((var.size, T), np.inf)
+    qs, vs, as_ = var["q"].start, var["v"].start, var["a"].start
+    qi, vi = lim.q_index, k.act_idx
+    lbx[qs + qi], ubx[qs + qi] = lim.lower[:, None], lim.upper[:, None]
+    lbx[vs + vi], ubx[vs + vi] = -lim.velocity[:, None], lim.velocity[:, None]
+    fz = lim.frozen
+    lbx[qs + qi[fz]] = ubx[qs + qi[fz]] = lim.freeze_at[fz, None]
+    for blk in (vs, as_):
+        lbx[blk + vi[fz]] = ubx[blk + vi[fz]] = 0.0
+    for s in SIDES:
+        sl = var[f"w_{s}"]
+        lbx[sl, ~tg.stance[s]] = ubx[sl, ~tg.stance[s]] = 0.0
+    for name in ("s_plus", "s_minus"):
+        lbx[var[name]] = ubx[var[name]] = 0.0
+    # ---- warm start
+    q0 = initial_q(demonstrator, imitator, tg, qi) if q_start is None else q_start
+    q0 = q0.copy()
+    q0[:, qi[fz]] = lim.freeze_at[fz]
+    lo, hi = np.where(np.isfinite(lim.lower), lim.lower, -1e9), np.where(
+        np.isfinite(lim.upper), lim.upper, 1e9)
+    q0[:, qi] = np.clip(q0[:, qi], lo, hi)
+    q0, v0, a0 = consistent_start(imitator.model, tg.t, q0)
+    v0[:, vi] = np.clip(v0[:, vi], -lim.velocity, lim.velocity)
+    x0 = np.zeros((var.size, T))
+    x0[var["q"]], x0[var["v"]], x0[var["a"]] = q0.T, v0.T, a0.T
+    start = robot_motion(imitator, tg.t, q0, tg.stance).replace(v=v0, a=a0)
+    for s, wv in initial_wrenches(imitator, start, cs, copts.f_min, k.nw).items():
+        x0[var[f"w_{s}"]] = wv.T
+    # the start's horizontal base position is the motion's origin
+    base_xy = [0, 1] if imitator.base == "free" else [imitator.idx_q("base_x")]
+    lbx[qs + np.array(base_xy), 0] = ubx[qs + np.array(base_xy), 0] = q0[0, base_xy]
+    spec = pb.Spec(T=T, stance=tg.stance, swing=tg.swing,
+                   goal_active={s: tg.stance[s] & np.all(np.isfinite(tg.push[s]), axis=1)
+                                for s in SIDES},
+                   planar=k.planar, free=imitator.base == "free", cone=c.knot.flags.cone,
+                   clearance=copts.clearance, leg_length=imitator.legs["left"].length,
+                   n_base=len(k.base_idx), n_act=len(k.act_idx))
+    lbg, ubg = pb.row_bounds(c, spec)
+    return Numbers(P, lbx, ubx, x0, lbg, ubg, spec, lim)
+
+
+def _group_names(c: pb.Compiled, lim: limits.Resolved, planar: bool, cone_mode: bool
+                 ) -> list[str]:
+    """A name for every per-knot row (in order)."""
+    k = c.knot
+    names = ["dynamics: base residual"] * len(k.base_idx)
+    names += [f"torque limit: {j}" for j in lim.names]
+    for mod, label in ((contact, "flat contact"), (cone, "contact wrench cone"),
+                       (swing, "swing clearance"), (force, "force direction")):
+        n = mod.rows_per_side(cone_mode if mod is force else planar)
+        for s in SIDES:
+            names += [f"{label}: {s}"] * n
+    names += ["quaternion norm"] * (1 if k.robot.base == "free" else 0)
+    return names
+
+
+def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unmet, ...]:
+    """Constraint groups violated by more than ``tol`` (scaled units) at ``z``."""
+    g = np.asarray(c.g_fun(z, num.P.T.ravel())).ravel()
+    viol = np.maximum(num.lbg - g, 0) + np.maximum(g - num.ubg, 0)
+    T, n = num.spec.T, c.ng_knot
+    names = _group_names(c, num.lim, num.spec.planar, num.spec.cone)
+    worst: dict[str, tuple[float, int]] = {}
+    vk = viol[: T * n].reshape(T, n)
+    for j, name in enumerate(names):
+        kk = int(np.argmax(vk[:, j]))
+        if vk[kk, j] > worst.get(name, (0.0, 0))[0]:
+            worst[name] = (float(vk[kk, j]), kk)
+    rest = viol[T * n:]
+    if T > 1 and rest.size:
+        n_step = c.knot.sym.nq + c.knot.sym.nv
+        st = rest[: n_step * (T - 1)].reshape(T - 1, n_step).max(axis=1)
+        worst["integration"] = (float(st.max()), int(np.argmax(st)) + 1)
+        ho = rest[n_step * (T - 1):].reshape(T - 1, -1).max(axis=1)
+        worst["contact hold (slip)"] = (float(ho.max()), int(np.argmax(ho)) + 1)
+    out = [Unmet(k_, v, kk) for k_, (v, kk) in worst.items() if v > tol]
+    return tuple(sorted(out, key=lambda u: -u.violation))
+
+
+def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verbose: bool,
+               label: str) -> tuple[np.ndarray, dict]:
+    """One IPOPT solve from ``x0`` ``(n_x, T)``; returns ``(z, stats)``."""
+    lbx, ubx = num.lbx.copy(), num.ubx.copy()
+    if elastic:
+        for name in ("s_plus", "s_minus"):
+            ubx[c.knot.var[name]] = np.inf
+    c.progress.reset()
+    with guard(verbose, num.lbg, num.ubg, label):
+        try:
+            sol = c.solver(x0=x0.T.ravel(), p=num.P.T.ravel(), lbx=lbx.T.ravel(),
+                           ubx=ubx.T.ravel(), lbg=num.lbg, ubg=num.ubg)
+        except RuntimeError as e:
+            raise SolverError(f"IPOPT could not run the optimal adaptor's NLP: {e}") from None
+    return np.asarray(sol["x"]).ravel(), dict(c.solver.stats())
+
+
+def _check_options(opts: dict) -> None:
+    bad = [k for k in opts if k not in OPTIONS]
+    if bad:
+        raise UnknownNameError("optimal-adaptor option", bad[0], OPTIONS)
+
+
+def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str = "segment",
+                  **options):
+    """The whole-body optimal adaptor (``adapt(..., method="optimal", ...)`` calls it).
+
+    Options (:data:`OPTIONS`):
+
+    - ``forces``: the demonstrator's measured :class:`~gdimitate.contact.ContactForces`
+      (needed by ``force="measured"``; they also give the contact schedule);
+    - ``rate`` [knots/s]: the knot grid (default :data:`~.params.DEFAULT_RATE`, 50 Hz);
+    - ``mode``: ``"trajectory"`` (one problem over all knots) or ``"per_frame"`` (the
+      streaming adaptor, :class:`~.streaming.StreamingAdaptor`, over the frames);
+    - ``weights`` (:class:`~.params.Weights`), ``limits`` (:class:`~.params.Limits`),
+      ``contact`` (:class:`~.params.Contact`: μ, f_min, margins, clearance, cone half-angle,
+      contact rule), ``contacts`` (``{side: SoleContact | {half_length, half_width, mu}}``
+      overriding the measured sole rectangles), ``body_map`` (a
+      :class:`~.bodymap.BodyMap`, dict or JSON path; default: the preset);
+    - ``tol``: feasibility tolerance of the optimiser's own row check (scaled units, default
+      1e-6); ``ipopt``: extra IPOPT options; ``verbose`` (default True): progress lines
+      (iteration, cost, constraint violation) on stderr.
+
+    Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
+    ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
+    ``contacts``, ``audit`` (:func:`gdimitate.audit.audit` recomputed from the output) and
+    ``solver`` (:class:`SolverInfo`). Never raises on an infeasible problem: the
+    least-infeasible motion comes back with ``solver.unmet`` and the audit's ``binding``.
+    """
+    _check_options(options)
+    if force not in FORCE_MODELS:
+        raise UnknownNameError("force model", force, FORCE_MODELS)
+    mode = options.get("mode", "trajectory")
+    if mode not in MODES:
+        raise UnknownNameError("mode", mode, MODES)
+    w = options.get("weights") or Weights()
+    lim_opts = options.get("limits") or Limits()
+    copts = options.get("contact") or Contact()
+    for name, v, typ in (("weights", w, Weights), ("limits", lim_opts, Limits),
+                         ("contact", copts, Contact)):
+        if not isinstance(v, typ):
+            raise InvalidInputError(f"{name}= must be a gdimitate.retarget.{typ.__name__}; "
+                                    f"got {type(v).__name__}")
+    tol = float(options.get("tol", 1e-6))
+    if not (np.isfinite(tol) and tol > 0):
+        raise InvalidInputError(f"tol must be a positive number; got {tol!r}")
+    forces: ContactForces | None = options.get("forces")
+    if force == "measured" and forces is None:
+        raise InvalidInputError("force='measured' needs forces= (the demonstrator's measured "
+                                "ContactForces)")
+    verbose = bool(options.get("verbose", True))
+    cs = _contacts(imitator, copts, options.get("contacts"))
+    bmap = body_map(demonstrator, imitator, options.get("body_map"))
+    if mode == "per_frame":
+        from .streaming import adapt_per_frame
+
+        return adapt_per_frame(demo, demonstrator, imitator, force=force, forces=forces,
+                               weights=w, limits=lim_opts, contact=copts, contacts=cs,
+                               body_map=bmap, tol=tol, ipopt=options.get("ipopt"))
+    rate = options.get("rate", DEFAULT_RATE)
+    demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
+    _, act = base_dofs(imitator)
+    act_names = limits.resolve(imitator, act, lim_opts).names
+    tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
+                               copts.rule)
+    flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
+                  cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
+    q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
+    imitator = _with_contacts(imitator, cs)
+    t0 = time.perf_counter()
+    c, cached = pb.compiled(imitator, flags, tuple(bmap.segments.values()), q_index, tg.T,
+                            options.get("ipopt"))
+    build_s = 0.0 if cached else time.perf_counter() - t0
+    num = setup(c, tg, imitator, demonstrator, w, lim_opts, copts, cs)
+    t1 = time.perf_counter()
+    z, st = run_solver(c, num, num.x0, False, verbose, f"{imitator.name} ({tg.T} knots)")
+    bad = unmet(c, num, z, tol)
+    elastic = False
+    iters = int(st.get("iter_count", 0))
+    if bad or not st.get("success"):
+        elastic = True
+        x_start = z.reshape(tg.T, -1).T
+        z2, st2 = run_solver(c, num, x_start, True, verbose, "least-infeasible")
+        iters += int(st2.get("iter_count", 0))
+        bad2 = unmet(c, num, _zero_slacks(c, z2, tg.T), tol)
+        if _worse(bad2, bad) and st.get("success") is False and not bad:
+            pass
+        z, st, bad = _zero_slacks(c, z2, tg.T), st2, bad2
+    info = SolverInfo(status=str(st.get("return_status")),
+                      success=bool(st.get("success")) and not bad and not elastic,
+                      iterations=iters, time_s=time.perf_counter() - t1, build_s=build_s,
+                      cached=cached, elastic=elastic, knots=tg.T,
+                      variables=int(np.sum(num.lbx != num.ubx)),
+                      constraints=int(np.sum(np.isfinite(num.lbg) | np.isfinite(num.ubg))),
+                      unmet=bad)
+    return package(c, num, z, tg, demonstrator, imitator, cs, force, copts, info)
+
+
+def _with_contacts(robot: Robot, cs: dict[str, SoleContact]) -> Robot:
+    """``robot`` itself when its contacts are ``cs`` (the sizes and μ are parameters, so the
+    NLP does not depend on them)."""
+    return robot
+
+
+def _worse(a: tuple[Unmet, ...], b: tuple[Unmet, ...]) -> bool:
+    return max((u.violation for u in a), default=0.0) > max((u.violation for u in b),
+                                                             default=0.0)
+
+
+def _zero_slacks(c: pb.Compiled, z: np.ndarray, T: int) -> np.ndarray:
+    """``z`` with the elastic slacks set to 0: the motion's real row values then show the
+    violations."""
+    Z = z.reshape(T, -1).T.copy()
+    for name in ("s_plus", "s_minus"):
+        Z[c.knot.var[name]] = 0.0
+    return Z.T.ravel()
+
+
+def wrenches_of(c: pb.Compiled, Z: np.ndarray) -> dict[str, np.ndarray]:
+    """``{side: (T, 6)}`` sole-frame wrenches of a solution ``Z`` ``(n_x, T)`` (planar models:
+    f_y = τ_x = τ_z = 0)."""
+    out = {}
+    for s in SIDES:
+        w = Z[c.knot.var[f"w_{s}"]].T
+        if c.knot.planar:
+            full = np.zeros((len(w), 6))
+            full[:, [0, 2, 4]] = w
+            w = full
+        out[s] = np.ascontiguousarray(w)
+    return out
+
+
+def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrator: Robot,
+            imitator: Robot, cs: dict[str, SoleContact], force: str, copts: Contact,
+            info: SolverInfo):
+    """The :class:`~gdimitate.adapt.AdaptedMotion` of a solution vector ``z``."""
+    from ..adapt import AdaptedMotion, compare
+
+    T = tg.T
+    Z = z.reshape(T, -1).T
+    var = c.knot.var
+    q, v, a = Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T
+    base = robot_motion(imitator, tg.t, q, tg.stance)
+    motion = base.replace(v=v, a=a)
+    W = wrenches_of(c, Z)
+    push_r = None
+    if force in ("measured", "dynamics"):
+        from ..metrics import frame_rotations
+
+        push_r = {s: np.where(tg.stance[s][:, None], -np.einsum(
+            "tij,tj->ti", frame_rotations(imitator, q, cs[s].frame), W[s][:, :3]), np.nan)
+            for s in SIDES}
+    report = compare(demonstrator, tg.demo.replace(contact=tg.stance), imitator, motion,
+                     "optimal", {s: np.ones(T, bool) for s in SIDES}, force,
+                     push_m=tg.push, push_r=push_r)
+    aud = None
+    try:
+        from ..audit import audit
+
+        target = tg.push if force in ("measured", "dynamics") else None
+        aud = audit(imitator, motion, W, cs, target=target,
+                    cone_half_angle=copts.cone_half_angle)
+    except ImportError:  # the audit's checks are not installed yet
+        aud = None
+    return AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,
+                         contacts=dict(cs), audit=aud, solver=info, force_model=force)

@@ -1,0 +1,179 @@
+"""What the demonstration asks of the imitator, knot by knot (all NumPy, computed with
+Pinocchio on the demonstrator): the knot grid, the contact schedule, scaled keypoints, mapped
+joint angles, segment orientations and the force direction of each stance foot."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..contact import ContactForces
+from ..errors import InvalidInputError
+from ..metrics import force_direction
+from ..motion import Motion
+from ..robot import SIDES, Robot
+from .bodymap import BodyMap
+
+__all__ = ["Targets", "resample", "schedule", "demonstration_targets", "direction_frame"]
+
+
+@dataclass(frozen=True)
+class Targets:
+    """Per knot ``k`` of ``t`` ``(T,)`` [s]: ``stance`` ``{side: (T,) bool}`` (the imitator's
+    contacts) and ``swing`` (feet held above the floor: not in the demonstrator's stance —
+    under the ``"anchor"`` rule a second stance foot is neither); ``height`` ``{side: (T,)}``,
+    ``placement`` ``{side: (T, 2)}``, ``shank`` and ``thigh`` ``{side: (T, 3)}`` unit vectors (the demonstrator's scaled keypoints), ``foot``
+    ``{side: (T, 3, 3)}`` its sole frames' world rotations;
+    ``segments`` ``(T, n_seg, 3, 3)`` world rotations; ``joints`` ``(T, n_act)`` joint targets
+    [rad] and ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
+    push on the ground (NaN where there is none); ``demo``: the resampled demonstration."""
+
+    t: np.ndarray
+    stance: dict[str, np.ndarray]
+    swing: dict[str, np.ndarray]
+    height: dict[str, np.ndarray]
+    placement: dict[str, np.ndarray]
+    shank: dict[str, np.ndarray]
+    thigh: dict[str, np.ndarray]
+    foot: dict[str, np.ndarray]
+    segments: np.ndarray
+    joints: np.ndarray
+    mapped: np.ndarray
+    push: dict[str, np.ndarray]
+    demo: Motion
+
+    @property
+    def T(self) -> int:
+        return int(self.t.size)
+
+
+def resample(robot: Robot, motion: Motion, rate: float) -> Motion:
+    """``motion`` on a uniform grid of ``rate`` knots/s from its first time to its last
+    (linear interpolation of each column, a free-flyer's quaternion re-normalised; contact
+    flags of the nearest original frame). Returns the motion itself when its grid already has
+    that rate."""
+    if not (isinstance(rate, (int, float, np.floating)) and np.isfinite(rate) and rate > 0):
+        raise InvalidInputError(f"rate must be a positive number of knots per second; "
+                                f"got {rate!r}")
+    t = motion.t
+    n = int(np.floor((t[-1] - t[0]) * rate + 1e-9)) + 1
+    if n < 2:
+        raise InvalidInputError(f"a {t[-1] - t[0]:.3f} s motion at {rate:g} knots/s has fewer "
+                                "than 2 knots: raise the rate")
+    tk = t[0] + np.arange(n) / rate
+    if tk.size == t.size and np.allclose(tk, t, atol=1e-9):
+        return motion
+    q = np.column_stack([np.interp(tk, t, motion.q[:, c]) for c in range(motion.q.shape[1])])
+    if robot.base == "free":
+        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    near = np.clip(np.searchsorted(t, tk - 0.5 / rate), 0, t.size - 1)
+    near = np.array([min(range(max(i - 1, 0), min(i + 2, t.size)), key=lambda j: abs(t[j] - x))
+                     for i, x in zip(near, tk)])
+    contact = {s: np.asarray(c)[near] for s, c in motion.contact.items()}
+    return motion.replace(t=tk, q=q, contact=contact, v=None, a=None)
+
+
+def schedule(demo: Motion, forces: ContactForces | None, rule: str) -> dict[str, np.ndarray]:
+    """The imitator's stance flags per knot: the demonstrator's measured contacts where
+    ``forces`` are given, else ``demo.contact`` (its kinematics); ``rule="anchor"`` keeps only
+    the foot down longest (Eq. (1)'s contact rule)."""
+    if forces is not None:
+        c = {s: np.interp(demo.t, forces.t, forces[s].contact.astype(float)) > 0.5
+             for s in SIDES}
+    else:
+        if not demo.contact or any(s not in demo.contact for s in SIDES):
+            raise InvalidInputError(
+                "the demonstration has no contact schedule: give motion.contact "
+                "{'left': (T,) bool, 'right': (T,) bool} or forces= (measured contacts)")
+        c = {s: np.asarray(demo.contact[s], bool).copy() for s in SIDES}
+    if not any(c[s].any() for s in SIDES):
+        raise InvalidInputError("the demonstration never touches the ground (no stance knot "
+                                "on either foot): nothing to push on")
+    if rule == "anchor":
+        out = {s: np.zeros(demo.T, bool) for s in SIDES}
+        anchor, since = None, {s: -1 for s in SIDES}
+        for k in range(demo.T):
+            for s in SIDES:
+                since[s] = (since[s] if since[s] >= 0 else k) if c[s][k] else -1
+            if anchor is None or not c[anchor][k]:
+                down = [s for s in SIDES if c[s][k]]
+                anchor = min(down, key=lambda s: since[s]) if down else None
+            if anchor is not None:
+                out[anchor][k] = True
+        c = out
+    return c
+
+
+def direction_frame(d: np.ndarray, planar: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``e1``, ``e2`` ``(T, 3)`` completing unit directions ``d`` ``(T, 3)`` to
+    an orthonormal frame (planar: ``e1`` in the x–z plane, ``e2`` = 0). NaN rows stay zero."""
+    e1, e2 = np.zeros_like(d), np.zeros_like(d)
+    for k, dk in enumerate(d):
+        if not np.all(np.isfinite(dk)):
+            continue
+        if planar:
+            e1[k] = [-dk[2], 0.0, dk[0]]
+            e1[k] /= np.linalg.norm(e1[k])
+            continue
+        ref = np.array([0.0, 1.0, 0.0]) if abs(dk[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+        u = ref - (ref @ dk) * dk
+        e1[k] = u / np.linalg.norm(u)
+        e2[k] = np.cross(dk, e1[k])
+    return e1, e2
+
+
+def _paths(robot: Robot, q: np.ndarray, frames: list[str]) -> dict[str, np.ndarray]:
+    m, d = robot.model, robot.data
+    ids = {f: m.getFrameId(f) for f in frames}
+    out = {f: np.empty((len(q), 3)) for f in frames}
+    rot = {f: np.empty((len(q), 3, 3)) for f in frames}
+    for k, qk in enumerate(q):
+        pin.framesForwardKinematics(m, d, qk)
+        for f, i in ids.items():
+            out[f][k] = d.oMf[i].translation
+            rot[f][k] = d.oMf[i].rotation
+    return out, rot
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bmap: BodyMap,
+                          act_names: tuple[str, ...], force: str,
+                          forces: ContactForces | None, rule: str) -> Targets:
+    """The :class:`Targets` of a (resampled) demonstration; see the module docstring."""
+    stance = schedule(demo, forces, rule)
+    down = schedule(demo, forces, "all")
+    swing = {s: ~down[s] for s in SIDES}
+    legs = demonstrator.legs
+    frames = [f for s in SIDES for f in (legs[s].hip, legs[s].knee, legs[s].ankle or legs[s].sole)]
+    seg_frames = list(bmap.segments)
+    dc = demonstrator.contacts
+    soles = [dc[s].frame if s in dc else legs[s].sole for s in SIDES]
+    pos, rot = _paths(demonstrator, demo.q, frames + seg_frames + soles)
+    height, placement, shank, thigh = {}, {}, {}, {}
+    for s in SIDES:
+        leg = legs[s]
+        hip, knee, ankle = pos[leg.hip], pos[leg.knee], pos[leg.ankle or leg.sole]
+        height[s] = (hip[:, 2] - ankle[:, 2]) / leg.length
+        placement[s] = (ankle[:, :2] - hip[:, :2]) / leg.length
+        shank[s] = _unit(ankle - knee)
+        thigh[s] = _unit(knee - hip)
+    foot = {s: rot[f] for s, f in zip(SIDES, soles)}
+    segments = np.stack([rot[f] for f in seg_frames], axis=1) if seg_frames else \
+        np.zeros((demo.T, 0, 3, 3))
+    joints = np.tile(imitator.neutral[[imitator.idx_q(j) for j in act_names]], (demo.T, 1))
+    mapped = np.zeros(len(act_names), bool)
+    for dj, (ij, scale, offset) in bmap.joints.items():
+        if ij in act_names:
+            i = act_names.index(ij)
+            joints[:, i] = scale * demo.q[:, demonstrator.idx_q(dj)] + offset
+            mapped[i] = True
+    fd_demo = demo.replace(contact=stance) if rule == "all" else demo
+    fd = force_direction(demonstrator, fd_demo, force, forces=forces)
+    push = {s: np.where(stance[s][:, None], fd[s].vector, np.nan) for s in SIDES}
+    return Targets(demo.t, stance, swing, height, placement, shank, thigh, foot, segments,
+                   joints, mapped, push, demo)
