@@ -31,6 +31,14 @@ def audit(robot, motion: Motion, wrenches: Mapping[str, np.ndarray],
     - ``cone_half_angle`` [rad]: the allowed angle between the push and its target;
     - ``tolerances``: :class:`AuditTolerances` (defaults stated there).
 
+    Checks (their names in :attr:`AuditReport.binding`): ``base_residual``; per actuated joint
+    ``torque:<joint>``, ``velocity:<joint>`` (|v| and forward differences of ``q``),
+    ``position:<joint>``; ``velocity_consistency``; per foot ``normal:<side>``,
+    ``friction:<side>`` (Coulomb's circle), ``cop:<side>``, ``yaw:<side>``, ``slip:<side>``,
+    ``slip_rotation:<side>``, ``contact_gap:<side>`` (stance: the whole sole on the floor),
+    ``swing_wrench:<side>``, ``force_direction:<side>`` (with a target); ``penetration`` (every
+    sole corner, every knot).
+
     Returns an :class:`AuditReport`. Raises :class:`~gdimitate.errors.InvalidInputError` for
     missing ``v``/``a``, wrong shapes or non-finite values.
     """

@@ -208,7 +208,7 @@ def _json(x: object) -> object:
     return x
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class AuditReport:
     """The recomputed feasibility of a motion with its contact wrenches.
 
