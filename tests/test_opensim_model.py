@@ -31,8 +31,8 @@ from gdimitate.errors import OsimError, URDFError
 from gdimitate.opensim import WORLD_FROM_OPENSIM as C
 from gdimitate.opensim import convert_osim, opensim_to_urdf, pelvis_to_freeflyer, read_osim
 
-DATA = Path("/work/shared/data/gait/opensim_subject01_walk1_3d")
-if not DATA.is_dir():
+DATA = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
+if not (DATA / "subject01.osim").is_file():  # the package copy, else the shared data folder
     DATA = Path(__file__).resolve().parents[2] / "shared/data/gait/opensim_subject01_walk1_3d"
 SUBJECT = DATA / "subject01.osim"
 IK = DATA / "subject01_walk1_ik.mot"
@@ -212,6 +212,25 @@ def test_robot_from_osim_legs_and_soles():
     # upright at q = 0: the measured base rotation is within 1° of identity
     assert np.degrees(np.arccos((np.trace(robot.base_rotation) - 1) / 2)) < 1.0
     print(f"\nRobot.from_osim(subject01): {seconds * 1e3:.0f} ms (convert + load)")
+
+
+@needs_data
+def test_declared_soles_match_the_feet_geometry():
+    """Robot's own sole measurement from the URDF's visual geometry (gdimitate.contact) finds
+    the rectangles the converter declares: the foot boxes and sole frames agree."""
+    conv = convert_osim(SUBJECT)
+    legs = {s: {k: conv.legs[s][k] for k in ("hip", "knee", "ankle", "sole")}
+            for s in ("left", "right")}
+    robot = Robot.from_urdf(conv.urdf, legs, floating=True)  # soles measured, not passed
+    assert robot.visual_model is not None
+    for s in ("left", "right"):
+        c = robot.contacts[s]
+        assert c.half_length == pytest.approx(conv.soles[s][0], abs=1e-4)
+        assert c.half_width == pytest.approx(conv.soles[s][1], abs=1e-4)
+        pin.framesForwardKinematics(robot.model, robot.data, robot.neutral)
+        measured = robot.data.oMf[robot.frame_id(c.frame)].translation
+        declared = robot.data.oMf[robot.frame_id(conv.legs[s]["contact"])].translation
+        assert np.linalg.norm(measured - declared) < 1e-3
 
 
 @needs_data
