@@ -352,7 +352,11 @@ class SimModel:
         """MuJoCo ``qpos`` ``(nq_mj,)`` of a Pinocchio configuration ``q`` ``(nq,)``."""
         q = np.asarray(q, dtype=float)
         out = np.zeros(self.mj.nq)
-        if self.free:
+        if self.free and self.free_placement.isIdentity():
+            out[self._fp:self._fp + 3] = q[:3]
+            out[self._fp + 3] = q[6]
+            out[self._fp + 4:self._fp + 7] = q[3:6]
+        elif self.free:
             M = self.free_placement * pin.XYZQUATToSE3(q[:7])
             out[self._fp:self._fp + 3] = M.translation
             out[self._fp + 3:self._fp + 7] = _quat_wxyz(M.rotation)
