@@ -591,3 +591,55 @@ def test_legs_by_name_or_given(tmp_path):
         read_bvh(path, legs=legs, up="x")
     with pytest.raises(gd.InvalidInputError, match="contacts="):
         read_bvh(path, legs=legs, contacts={"left": np.ones(3, bool), "right": np.ones(3, bool)})
+
+
+ASF = {"Hips": "root", "LeftUpLeg": "lfemur", "LeftLeg": "ltibia", "LeftFoot": "lfoot",
+       "LeftToeBase": "ltoes", "RightUpLeg": "rfemur", "RightLeg": "rtibia",
+       "RightFoot": "rfoot", "RightToeBase": "rtoes", "Spine": "lowerback", "Spine1": "thorax",
+       "Neck": "lowerneck", "Head": "head", "LeftShoulder": "lclavicle", "LeftArm": "lhumerus",
+       "LeftForeArm": "lradius", "LeftHand": "lwrist", "RightShoulder": "rclavicle",
+       "RightArm": "rhumerus", "RightForeArm": "rradius", "RightHand": "rwrist"}
+
+
+def test_cmu_asf_names_and_unit_report(tmp_path, caplog, recwarn):
+    joints = skeleton_m()
+    for j in joints:
+        j[0], j[1] = ASF[j[0]], ASF.get(j[1]) if j[1] else None
+    joints = to_file_units(joints, 0.056444)
+    values = synthetic_values(joints, 12, 1 / 120, ROOT_6, 0.056444)
+    path = tmp_path / "asf.bvh"
+    write_bvh(path, joints, ROOT_6, values, 1 / 120)
+    with caplog.at_level("INFO", logger="gdimitate.bvh"):
+        robot, motion = read_bvh(path)
+    assert "CMU units" in caplog.text  # the detected unit is said
+    assert not [w for w in recwarn if "anthropometric" in str(w.message)]  # all names known
+    leg = robot.legs["left"]
+    assert (leg.hip, leg.knee, leg.ankle) == ("lfemur_Xrotation", "ltibia_Xrotation",
+                                              "lfoot_Xrotation")  # X: the lateral axis
+    m = robot.model
+    thigh = m.inertias[m.frames[m.getFrameId("rfemur")].parentJoint].mass
+    assert thigh == pytest.approx(0.1416 * 75.0, rel=1e-4)
+    check_fk(robot, motion, [[n, p, o, ROOT_6 if p is None else ch, e]
+                             for n, p, o, ch, e in joints], values, C_Y, 0.056444)
+
+
+def test_bone_shapes_join_the_joints():
+    """Each bone cylinder's end caps sit on its joint and on a child joint / End Site (zero
+    pose), so the viewer draws the skeleton where the kinematics put it."""
+    robot, _ = read_bvh(CMU)
+    m, d, vm = robot.model, robot.data, robot.visual_model
+    q = pin.neutral(m)
+    pin.framesForwardKinematics(m, d, q)
+    vd = vm.createData()
+    pin.updateGeometryPlacements(m, d, vm, vd, q)
+    points = np.array([d.oMf[i].translation for i in range(len(m.frames))
+                       if m.frames[i].type == pin.FrameType.BODY])
+    n = 0
+    for g, M in zip(vm.geometryObjects, vd.oMg):
+        if type(g.geometry).__name__ != "Cylinder":
+            continue
+        h = g.geometry.halfLength
+        for end in (M.translation + h * M.rotation[:, 2], M.translation - h * M.rotation[:, 2]):
+            assert np.min(np.linalg.norm(points - end, axis=1)) < 1e-9
+        n += 1
+    assert n == 23  # the CMU skeleton's non-zero segments, less the feet (boxes) and toes
