@@ -181,6 +181,40 @@ def test_subject01_ik_frames_match_opensim(subject):
 
 @needs_opensim
 @needs_data
+def test_subject01_centroidal_inertia_and_limits(subject):
+    """Whole-body inertia about the centre of mass (Pinocchio's ccrba) equals the one summed
+    from OpenSim's per-body masses, centres of mass, inertias and poses, up to what the knee
+    approximation moves: a body shifted by δ at distance r from the centre of mass changes an
+    entry by at most 2m(2rδ + δ²). Joint limits are OpenSim's coordinate ranges."""
+    conv, ref = subject
+    bodies, e, _, _, com_err, m = _errors(conv, ref)
+    _, Q = _pin_trajectory(conv, ref)
+    d = m.createData()
+    worst = 0.0
+    for t in range(0, len(Q), 5):
+        pin.ccrba(m, d, Q[t], np.zeros(m.nv))
+        c = ref["com"][t]
+        I_os, bound = np.zeros((3, 3)), 1e-9
+        for i in range(len(bodies)):
+            R, mb = ref["body_R"][t, i], float(ref["body_mass"][i])
+            r = R @ ref["body_com"][i] + ref["body_p"][t, i] - c
+            I_os += R @ ref["body_inertia"][i] @ R.T + mb * (r @ r * np.eye(3) - np.outer(r, r))
+            delta = e["bound"][t, i] + com_err[t]
+            bound += 2 * mb * (2 * np.linalg.norm(r) * delta + delta**2)
+        err = np.abs(d.Ig.inertia - C @ I_os @ C.T).max()
+        assert err <= bound, (t, err, bound)
+        worst = max(worst, err / np.trace(I_os))
+    assert worst < 1e-3
+    coords = [str(n) for n in ref["coordinates"]]
+    for n, (lo, hi) in zip(coords, ref["ranges"]):
+        if m.existJointName(n):
+            j = m.joints[m.getJointId(n)]
+            assert m.lowerPositionLimit[j.idx_q] == pytest.approx(lo, abs=1e-12)
+            assert m.upperPositionLimit[j.idx_q] == pytest.approx(hi, abs=1e-12)
+
+
+@needs_opensim
+@needs_data
 def test_subject01_marker_frames(subject):
     conv, ref = subject
     assert len(conv.markers) == 39

@@ -6,9 +6,10 @@ Usage: ``python osim_kinematics.py MODEL.osim OUT.npz (--mot FILE.mot | --q IN.n
 ``--mot``: every row of an OpenSim coordinates file (degrees converted by OpenSim's own
 rules); ``--q``: an ``.npz`` with ``names`` (n,) and ``q`` (T, n) in radians/metres.
 Writes ``OUT.npz``: ``names``/``q`` (the coordinate values used, rad/m), ``bodies`` (nb,),
-``body_p`` (T, nb, 3) body origins and ``body_R`` (T, nb, 3, 3) orientations in ground, ``com``
-(T, 3), ``mass``, ``markers`` (nm,), ``marker_p`` (T, nm, 3), ``seconds`` (model load + all
-frames).
+``body_p`` (T, nb, 3) body origins and ``body_R`` (T, nb, 3, 3) orientations in ground,
+``body_mass`` (nb,), ``body_com`` (nb, 3) and ``body_inertia`` (nb, 3, 3) (about the centre of
+mass, body frame), ``com`` (T, 3), ``mass``, ``markers`` (nm,), ``marker_p`` (T, nm, 3),
+``coordinates`` (all, nc) with their ``ranges`` (nc, 2), ``seconds`` (model load + all frames).
 """
 
 import sys
@@ -57,7 +58,17 @@ def main(model_path, out, mode, src):
         for i, m in enumerate(markers):
             marker_p[t, i] = m.getLocationInGround(state).to_numpy()
         com[t] = model.calcMassCenterPosition(state).to_numpy()
+    inertia = np.zeros((len(bodies), 3, 3))
+    for i, b in enumerate(bodies):
+        I = b.getInertia()  # about the body's centre of mass, body frame
+        m, p = I.getMoments().to_numpy(), I.getProducts().to_numpy()  # xx yy zz, xy xz yz
+        inertia[i] = [[m[0], p[0], p[1]], [p[0], m[1], p[2]], [p[1], p[2], m[2]]]
+    all_coords = [cs.get(i) for i in range(cs.getSize())]
     np.savez(out, names=np.array(names), q=q, bodies=np.array([b.getName() for b in bodies]),
+             body_mass=np.array([b.getMass() for b in bodies]),
+             body_com=np.array([b.getMassCenter().to_numpy() for b in bodies]),
+             body_inertia=inertia, coordinates=np.array([c.getName() for c in all_coords]),
+             ranges=np.array([[c.getRangeMin(), c.getRangeMax()] for c in all_coords]),
              body_p=body_p, body_R=body_R, com=com, mass=model.getTotalMass(state),
              markers=np.array([m.getName() for m in markers]), marker_p=marker_p,
              seconds=time.perf_counter() - t0)
