@@ -22,11 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .contact import SoleContact, wrench_cone
+from .contact import ContactForces, SoleContact, wrench_cone
 from .errors import InvalidInputError, SolverError, UnknownNameError
 from .motion import Motion
 
-__all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS"]
+__all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS", "measured_wrenches"]
 
 METHODS = ("cone", "lstsq")
 GRAVITY = 9.81
@@ -265,3 +265,32 @@ def _cone_qp(A: np.ndarray, b: np.ndarray, rows, row_scale: np.ndarray
         raise SolverError(f"the wrench QP failed (DAQP exit flag {flag}) although it is always "
                           "feasible; check the motion for extreme values")
     return np.asarray(x[:p]), False
+
+
+def measured_wrenches(robot, motion: Motion, forces: ContactForces,
+                      contacts: Mapping[str, SoleContact] | None = None) -> dict[str, np.ndarray]:
+    """Measured ground reaction forces as contact wrenches ``{side: (T, 6)}`` [N, N·m] at each
+    foot's contact frame, in its axes — the convention of :func:`estimate_wrenches`, the
+    adaptor's output and :func:`gdimitate.audit.audit` (whose ``tau`` is then the inverse
+    dynamics with the measured forces applied).
+
+    Per knot the world force f acts at the centre of pressure c with the free moment τ_free
+    (``forces``, on the motion's own time grid): at the frame's origin p with rotation R the
+    wrench is ``[Rᵀ f; Rᵀ ((c − p) × f + τ_free)]``; zeros where the foot is not in contact.
+    """
+    contacts = dict(contacts or robot.require_contacts())
+    if forces.t.shape != motion.t.shape or not np.allclose(forces.t, motion.t, atol=1e-9):
+        raise InvalidInputError("forces must be on the motion's time grid (read_grf(..., t="
+                                "motion.t) resamples them)")
+    data = robot.model.createData()
+    out = {s: np.zeros((motion.T, 6)) for s in contacts}
+    for k, qk in enumerate(motion.q):
+        pin.framesForwardKinematics(robot.model, data, qk)
+        for s, c in contacts.items():
+            f = forces[s]
+            if not f.contact[k]:
+                continue
+            M = data.oMf[robot.frame_id(c.frame)]
+            tau = np.cross(f.cop[k] - M.translation, f.force[k]) + f.torque[k]
+            out[s][k] = np.r_[M.rotation.T @ f.force[k], M.rotation.T @ tau]
+    return out
