@@ -281,7 +281,11 @@ def _fit_axis(joint: OsimJoint, kinds, held: Mapping[str, float]):
         return Rotation.from_matrix(np.swapaxes(R_true, 1, 2) @ R).as_rotvec().ravel()
 
     sol = least_squares(residual, np.zeros(8), xtol=1e-12, ftol=1e-12)
-    return unpack(sol.x)
+    A, ax, B = unpack(sol.x)
+    # A·R(ax, q)·B = (A·G)·R(Gᵀ·ax, q)·(Gᵀ·B) for any G: take G = Aᵀ·A0 so that the joint
+    # frame keeps its default orientation A0 and only the axis tilts
+    G = A.T @ A0
+    return A0, G.T @ ax, G.T @ B
 
 
 def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
