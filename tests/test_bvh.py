@@ -534,6 +534,12 @@ def test_malformed_files(tmp_path):
             assert f"line {line}:" in msg, f"{what}: {msg!r} (expected line {line})"
     with pytest.raises(BVHError, match="no such BVH file"):
         read_bvh(tmp_path / "missing.bvh")
+    with pytest.raises(BVHError, match="line 1: .*'HIERARCHY' at the start"):
+        read_bvh(_bad(tmp_path, [], "empty.bvh"))
+    renamed = [re.sub(r"JOINT Spine$", "JOINT root_joint", s) for s in lines]
+    assert renamed != lines
+    with pytest.raises(BVHError, match="root_joint"), pytest.warns(UserWarning):
+        read_bvh(_bad(tmp_path, renamed, "reserved.bvh"))  # Pinocchio's free-flyer name
     assert issubclass(BVHError, gd.GdimitateError)
 
 

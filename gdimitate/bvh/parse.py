@@ -104,18 +104,18 @@ class _Tokens:
 
     def peek(self) -> tuple[str, int]:
         if self.i >= len(self.items):
-            last = self.items[-1][1] if self.items else 0
+            last = self.items[-1][1] if self.items else 1
             return "", last
         return self.items[self.i]
 
     def take(self, expected: str | None = None, what: str = "") -> tuple[str, int]:
         tok, line = self.peek()
+        desc = f"{expected!r} {what}".strip() if expected else what
         if tok == "":
-            raise self.error(line, "the file ends inside the HIERARCHY section while "
-                                   f"{what or expected!r} was expected (truncated file or "
-                                   "unbalanced braces)")
+            raise self.error(line, f"the file ends inside the HIERARCHY section where {desc} was "
+                                   "expected (truncated file or unbalanced braces)")
         if expected is not None and tok.lower() != expected.lower():
-            raise self.error(line, f"expected {expected!r} {what}but found {tok!r}")
+            raise self.error(line, f"expected {desc} but found {tok!r}")
         self.i += 1
         return tok, line
 

@@ -46,6 +46,8 @@ BONE_RADIUS = 0.035
 #: Revolute joint limits ±[rad].
 REVOLUTE_LIMIT = 2 * math.pi
 PRISMATIC_LIMIT = 10.0
+#: Names Pinocchio gives its own joints (the world, the free-flyer).
+RESERVED = frozenset({"universe", "root_joint"})
 
 
 @dataclass(frozen=True)
@@ -164,9 +166,10 @@ def skeleton_urdf(bvh: BVHFile, name: str, C: np.ndarray, scale: float,
     dup = sorted({n for n in names if names.count(n) > 1})
     jn = [jt.name for jt in joints]
     dup += sorted({n for n in jn if jn.count(n) > 1})
+    dup += sorted(RESERVED & {j.name for j in bvh.joints})
     if dup:
-        raise BVHError(f"{bvh.path}: generated URDF names collide with BVH joint names: {dup}; "
-                       "rename those BVH joints")
+        raise BVHError(f"{bvh.path}: BVH joint names collide with generated URDF names or "
+                       f"Pinocchio's own: {dup}; rename those BVH joints")
     robot = yd.Robot(name=name, links=links, joints=joints)
     tree = yd.URDF(robot=robot, build_scene_graph=False, load_meshes=False).write_xml()
     xml = etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
