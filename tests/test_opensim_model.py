@@ -37,6 +37,7 @@ if not (DATA / "subject01.osim").is_file():  # the package copy, else the shared
 SUBJECT = DATA / "subject01.osim"
 IK = DATA / "subject01_walk1_ik.mot"
 SYNTH = Path(__file__).parent / "data/osim/rajagopal_like.osim"
+MINIMAL = Path(__file__).parent / "data/osim/minimal_prefixed.osim"
 SCRIPT = Path(__file__).parent / "opensim_ref/osim_kinematics.py"
 
 needs_opensim = pytest.mark.skipif(importlib.util.find_spec("opensim") is None,
@@ -60,23 +61,35 @@ def subject(tmp_path_factory):
     return convert_osim(SUBJECT, tmp / "subject01.urdf"), ref
 
 
-@pytest.fixture(scope="module")
-def synthetic(tmp_path_factory):
+def _random_reference(tmp_path_factory, path: Path, seed: int):
+    """Random poses within every coordinate's range (free-flyer near the origin), OpenSim's
+    kinematics of them, and the conversion."""
     if importlib.util.find_spec("opensim") is None:
         pytest.skip("needs opensim")
-    tmp = tmp_path_factory.mktemp("osim_synth")
-    model = read_osim(SYNTH)
-    rng = np.random.default_rng(7)
+    tmp = tmp_path_factory.mktemp(path.stem)
+    model = read_osim(path)
+    rng = np.random.default_rng(seed)
     names = [c.name for c in model.coordinates]
     lo = np.array([c.range[0] for c in model.coordinates])
     hi = np.array([c.range[1] for c in model.coordinates])
     q = lo + (hi - lo) * rng.random((80, len(names)))
+    root = {c.name for c in model.joints[0].coordinates}
     for k, n in enumerate(names):  # keep the free-flyer near the origin
-        if n.startswith("pelvis"):
-            q[:, k] = rng.uniform(-0.6, 0.6, len(q)) + (0.95 if n == "pelvis_ty" else 0.0)
+        if n in root:
+            q[:, k] = rng.uniform(-0.6, 0.6, len(q))
     np.savez(tmp / "q.npz", names=np.array(names), q=q)
-    ref = _reference(SYNTH, tmp / "ref.npz", "--q", str(tmp / "q.npz"))
-    return convert_osim(SYNTH, tmp / "synth.urdf"), ref
+    ref = _reference(path, tmp / "ref.npz", "--q", str(tmp / "q.npz"))
+    return convert_osim(path, tmp / f"{path.stem}.urdf"), ref
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory):
+    return _random_reference(tmp_path_factory, SYNTH, 7)
+
+
+@pytest.fixture(scope="module")
+def minimal(tmp_path_factory):
+    return _random_reference(tmp_path_factory, MINIMAL, 3)
 
 
 def _pin_trajectory(conv, ref):
@@ -354,6 +367,23 @@ def test_synthetic_converts_without_opensim(tmp_path):
     a1 = robot.data.oMi[robot.model.getJointId("ankle_angle_r")].translation
     assert a1[0] < a0[0] - 0.1
     assert opensim_to_urdf(SYNTH, tmp_path / "x.urdf") == tmp_path / "x.urdf"
+
+
+@needs_opensim
+def test_minimal_free_gimbal_slider_model_is_exact(minimal):
+    """FreeJoint root, GimbalJoint hips, SliderJoint, sockets naming bodies directly: no
+    approximation, every body and marker within 1 µm of OpenSim."""
+    conv, ref = minimal
+    assert conv.approximations == ()
+    assert conv.root_joint == "root"
+    bodies, e, mk_err, _, com, m = _errors(conv, ref)
+    assert e["pos"].max() < 1e-6 and e["rot"].max() < 1e-6 and mk_err.max() < 1e-6
+    assert com.max() < 1e-6
+    assert m.joints[m.getJointId("pack_slide")].shortname().startswith("JointModelP")
+    robot = Robot.from_osim(MINIMAL)
+    assert (robot.legs["right"].hip, robot.legs["right"].knee, robot.legs["right"].ankle) == (
+        "r_hip_z", "r_knee_angle", "r_ankle_angle")
+    assert robot.legs["left"].sole == "l_foot_sole"
 
 
 # ------------------------------------------------------------------ malformed files

@@ -173,20 +173,21 @@ def _lateral_revolute(plan: JointPlan, R_parent: np.ndarray, where: str) -> str:
 
 def _foot_box(model, poses, foot: str):
     """Axis-aligned (world at neutral) box of the foot subtree, in world-oriented coordinates
-    relative to the foot origin (ours): (lo (3,), hi (3,)). Its bottom is the lowest of the
-    subtree's body origins and centres of mass; markers on the subtree extend it forward,
-    backward and sideways only (they sit on the skin, above the sole)."""
+    relative to the foot origin (ours): (lo (3,), hi (3,)). Forward, backward and sideways it
+    spans the subtree's body origins, their centres of mass mirrored through them (a segment
+    reaches about twice as far as its centre of mass) and the markers on the subtree; its
+    bottom is the lowest body origin or centre of mass (markers sit on the skin, above the
+    sole)."""
     Rf, pf = poses[foot]
-    pts = []
+    pts, low = [], []  # horizontal extent; bottom
     for b in _subtree(model, foot):
         R, p = poses[b]
-        pts.append(p)
-        if b != foot:
-            pts.append(p + 2 * (R @ model.body(b).com))
-        else:
-            pts.append(p + R @ model.body(b).com)
+        c = R @ model.body(b).com
+        pts += [p, p + 2 * c]  # origin and mirrored centre of mass span the segment
+        low += [p, p + c]
     P = (np.array(pts) - pf) @ C.T
     lo, hi = P.min(axis=0), P.max(axis=0)
+    lo[2] = float(((np.array(low) - pf) @ C.T)[:, 2].min())
     marks = [poses[m.body][1] + poses[m.body][0] @ m.location for m in model.markers
              if m.body in _subtree(model, foot)]
     if marks:  # skin markers widen and lengthen the box; its bottom stays at the bones'
