@@ -98,19 +98,23 @@ def tiny_reader(path: Path):
 
 
 def check_fk(robot, motion, joints, values, C, scale, tol=FK_TOL):
-    """Pinocchio (through the Robot) vs reference_fk on every frame; returns the max error."""
+    """Pinocchio (through the Robot) vs reference_fk on every frame, the reference lowered by
+    the floor height the reader reports (read_bvh(ground=True) puts the floor at z = 0);
+    returns the max error."""
     ref = reference_fk(joints, values)
     m, d = robot.model, robot.data
     fids = {n: m.getFrameId(n) for n in ref}
     assert all(m.frames[f].name == n for n, f in fids.items())
     worst = 0.0
     root = joints[0][0]
+    info = robot.bvh_info
+    floor = info.floor if info.grounded else 0.0
     for k, q in enumerate(motion.q):
         pin.framesForwardKinematics(m, d, q)
         for n, f in fids.items():
             p, R = ref[n]
             M = d.oMf[f]
-            err = np.abs(M.translation - scale * C @ p[k]).max()
+            err = np.abs(M.translation - (scale * C @ p[k] - [0.0, 0.0, floor])).max()
             Rw = C @ R[k] @ C.T if n == root else C @ R[k]
             worst = max(worst, err, np.abs(M.rotation - Rw).max())
     assert worst < tol, f"FK differs from the reference by {worst:.3g}"
@@ -289,6 +293,27 @@ def test_synthetic_fk_units_orders_rates(tmp_path, key):
     quat = motion.q[:, 3:7]
     assert np.all(np.sum(quat[1:] * quat[:-1], axis=1) > 0)
     np.testing.assert_allclose(np.linalg.norm(quat, axis=1), 1.0, atol=1e-12)
+
+
+def test_ground_shift(tmp_path):
+    """ground=True lowers the base by the floor estimate, nothing else; the lower foot's lowest
+    sole corner then has median height 0 (computed here from the corners' own FK)."""
+    robot, motion = read_bvh(CMU)
+    raw_robot, raw = read_bvh(CMU, ground=False)
+    floor = robot.bvh_info.floor
+    assert raw_robot.bvh_info.floor == floor and 0.0 < floor < 0.05  # CMU's floor: ~2 cm
+    np.testing.assert_array_equal(motion.q[:, [0, 1]], raw.q[:, [0, 1]])
+    np.testing.assert_allclose(raw.q[:, 2] - motion.q[:, 2], floor, atol=1e-15)
+    np.testing.assert_array_equal(motion.q[:, 3:], raw.q[:, 3:])
+    m, d = robot.model, robot.data
+    low = []
+    for q in motion.q:
+        pin.framesForwardKinematics(m, d, q)
+        z = [(d.oMf[m.getFrameId(c.frame)].act(corner))[2] for c in robot.contacts.values()
+             for corner in c.corners()]
+        low.append(min(z))
+    assert np.median(low) == pytest.approx(0.0, abs=1e-12)
+    assert all(np.array_equal(motion.contact[s], raw.contact[s]) for s in motion.contact)
 
 
 def test_explicit_scale_and_tpose(tmp_path):

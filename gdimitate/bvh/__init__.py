@@ -9,7 +9,7 @@ height and speed. Modules: :mod:`.parse` (the strict reader), :mod:`.skeleton` (
 soles), :mod:`.inertia`, :mod:`.urdf`, :mod:`.contacts`, :mod:`.reader`.
 """
 
-from .contacts import ContactRule, detect_contacts
+from .contacts import ContactRule, detect_contacts, estimate_floor, sole_corners
 from .parse import BVHFile, BVHJoint, parse_bvh
 from .reader import BVHInfo, bvh_to_q, channel_rotation, is_reference_frame, read_bvh
 from .skeleton import UNITS, UP_TURNS
@@ -24,7 +24,9 @@ __all__ = [
     "bvh_to_q",
     "channel_rotation",
     "detect_contacts",
+    "estimate_floor",
     "is_reference_frame",
     "parse_bvh",
     "read_bvh",
+    "sole_corners",
 ]

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from ..errors import InvalidInputError
 
-__all__ = ["ContactRule", "detect_contacts", "close_gaps"]
+__all__ = ["ContactRule", "detect_contacts", "estimate_floor", "sole_corners", "close_gaps"]
 
 
 @dataclass(frozen=True)
@@ -74,21 +74,29 @@ def sole_corners(robot, q: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-def detect_contacts(robot, q: np.ndarray, t: np.ndarray, hip_height: float,
-                    rule: ContactRule = ContactRule()) -> tuple[dict[str, np.ndarray], float]:
-    """Stance masks ``{"left": (T,) bool, "right": (T,) bool}`` and the floor height [m] of a
-    motion ``q`` ``(T, nq)`` on times ``t`` ``(T,)`` [s] of ``robot`` (whose
-    :attr:`~gdimitate.robot.Robot.contacts` give the soles); ``hip_height`` [m] scales the
-    thresholds (see the module docstring)."""
-    pts = sole_corners(robot, q)
-    low = {s: p[..., 2].min(axis=1) for s, p in pts.items()}
-    floor = float(np.median(np.min(np.stack(list(low.values())), axis=0)))
+def estimate_floor(corners: dict[str, np.ndarray]) -> float:
+    """The floor height [m]: the median over frames of the lower foot's lowest sole corner
+    (``corners``: ``{side: (T, 4, 3)}`` world positions, :func:`sole_corners`)."""
+    low = np.stack([p[..., 2].min(axis=1) for p in corners.values()])
+    return float(np.median(low.min(axis=0)))
+
+
+def detect_contacts(corners: dict[str, np.ndarray], t: np.ndarray, hip_height: float,
+                    rule: ContactRule = ContactRule(), floor: float | None = None
+                    ) -> dict[str, np.ndarray]:
+    """Stance masks ``{"left": (T,) bool, "right": (T,) bool}`` from the sole corners
+    ``{side: (T, 4, 3)}`` [m] (:func:`sole_corners`) on times ``t`` ``(T,)`` [s];
+    ``hip_height`` [m] scales the thresholds, ``floor`` [m] defaults to
+    :func:`estimate_floor` (see the module docstring)."""
+    if floor is None:
+        floor = estimate_floor(corners)
     dt = float(np.median(np.diff(t)))
     out = {}
-    for s, p in pts.items():
+    for s, p in corners.items():
+        low = p[..., 2].min(axis=1)
         vel = np.gradient(p[..., :2], t, axis=0)  # (T, 4, 2)
         k = p[..., 2].argmin(axis=1)
         speed = np.linalg.norm(vel[np.arange(len(t)), k], axis=1)
-        raw = (low[s] - floor < rule.height * hip_height) & (speed < rule.speed * hip_height)
+        raw = (low - floor < rule.height * hip_height) & (speed < rule.speed * hip_height)
         out[s] = close_gaps(raw, int(round(rule.gap / dt)), int(round(rule.min_stance / dt)))
-    return out, floor
+    return out

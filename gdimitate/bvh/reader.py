@@ -16,7 +16,7 @@ from ..contact import SoleContact, sole_frame_name
 from ..errors import BVHError, InvalidInputError
 from ..motion import Motion
 from ..robot import Robot
-from .contacts import ContactRule, detect_contacts
+from .contacts import ContactRule, detect_contacts, estimate_floor, sole_corners
 from .inertia import segment_inertias
 from .parse import BVHFile, parse_bvh
 from .skeleton import (
@@ -41,7 +41,8 @@ class BVHInfo:
     ``path``; ``scale`` [m per file unit]; ``unit`` (its name, or ``"given"``);
     ``hip_height`` [m] (root to the lowest point at the zero pose); ``up``; ``turn`` (3, 3):
     x_ours = turn · x_bvh; ``skipped_first_frame``; ``frame_time`` [s]; ``floor`` [m]: the
-    floor height the contact detection estimated (``nan`` where contacts were given);
+    floor's height in the file's world (our axes), as estimated from the feet; ``grounded``:
+    whether it was subtracted from the base height (``read_bvh(ground=True)``);
     ``unmatched``: links massed by length (not in the segment table); ``urdf``: the URDF text;
     ``channels``: where each frame column went."""
 
@@ -54,6 +55,7 @@ class BVHInfo:
     skipped_first_frame: bool
     frame_time: float
     floor: float
+    grounded: bool
     unmatched: tuple[str, ...]
     urdf: str
     channels: tuple[ChannelJoint, ...]
@@ -137,7 +139,8 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
              mass: float = 75.0,
              contacts: ContactRule | Mapping[str, np.ndarray] | None = None,
              legs: Mapping[str, Mapping[str, str]] | None = None,
-             urdf_path: str | Path | None = None) -> tuple[Robot, Motion]:
+             ground: bool = True, urdf_path: str | Path | None = None
+             ) -> tuple[Robot, Motion]:
     """Read a BVH file → ``(robot, motion)``.
 
     The skeleton becomes a URDF (see :mod:`gdimitate.bvh.urdf`: a link per BVH joint, one
@@ -163,6 +166,9 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
       foot height and speed (default thresholds when ``None``).
     - ``legs``: BVH joint names ``{"left": {"hip", "knee", "ankle", "toe"?}, "right": …}``
       where the names do not follow a known convention.
+    - ``ground``: lower (or raise) the base on every frame by the floor height estimated from
+      the clip (:func:`gdimitate.bvh.contacts.estimate_floor`), so that the floor is z = 0;
+      ``robot.bvh_info.floor`` keeps that height. ``False`` keeps the file's heights.
     - ``urdf_path``: also write the URDF there (``robot.urdf_path``).
 
     Raises :class:`~gdimitate.errors.BVHError` for malformed files and skeletons it cannot
@@ -170,13 +176,14 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
     """
     bvh = parse_bvh(path)
     C = world_turn(up)
-    if not (np.isfinite(mass) and mass > 0):
+    if not (isinstance(mass, (int, float, np.floating)) and np.isfinite(mass) and mass > 0):
         raise InvalidInputError(f"mass must be a positive number of kg; got {mass!r}")
     if scale is None:
         scale, unit, h_units = detect_scale(bvh, C)
         log.info("%s: units detected as %s (hip height %.3g m)", bvh.path, unit, h_units * scale)
     else:
-        if not (np.isfinite(scale) and scale > 0):
+        if not (isinstance(scale, (int, float, np.floating)) and np.isfinite(scale)
+                and scale > 0):
             raise BVHError(f"scale={scale!r} must be a positive number of metres per file unit")
         unit = "given"
         h_units = hip_height_units(bvh, C)
@@ -199,13 +206,19 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
     skip = is_reference_frame(bvh) if skip_first_frame is None else bool(skip_first_frame)
     frames = bvh.frames[1:] if skip else bvh.frames
     if frames.shape[0] < 2:
-        raise BVHError(f"{bvh.path}: {frames.shape[0]} frame(s) left after skipping the first; "
-                       "a motion needs at least 2")
+        raise BVHError(f"{bvh.path}: a motion needs at least 2 frames; the file has "
+                       f"{bvh.frames.shape[0]}" + (" and the first (a reference pose) is skipped"
+                                                   if skip else ""))
     q = bvh_to_q(bvh, model, cmap, C, scale, frames)
     t = np.arange(frames.shape[0]) * bvh.frame_time
-    floor = float("nan")
+    corners = sole_corners(robot, q)
+    floor = estimate_floor(corners)
+    if ground:
+        q[:, 2] -= floor
+        corners = {s: c - np.array([0.0, 0.0, floor]) for s, c in corners.items()}
     if contacts is None or isinstance(contacts, ContactRule):
-        contact, floor = detect_contacts(robot, q, t, hip_height, contacts or ContactRule())
+        contact = detect_contacts(corners, t, hip_height, contacts or ContactRule(),
+                                  0.0 if ground else floor)
     else:
         contact = {s: np.asarray(contacts[s], dtype=bool) for s in contacts}
         if set(contact) != {"left", "right"} or any(c.shape != t.shape for c in contact.values()):
@@ -216,5 +229,5 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
     motion = Motion(t=t, joint_names=names, q=q, contact=contact, base_nq=7,
                     joint_nq=tuple(model.joints[i].nq for i in range(1, model.njoints)))
     robot.bvh_info = BVHInfo(str(path), float(scale), unit, float(hip_height), up, C, skip,
-                             bvh.frame_time, floor, unmatched, xml, cmap)
+                             bvh.frame_time, floor, bool(ground), unmatched, xml, cmap)
     return robot, motion
