@@ -183,6 +183,40 @@ class Reference:
         h = self.t[k + 1] - self.t[k]
         return k, float(np.clip((t - self.t[k]) / h, 0.0, 1.0))
 
+    def samples(self, times: np.ndarray) -> list[Sample]:
+        """:meth:`at` for many times ``(N,)`` [s] at once (vectorised; the same values)."""
+        times = np.asarray(times, dtype=float)
+        k = np.clip(np.searchsorted(self.t, times, side="right") - 1, 0, self.t.size - 2)
+        al = np.clip((times - self.t[k]) / (self.t[k + 1] - self.t[k]), 0.0, 1.0)
+        kc = np.where((al >= 1.0) | (times >= self.t[-1]), k + 1, k)
+        mo, p, m = self.plan.motion, self.plan, self.robot.model
+
+        def lerp(x: np.ndarray) -> np.ndarray:
+            sh = (-1,) + (1,) * (x.ndim - 1)
+            return (1 - al).reshape(sh) * x[k] + al.reshape(sh) * x[k + 1]
+
+        def slerp(R: np.ndarray) -> np.ndarray:
+            rel = np.array([pin.log3(R[i].T @ R[i + 1]) for i in range(R.shape[0] - 1)])
+            return np.einsum("nij,njk->nik", R[k], _exp3(al[:, None] * rel[k]))
+
+        q = np.array([pin.interpolate(m, mo.q[i], mo.q[i + 1], a) for i, a in zip(k, al)])
+        v, a, com, bw, bz, brot = (lerp(mo.v), lerp(mo.a), lerp(self.com), lerp(self.base_w),
+                                   lerp(self.base_z), slerp(self.base_rot))
+        w = {s: lerp(p.wrenches[s]) for s in SIDES}
+        st = {s: mo.contact[s][kc] for s in SIDES}
+        fp = {s: lerp(self.foot_pos[s]) for s in SIDES}
+        fr = {s: slerp(self.foot_rot[s]) for s in SIDES}
+        fva = {s: lerp(self.foot_va[s]) for s in SIDES}
+        return [Sample(q=q[i], v=v[i], a=a[i], wrench={s: w[s][i] for s in SIDES},
+                       stance={s: bool(st[s][i]) for s in SIDES},
+                       com=com[i, 0], com_vel=com[i, 1], com_acc=com[i, 2],
+                       base_rot=brot[i], base_height=float(bz[i]), base_omega=bw[i, 0],
+                       base_alpha=bw[i, 1], foot_pos={s: fp[s][i] for s in SIDES},
+                       foot_rot={s: fr[s][i] for s in SIDES},
+                       foot_vel={s: fva[s][i, 0] for s in SIDES},
+                       foot_acc={s: fva[s][i, 1] for s in SIDES})
+                for i in range(times.size)]
+
     def at(self, t: float) -> Sample:
         """The plan at time ``t`` [s] (held at the end points outside the plan)."""
         k, al = self._index(t)
@@ -210,3 +244,16 @@ class Reference:
             foot_vel={s: lerp(self.foot_va[s])[0] for s in SIDES},
             foot_acc={s: lerp(self.foot_va[s])[1] for s in SIDES},
         )
+
+
+def _exp3(w: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(N, 3, 3)`` of rotation vectors ``(N, 3)`` (Rodrigues)."""
+    th = np.linalg.norm(w, axis=1)
+    K = np.zeros((w.shape[0], 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
+    small = th < 1e-8
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th**2 / 6, np.sin(ths) / ths)[:, None, None]
+    b = np.where(small, 0.5 - th**2 / 24, (1 - np.cos(ths)) / ths**2)[:, None, None]
+    return np.eye(3) + a * K + b * (K @ K)

@@ -39,12 +39,15 @@ def _unactuated(robot: Robot) -> np.ndarray:
 def split_wrenches(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
     """Per knot, the minimum-norm stance-foot wrenches ``{side: (T, 6)}`` (sole frame, at its
     origin; zeros in swing) with Σ_c J_cᵀ w_c equal to the unactuated rows of
-    ``rnea(q, v, a)``. ``motion`` needs ``v`` and ``a``."""
+    ``rnea(q, v, a)``. The norm is Σ ‖f‖² + ‖τ‖²/r², r = 10 % of the narrowest sole
+    half-width: moments are dear, so a centre of mass over one foot shifts the normal forces
+    onto that foot rather than loading the soles' edges. ``motion`` needs ``v`` and ``a``."""
     m, d = robot.model, robot.model.createData()
     contacts = robot.require_contacts()
     fids = {s: m.getFrameId(contacts[s].frame) for s in SIDES}
     un = _unactuated(robot)
     out = {s: np.zeros((motion.T, 6)) for s in SIDES}
+    lever = 0.1 * min(c.half_width for c in contacts.values())
     for k in range(motion.T):
         q, v, a = motion.q[k], motion.v[k], motion.a[k]
         tau = pin.rnea(m, d, q, v, a)
@@ -54,7 +57,8 @@ def split_wrenches(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
         if not stance:
             continue
         J = np.hstack([pin.getFrameJacobian(m, d, fids[s], _LOCAL).T for s in stance])
-        w = np.linalg.lstsq(J[un], tau[un], rcond=None)[0]
+        scale = np.tile(np.r_[np.ones(3), np.full(3, lever)], len(stance))
+        w = scale * np.linalg.lstsq(J[un] * scale, tau[un], rcond=None)[0]
         for i, s in enumerate(stance):
             out[s][k] = w[6 * i: 6 * i + 6]
     return out

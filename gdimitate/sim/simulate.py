@@ -232,28 +232,21 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
     m = robot.model
     nu = sim.idx_v_act.size
     rec = _Recorder(n_ctrl, m.nq, m.nv, nu)
-    pin_data = m.createData()
-    fids = {s: m.getFrameId(plan.contacts[s].frame) for s in SIDES}
+    samples = ref.samples(t0 + control_period * np.arange(n_ctrl))
     base_body = sim.base_body
     fails = 0
-    ft, reason = None, ""
     wall = time.perf_counter()
     steps = 0
     for k in range(n_ctrl):
         t = t0 + k * control_period
         q, v = sim.state(data)
-        s = ref.at(t)
+        s = samples[k]
         out = ctl.step(q, v, s)
         fails += out.status < 0
         data.ctrl[:] = out.tau
-        wr = measure_contacts(sim, data)
-        pin.framesForwardKinematics(m, pin_data, s.q)
-        rec.put(k, t, q, v, out, s, wr, sim, data, {sd: pin_data.oMf[fids[sd]].rotation
-                                                   for sd in SIDES})
+        rec.put(k, t, q, v, out, s, measure_contacts(sim, data), sim, data)
         height, plan_h, tilt = rec.base_state(k, sim, data, s)
-        ft, reason = fall_time(np.array([t]), np.array([height]), np.array([plan_h]),
-                               np.array([tilt]), fall)
-        if ft is not None and stop_on_fall:
+        if stop_on_fall and (height < fall.min_height_ratio * plan_h or tilt > fall.max_tilt):
             rec.truncate(k + 1)
             break
         for _ in range(every):
@@ -284,7 +277,7 @@ class _Recorder:
         self.height, self.plan_height, self.tilt = z(n), z(n), z(n)
         self.n = n
 
-    def put(self, k, t, q, v, out, s, wr, sim, data, plan_rot) -> None:
+    def put(self, k, t, q, v, out, s, wr, sim, data) -> None:
         self.t[k], self.q[k], self.v[k], self.tau[k] = t, q, v, out.tau
         self.plan_q[k] = s.q
         for sd in SIDES:
@@ -293,7 +286,7 @@ class _Recorder:
             self.wrench_sole[sd][k] = np.r_[R.T @ wr[sd][:3], R.T @ wr[sd][3:]]
             self.sole_xy[sd][k] = data.site_xpos[sim.sole_site[sd]][:2]
             self.stance[sd][k] = s.stance[sd]
-            self.plan_force[sd][k] = plan_rot[sd] @ s.wrench[sd][:3]
+            self.plan_force[sd][k] = s.foot_rot[sd] @ s.wrench[sd][:3]
             self.qp_wrench[sd][k] = out.wrench[sd]
 
     def base_state(self, k, sim, data, s) -> tuple[float, float, float]:
