@@ -17,6 +17,13 @@ CHANNELS, an unknown channel, a frame line with the wrong number of values, NaN/
 zero or negative ``Frame Time``, fewer or more frame lines than ``Frames:`` says — raises
 :class:`~gdimitate.errors.BVHError` naming the line and what to fix. Nothing is dropped.
 
+Meaning of the numbers (used by :mod:`gdimitate.bvh.reader` and :mod:`gdimitate.bvh.urdf`):
+a joint's transform relative to its parent is a translation by its OFFSET plus its position
+channels (in the parent's axes), then the rotations of its rotation channels composed in the
+file's order, ``R = R_c1 · R_c2 · …`` (right-handed, about the joint's own rotated axes),
+whatever the position channels' place in the list. The root's position is OFFSET + position
+channels in the file's world.
+
 Why our own reader: the PyPI parsers checked (``bvh`` 0.3, 2017: no validation, unbalanced
 braces pass silently; ``bvhio`` 1.5.4: transforms in single precision through PyGLM, pinned
 ``pyglm==2.8.2``; ``pybvh`` 0.9.0: assumes three rotation channels per joint, reorders root

@@ -26,12 +26,12 @@
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass
 
 import numpy as np
 import yourdfpy as yd
-from lxml import etree
 
 from ..contact import sole_frame_name
 from ..errors import BVHError
@@ -172,5 +172,6 @@ def skeleton_urdf(bvh: BVHFile, name: str, C: np.ndarray, scale: float,
                        f"Pinocchio's own: {dup}; rename those BVH joints")
     robot = yd.Robot(name=name, links=links, joints=joints)
     tree = yd.URDF(robot=robot, build_scene_graph=False, load_meshes=False).write_xml()
-    xml = etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
-    return xml.decode(), tuple(cmap)
+    buf = io.BytesIO()
+    tree.write(buf, pretty_print=True, xml_declaration=True, encoding="UTF-8")  # lxml's tree
+    return buf.getvalue().decode(), tuple(cmap)
