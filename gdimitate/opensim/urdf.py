@@ -16,8 +16,9 @@
   at q = 0.
 * Markers become frames (links on fixed joints) named after the markers.
 * Visual shapes (OpenSim's ``.vtp`` meshes are not shipped): a cylinder from each body's origin
-  to each child joint (radius from the mass at the density of water), a sphere for bodies
-  without children, and per foot one box covering the foot body and its descendants (their
+  to each child joint and, where no child joint lies along the centre of mass, to twice the
+  centre of mass (radius from the mass at the density of water), a sphere for bodies without
+  either, and per foot one box covering the foot body and its descendants (their
   origins, mirrored centres of mass and markers). On each foot box's lowest face two frames:
   ``<foot>_sole`` directly below the ankle (the leg's sole frame) and ``<foot>_contact`` at
   the face's centre (the centre of the foot's contact rectangle, the box's length × width).
@@ -233,8 +234,11 @@ def _visuals(model, plans, poses, body: str, feet: dict[str, tuple]) -> list[you
     R, p = poses[body]
     vecs = [C @ (R.T @ (poses[j.child][1] - p)) for j in model.children(body)]
     vecs = [v for v in vecs if np.linalg.norm(v) > 0.02]
-    if not vecs and np.linalg.norm(b.com) > 0.02:
-        vecs = [2 * (C @ b.com)]
+    com = C @ b.com
+    L = float(np.linalg.norm(com))
+    along = any(v @ com > max(np.linalg.norm(v), L) * L * math.cos(math.radians(20)) for v in vecs)
+    if L > 0.02 and not along:  # no child joint along the mass: e.g. a torso carrying arms
+        vecs.append(2 * com)
     if not vecs:
         r = (3 * max(b.mass, 1e-3) / (4 * math.pi * _DENSITY)) ** (1 / 3)
         return [yourdfpy.Visual(name=f"{body}_sphere", origin=np.eye(4),
