@@ -7,7 +7,8 @@
 * Every other joint becomes a chain of revolute/prismatic URDF joints named after the
   coordinates, through massless links ``<joint>__<coordinate>``, then a fixed joint
   ``<joint>__child`` where the chain does not end in the child body's frame (see
-  :mod:`.joints` for the rules and the approximation of coupled motions, e.g. spline knees).
+  :mod:`.joints` for the rules and the approximation of coupled motions, e.g. spline knees);
+  a joint that moves nothing (a ``WeldJoint``, constants only) is one fixed joint of its name.
   Coordinate ranges become joint limits; OpenSim has no torque or speed limits (muscles drive
   the model), so the URDF carries nominal ones, :data:`EFFORT_LIMIT` and :data:`VELOCITY_LIMIT`.
 * OpenSim's Y-up axes are turned to ours (x forward, y left, z up) by conjugating every
