@@ -21,6 +21,7 @@ import opensim as osim
 
 def main(model_path, out, mode, src):
     t0 = time.perf_counter()
+    osim.Logger.removeFileSink()  # else opensim.log lands next to the model file
     model = osim.Model(model_path)
     state = model.initSystem()
     cs = model.getCoordinateSet()
