@@ -153,7 +153,7 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
         robot = Robot.from_library(a.robot or "hoap2")
         motion = adapt(walk, human, robot).motion
     out = prepare_output_dir(a.out)
-    print(f"entraining a Matsuoka network to {robot.name}'s sagittal angles "
+    print(f"entraining a Matsuoka network to {robot.name}'s joints and base "
           f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
           flush=True)
     cpg = entrain(robot, motion, duration=a.duration)
