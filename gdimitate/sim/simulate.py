@@ -107,8 +107,10 @@ class SimResult:
     ``plan_q`` ``(N, nq)``, ``plan_stance`` {side: ``(N,)`` bool}, ``plan_forces`` {side:
     ``(N, 3)``} the plan sampled on this grid (forces in the world frame); ``qp_wrenches``
     {side: ``(N, 6)``}; ``demo_forces`` {side: ``(N, 3)``} or ``None`` (resampled);
-    ``metrics`` (:class:`SimMetrics`); ``dt``, ``control_period`` [s]; ``joint_names`` and
-    ``actuated`` (joint names of the columns of ``tau``).
+    ``metrics`` (:class:`SimMetrics`); ``dt``, ``control_period`` [s]; ``joint_names``;
+    ``actuated`` (joint names of the columns of ``tau``) and ``effort`` ``(nu,)`` their limits
+    (inf: unlimited); ``base_height``, ``plan_base_height`` ``(N,)`` [m] and ``tilt`` ``(N,)``
+    [rad] (what the fall criteria look at); ``base_nq``, ``joint_nq`` (as in ``Motion``).
     """
 
     t: np.ndarray
@@ -129,6 +131,10 @@ class SimResult:
     control_period: float
     joint_names: tuple[str, ...]
     actuated: tuple[str, ...]
+    effort: np.ndarray
+    base_height: np.ndarray
+    plan_base_height: np.ndarray
+    tilt: np.ndarray
     base_nq: int
     joint_nq: tuple[int, ...]
 
@@ -356,7 +362,9 @@ def _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, period) -> 
         contact_wrenches=rec.wrench_sole, cop=cop, cop_margin=margin, plan_q=rec.plan_q,
         plan_stance=rec.stance, plan_forces=rec.plan_force, qp_wrenches=rec.qp_wrench,
         demo_forces=demo, metrics=metrics, dt=float(dt), control_period=float(period),
-        joint_names=robot.joint_names, actuated=act_names, base_nq=mo.base_nq,
+        joint_names=robot.joint_names, actuated=act_names, effort=sim.effort.copy(),
+        base_height=rec.height, plan_base_height=rec.plan_height, tilt=rec.tilt,
+        base_nq=mo.base_nq,
         joint_nq=mo.joint_nq)
 
 

@@ -1,0 +1,65 @@
+"""Plan and simulation side by side in meshcat, through :class:`gdimitate.viz.Viewer`.
+
+The plan (sampled on the simulation grid) is drawn at y = −gap/2, the simulated robot at
+y = +gap/2, each with its feet's push direction (sagittal angle, hidden when the foot is
+unloaded) and its centre of mass; one animation plays both (the viewer's own recorder).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..metrics import angle_down
+from ..robot import SIDES, Robot
+from .simulate import SimResult
+
+__all__ = ["show_simulation"]
+
+
+def _directions(forces: dict[str, np.ndarray], min_force: float) -> dict[str, np.ndarray]:
+    out = {}
+    for s in SIDES:
+        a = angle_down(-forces[s])
+        a[forces[s][:, 2] < min_force] = np.nan
+        out[s] = a
+    return out
+
+
+def show_simulation(robot: Robot, result: SimResult, *, gap: float = 1.0, fps: float = 30.0,
+                    html: str | os.PathLike | None = None, viewer: object | None = None,
+                    port: int | None = None, open_browser: bool = False,
+                    camera: Sequence[float] | None = None) -> object:
+    """Animate ``result``'s plan and simulation side by side; return the
+    :class:`~gdimitate.viz.Viewer` (close it when done, unless you passed ``viewer``).
+
+    ``gap`` [m]: distance between the two robots; ``fps``: animation frame rate; ``html``:
+    also write the self-contained page there; ``viewer``: draw into this viewer (cleared
+    first); ``port``/``open_browser``: for a new viewer; ``camera``: position (3,) [m].
+    """
+    from ..viz import Viewer
+
+    own = viewer is None
+    v = Viewer.start(port, open_browser) if own else viewer
+    try:
+        if not own:
+            v.clear()
+        min_force = 0.01 * robot.mass * 9.81
+        v.show(robot, result.plan_motion(), name="plan", offset=(0.0, -gap / 2, 0.0),
+               force_directions=_directions(result.plan_forces, min_force),
+               color=(0.55, 0.75, 1.0), opacity=0.6)
+        v.show(robot, result.motion(), name="simulation", offset=(0.0, gap / 2, 0.0),
+               force_directions=_directions(result.contact_forces, min_force))
+        v.animate(fps=fps)
+        if camera is not None:
+            com = v.tracks["simulation"].frames.com + v.tracks["simulation"].offset
+            v.set_camera(camera, np.array([com[:, 0].mean(), 0.0, com[:, 2].mean()]))
+        if html is not None:
+            v.save_html(html)
+    except BaseException:
+        if own:
+            v.close()
+        raise
+    return v
