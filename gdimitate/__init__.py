@@ -12,7 +12,7 @@ The pipeline (DESIGN §2)::
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import bvh, gait, metrics, opensim, oscillator, planar, retarget
+from . import bvh, gait, metrics, opensim, oscillator, planar, retarget, sim
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
 from .cpg import CPGReplay, entrain
@@ -78,5 +78,6 @@ __all__ = [
     "planar",
     "retarget",
     "self_adjust",
+    "sim",
     "walking_motion",
 ]
