@@ -15,7 +15,7 @@ import pytest
 import gdimitate as gd
 from gdimitate.contact import ContactForces, FootForces, cone_margin
 from gdimitate.robot import SIDES
-from gdimitate.sim import Push, simulate
+from gdimitate.sim import Push, Reference, TrackingController, build_model, check_plan, simulate
 from gdimitate.sim.scenarios import kinematic_walk_plan, standing_plan, sway_plan
 
 G = 9.81
@@ -43,6 +43,38 @@ def _push_for(robots, name):
     if name != "hoap2":
         return PUSH
     return PUSH / _tipping_force(robots["g1"]) * _tipping_force(robots["hoap2"])
+
+
+@pytest.mark.parametrize("name", ["g1", "hoap2"])
+def test_controller_output_satisfies_pinocchio_dynamics_and_cones(robots, name):
+    """At perturbed states, the QP's (a, w, τ) satisfy Pinocchio's rnea(q, v, a) =
+    Sᵀτ + Σ J_cᵀ w_c on every row (the QP used crba + nle), its wrenches lie in the sole
+    cones and its torques within the effort limits."""
+    robot = robots[name]
+    plan = standing_plan(robot, 1.0)
+    sim = build_model(robot)
+    ctl = TrackingController(sim)
+    ref = Reference(robot, check_plan(robot, plan))
+    m, d = robot.model, robot.model.createData()
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        q = pin.integrate(m, robot.neutral, 0.05 * rng.normal(size=m.nv))
+        v = 0.2 * rng.normal(size=m.nv)
+        out = ctl.step(q, v, ref.at(0.5))
+        assert out.status >= 1
+        tau = np.zeros(m.nv)
+        tau[sim.idx_v_act] = out.tau
+        pin.computeJointJacobians(m, d, q)
+        pin.updateFramePlacements(m, d)
+        for s in SIDES:
+            J = pin.getFrameJacobian(m, d, robot.frame_id(sim.contacts[s].frame),
+                                     pin.ReferenceFrame.LOCAL)
+            tau += J.T @ out.wrench[s]
+            assert np.all(sim.contacts[s].cone() @ out.wrench[s] <= 1e-6 * robot.mass * G)
+            assert out.wrench[s][2] >= -1e-9
+        ref_tau = pin.rnea(m, d, q, v, out.a)
+        assert np.allclose(tau, ref_tau, atol=1e-6 * robot.mass * G)
+        assert np.all(np.abs(out.tau) <= sim.effort + 1e-9)
 
 
 @pytest.mark.slow

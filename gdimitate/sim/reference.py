@@ -77,6 +77,10 @@ def check_plan(robot: Robot, plan: Any) -> Plan:
         raise PlanError(f"plan.motion.v/a must be ({mo.T}, {m.nv}); got {mo.v.shape}, "
                         f"{mo.a.shape}")
     T = mo.T
+    if plan.wrenches is None or plan.contacts is None:
+        raise PlanError("the plan has no contact wrenches/contacts (of the adaptors, only "
+                        "method='optimal' produces them); a plan needs .wrenches "
+                        "{'left': (T, 6), 'right': (T, 6)} and .contacts")
     wrenches, contacts = {}, {}
     for s in SIDES:
         if s not in mo.contact:
