@@ -165,3 +165,19 @@ class SimModelError(SimulationError):
 class PlanError(SimulationError, InvalidInputError):
     """A plan handed to :func:`gdimitate.sim.simulate` that does not fit the robot or the plan
     contract (shapes, time grid, stance schedule, wrenches)."""
+
+
+class DemonstrationFormatError(InvalidInputError):
+    """A demonstration file of a kind :func:`gdimitate.demonstration.load_demonstration`
+    cannot read (the message lists the supported extensions), or arguments that format cannot
+    use (e.g. ``coordinates=`` without an ``.osim``)."""
+
+
+class RobotMismatchError(InvalidInputError):
+    """A motion file whose recorded robot (name, fingerprint) differs from the robot it is
+    read with, or whose robot cannot be rebuilt from what it records."""
+
+
+class ExportError(InvalidInputError):
+    """An export that cannot be written as asked (unknown format, a motion without the
+    velocities or wrenches the format needs, a robot the format cannot describe)."""
