@@ -125,7 +125,7 @@ def direction_agreement(force: np.ndarray, reference: np.ndarray, present: np.nd
 class StanceSlip:
     """One stance of one foot (from the plan's schedule): ``side``, ``start``/``end`` [s],
     ``slip`` [m] the largest horizontal distance of the simulated sole-frame origin from where
-    it was when the stance began."""
+    it was when the stance began (its first loaded sample; NaN: never loaded)."""
 
     side: str
     start: float
@@ -140,13 +140,21 @@ def stance_intervals(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1))
 
 
-def stance_slip(t: np.ndarray, side: str, sole_xy: np.ndarray, stance: np.ndarray
-                ) -> list[StanceSlip]:
+def stance_slip(t: np.ndarray, side: str, sole_xy: np.ndarray, stance: np.ndarray,
+                loaded: np.ndarray | None = None) -> list[StanceSlip]:
     """Slip of each stance of one foot: ``sole_xy`` ``(N, 2)`` [m] simulated sole positions,
-    ``stance`` ``(N,)`` the plan's schedule on the same grid."""
+    ``stance`` ``(N,)`` the plan's schedule on the same grid, ``loaded`` ``(N,)`` where the
+    simulated foot carries load (default: all). Each stance's slip is measured from the first
+    loaded sample in it (a foot landing late is not slipping); NaN if it is never loaded."""
+    loaded = np.ones(len(t), bool) if loaded is None else np.asarray(loaded, bool)
     out = []
     for i, j in stance_intervals(stance):
-        d = np.linalg.norm(sole_xy[i:j + 1] - sole_xy[i], axis=1)
+        on = np.flatnonzero(loaded[i:j + 1])
+        if on.size == 0:
+            out.append(StanceSlip(side, float(t[i]), float(t[j]), float("nan")))
+            continue
+        i0 = i + int(on[0])
+        d = np.linalg.norm(sole_xy[i0:j + 1] - sole_xy[i0], axis=1)
         out.append(StanceSlip(side, float(t[i]), float(t[j]), float(d.max())))
     return out
 

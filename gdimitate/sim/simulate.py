@@ -65,7 +65,8 @@ class SimMetrics:
 
     ``fell`` and ``fall_time`` [s] (``None`` when it did not), ``fall_reason`` (``"height"``,
     ``"tilt"`` or ``""``), ``criteria`` (the thresholds); ``slip`` — one
-    :class:`~gdimitate.sim.metrics.StanceSlip` per stance of each foot —, ``slip_max`` [m];
+    :class:`~gdimitate.sim.metrics.StanceSlip` per stance of each foot —, ``slip_max`` [m]
+    (over stances that were loaded);
     ``force_vs_plan`` / ``force_vs_demo`` {side: :class:`~gdimitate.sim.metrics.
     DirectionAgreement`} (``force_vs_demo`` is ``None`` without ``demo_forces``);
     ``cop_margin_min`` {side: [m]} the smallest centre-of-pressure margin inside the sole while
@@ -319,11 +320,12 @@ def _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, period) -> 
     m = robot.model
     t = rec.t
     ft, reason = fall_time(t, rec.height, rec.plan_height, rec.tilt, fall)
-    slips = []
-    for s in SIDES:
-        slips += stance_slip(t, s, rec.sole_xy[s], rec.stance[s])
     mg = robot.mass * float(np.linalg.norm(m.gravity.linear))
     min_force = 0.01 * mg
+    slips = []
+    for s in SIDES:
+        slips += stance_slip(t, s, rec.sole_xy[s], rec.stance[s],
+                             rec.wrench_world[s][:, 2] > min_force)
     cop, margin = {}, {}
     for s in SIDES:
         cop[s], margin[s] = cop_and_margin(sim.contacts[s], rec.wrench_sole[s], min_force)
@@ -346,7 +348,8 @@ def _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, period) -> 
     base_err = _base_position_error(robot, rec)
     metrics = SimMetrics(
         fell=ft is not None, fall_time=ft, fall_reason=reason, criteria=fall,
-        slip=tuple(slips), slip_max=max((x.slip for x in slips), default=0.0),
+        slip=tuple(slips),
+        slip_max=max((x.slip for x in slips if np.isfinite(x.slip)), default=0.0),
         force_vs_plan=vs_plan, force_vs_demo=vs_demo,
         cop_margin_min={s: float(np.nanmin(margin[s])) if np.any(np.isfinite(margin[s]))
                         else float("nan") for s in SIDES},
