@@ -42,6 +42,12 @@ LIBRARY: dict[str, LibraryEntry] = {
         LibraryEntry("simple_humanoid",
                      "simple_humanoid_description/urdf/simple_humanoid.urdf",
                      "no visual geometry"),
+        LibraryEntry("alexander", "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf",
+                     "Boardwalk Robotics Alexander, lower body (legs and pelvis), 49 kg"),
+        LibraryEntry("icub_full", "icub_description/robots/icub.urdf",
+                     "IIT iCub with every joint (eyes, hands), 1.0 m"),
+        LibraryEntry("g1_hands", "g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf",
+                     "Unitree G1, 29 DoF with three-finger hands"),
     ]
 }
 
@@ -83,7 +89,9 @@ def library_entry(name: str) -> tuple[Path, Path]:
 
 def list_robots() -> list[str]:
     """Names accepted by :meth:`gdimitate.Robot.from_library`: our planar models, then
-    example-robot-data's."""
+    example-robot-data's bipeds and humanoids that Pinocchio loads (not listed: ``alex``,
+    upper body only; ``talos_full_v2``, whose ``package:///`` mesh paths point outside the
+    package; ``romeo_small``, whose inertias break the triangle inequality; Cassie, SDF only)."""
     from .urdfgen import PLANAR_MODELS
 
     return [*PLANAR_MODELS, *LIBRARY]

@@ -30,6 +30,7 @@ from .errors import (
     ContactError,
     InvalidInputError,
     LegDetectionError,
+    MeshPathError,
     UnknownNameError,
     UnknownRobotError,
     URDFError,
@@ -105,6 +106,10 @@ _ROLE_PATTERNS = {
     "knee": r"knee|kfe",
     "ankle": r"ankle",
 }
+
+
+#: Frame names that say "sensor" (an IMU, a force-torque sensor, a camera…): never a sole.
+_SENSOR_NAME = re.compile(r"imu|sensor|camera|lidar|(^|[_\W])ft([_\W]|$)|force_?torque", re.I)
 
 
 #: Joints of library robots whose subtrees are massless on purpose (Romeo's hands: every
@@ -298,7 +303,14 @@ class Robot:
             pkgs = [Path(package_dir)]
         else:
             pkgs = [Path(d) for d in package_dir]
-        confine_meshes(root, path, pkgs)
+        try:
+            confine_meshes(root, path, pkgs)
+        except MeshPathError as e:
+            if "not found" not in str(e):
+                raise
+            raise MeshPathError(f"{e}; if the URDF names its meshes package://NAME/…, pass "
+                                "package_dir= (CLI: --package-dir) the folder that holds NAME/"
+                                ) from None
         xml = ET.tostring(root, encoding="unicode")
         try:
             model = (pin.buildModelFromXML(xml, pin.JointModelFreeFlyer()) if floating
@@ -362,6 +374,64 @@ class Robot:
         return cls.from_urdf(path, LEG_PRESETS.get(name), name=name, package_dir=pkg,
                              floating=True, massless_joints=MASSLESS_PRESETS.get(name, ()))
 
+    @classmethod
+    def load(cls, spec: str | Path, *, package_dir: str | Path | None = None,
+             contacts: Mapping[str, SoleContact | Mapping] | None = None,
+             legs: Mapping[str, Mapping[str, str | None]] | None = None) -> Robot:
+        """A robot from a library name (:func:`gdimitate.list_robots`) or a model file path
+        (``.urdf``: :meth:`from_urdf` with ``legs``, ``package_dir`` and ``contacts``;
+        ``.osim``: :meth:`from_osim`, whose legs and soles come from the model).
+
+        ``contacts``/``legs`` on a library robot override its presets (its URDF is loaded
+        with them). Raises :class:`UnknownRobotError` (listing the names) for a name that is
+        neither a library robot nor an existing file, :class:`InvalidInputError` for
+        ``legs``/``contacts`` on an ``.osim`` or an unknown extension."""
+        text = str(spec)
+        p = Path(text).expanduser()
+        if text in list_robots() and not p.suffix:
+            if legs is None and contacts is None and package_dir is None:
+                return cls.from_library(text)
+            if text in PLANAR_MODELS:
+                raise InvalidInputError(f"{text!r} is one of our planar models: it takes no "
+                                        "legs=/contacts=/package_dir=")
+            path, pkg = library_entry(text)
+            return cls.from_urdf(path, legs or LEG_PRESETS.get(text), name=text,
+                                 package_dir=package_dir or pkg, floating=True,
+                                 contacts=contacts,
+                                 massless_joints=MASSLESS_PRESETS.get(text, ()))
+        suffix = p.suffix.lower()
+        if suffix == ".urdf":
+            return cls.from_urdf(p, legs, package_dir=package_dir, contacts=contacts)
+        if suffix == ".osim":
+            if legs is not None or contacts is not None:
+                raise InvalidInputError(f"{p}: an OpenSim model brings its own legs and soles; "
+                                        "legs=/contacts= are for URDFs")
+            return cls.from_osim(p)
+        if suffix:
+            raise InvalidInputError(f"robot {text!r}: a model file must be .urdf or .osim; "
+                                    f"library names: {list_robots()}")
+        raise UnknownRobotError(text, list_robots())
+
+    @property
+    def fingerprint(self) -> str:
+        """A short hash (16 hex digits) of the model: joint names and types, joint
+        placements, link inertias (mass, centre of mass, rotational inertia) and position,
+        velocity and effort limits, rounded to 1e-9 (so a URDF re-read from its text gives the
+        same one). Motion files record it to check that they are read with their robot."""
+        import hashlib
+
+        m = self.model
+        h = hashlib.sha256()
+        for j in range(1, m.njoints):
+            h.update(f"{m.names[j]}:{m.joints[j].shortname()};".encode())
+        arrays = [np.array([X.homogeneous for X in m.jointPlacements]),
+                  np.array([[I.mass, *I.lever, *I.inertia.ravel()] for I in m.inertias]),
+                  m.lowerPositionLimit, m.upperPositionLimit, m.velocityLimit, m.effortLimit]
+        for a in arrays:
+            a = np.clip(np.nan_to_num(np.asarray(a, dtype=float)), -1e20, 1e20)
+            h.update((np.round(a, 9) + 0.0).tobytes())  # + 0.0: no negative zeros
+        return h.hexdigest()[:16]
+
     # ------------------------------------------------------------------ leg detection
     def _resolve_leg_names(self, legs) -> dict[str, dict[str, str | None]]:
         model = self.model
@@ -402,7 +472,8 @@ class Robot:
                         f"'sole': …}}, 'right': {{…}}}} explicitly."
                     )
                 d[role] = self._pick_pitch(cands) if len(cands) > 1 else cands[0]
-            bodies = [f.name for f in model.frames if f.type == pin.FrameType.BODY]
+            bodies = [f.name for f in model.frames if f.type == pin.FrameType.BODY
+                      and not _SENSOR_NAME.search(f.name)]
             soles = []
             for pat in (r"sole", r"foot", r"toe", r"ankle"):  # first that matches, lowest of it
                 soles = soles or [f for f in bodies if _side_of(f) == s and re.search(pat, f, re.I)]
