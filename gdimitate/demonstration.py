@@ -80,4 +80,160 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
     extension (listing :data:`SUPPORTED`) or arguments the format cannot use, and the readers'
     own errors for malformed files.
     """
-    raise NotImplementedError  # implemented below in the next commit
+    p = Path(path).expanduser()
+    suffix = p.suffix.lower()
+    if suffix not in SUPPORTED:
+        raise DemonstrationFormatError(
+            f"{p}: unknown demonstration format {p.suffix or '(no extension)'!r}; supported: "
+            + "; ".join(f"{k} ({v})" for k, v in SUPPORTED.items()))
+    if not p.is_file():
+        raise DemonstrationFormatError(f"demonstration file not found: {p}")
+    if coordinates is not None and suffix != ".osim":
+        raise DemonstrationFormatError(f"coordinates= goes with an .osim model; {p} is "
+                                       f"{suffix}")
+    if suffix == ".osim":
+        if coordinates is None:
+            raise DemonstrationFormatError(
+                f"{p} is an OpenSim model: pass coordinates= (CLI: --coordinates FILE.mot), "
+                "the .mot/.sto of its joint angles")
+        if robot is not None:
+            raise DemonstrationFormatError("an .osim demonstration builds its own robot; "
+                                           "robot= is for a .mot/.sto")
+        return _full_body(Path(coordinates).expanduser(), Robot.from_osim(p), grf, overground,
+                          f"{p} (model) + ")
+    if grf is not None and suffix in (".bvh", ".npz"):
+        raise DemonstrationFormatError(f"grf= goes with OpenSim coordinates; {p} is {suffix}")
+    if suffix in (".mot", ".sto"):
+        if robot is not None:
+            return _full_body(p, robot, grf, overground, "")
+        return _sagittal(p, grf)
+    if suffix == ".bvh":
+        if robot is not None:
+            raise DemonstrationFormatError("a .bvh demonstration builds its own robot from the "
+                                           "skeleton; robot= is for a .mot/.sto or .npz")
+        from .bvh import read_bvh
+
+        bot, motion = read_bvh(p)
+        info = bot.bvh_info
+        return Demonstration(bot, motion, None, str(p),
+                             f"BVH ({info.unit}, floor at z = 0: {info.grounded}); contacts "
+                             "from the feet's height and speed")
+    return _npz(p, robot)
+
+
+def _sagittal(p: Path, grf) -> Demonstration:
+    from .errors import OpenSimDataError
+    from .gait import read_opensim
+
+    try:
+        bot, motion = read_opensim(p, grf=grf)
+    except OpenSimDataError as e:
+        if "full-body" not in str(e):
+            raise
+        raise DemonstrationFormatError(
+            f"{p} is a full-body 3-D coordinates file: give its OpenSim model (robot="
+            "Robot.from_osim(model.osim); CLI: --osim model.osim) or read it as model.osim "
+            "with coordinates=") from None
+    return Demonstration(bot, motion, None, str(p),
+                         "OpenSim sagittal coordinates on a planar human (1.75 m); contacts "
+                         + ("from the measured vertical GRF" if grf is not None
+                            else "from the sole heights"))
+
+
+def _external_loads(grf: Path) -> Path | None:
+    """The ExternalLoads XML beside a GRF file: ``<stem>.xml``, or the only ``.xml`` in its
+    folder whose ``datafile`` names the GRF file."""
+    same = grf.with_suffix(".xml")
+    if same.is_file():
+        return same
+    hits = []
+    for x in sorted(grf.parent.glob("*.xml")):
+        try:
+            text = x.read_text(errors="replace")[:200_000]
+        except OSError:
+            continue
+        if "ExternalLoads" in text and grf.name in text:
+            hits.append(x)
+    return hits[0] if len(hits) == 1 else None
+
+
+def _full_body(coords: Path, robot: Robot, grf, overground: bool, prefix: str
+               ) -> Demonstration:
+    from .opensim import read_coordinates, read_grf, treadmill_to_overground
+
+    if coords.suffix.lower() not in (".mot", ".sto"):
+        raise DemonstrationFormatError(f"coordinates must be a .mot/.sto file; got {coords}")
+    motion = read_coordinates(coords, robot)
+    source = f"{prefix}{coords}"
+    if grf is None:
+        contact, how = _kinematic_contact(robot, motion)
+        return Demonstration(robot, motion.replace(contact=contact), None, source,
+                             f"OpenSim full-body coordinates; contacts from the sole corners' "
+                             f"{how} (no forces given)")
+    grf = Path(grf).expanduser()
+    xml = _external_loads(grf)
+    forces = read_grf(grf, robot, xml, t=motion.t)
+    motion = motion.replace(contact=forces.contact)
+    note = (f"OpenSim full-body coordinates; forces {grf.name} (ExternalLoads "
+            f"{xml.name if xml else 'none: feet from column names'})")
+    if overground:
+        motion, forces = treadmill_to_overground(robot, motion, forces)
+        note += "; " + forces.frame_note
+    return Demonstration(robot, motion, forces, source, note)
+
+
+def _kinematic_contact(robot: Robot, motion: Motion) -> tuple[dict, str]:
+    """Stance masks from the sole corners (height and speed); a foot that never stands
+    still (a treadmill trial: stance feet ride the belt) → height alone. Returns the masks
+    and which rule was used."""
+    from .bvh.contacts import ContactRule, detect_contacts, sole_corners
+
+    robot.require_contacts()
+    hip = max(robot.legs[s].length + robot.legs[s].foot for s in ("left", "right"))
+    corners = sole_corners(robot, motion.q)
+    contact = detect_contacts(corners, motion.t, hip)
+    if min(c.mean() for c in contact.values()) >= 0.1:
+        return contact, "height and speed"
+    return (detect_contacts(corners, motion.t, hip, ContactRule(speed=1e6)),
+            "height alone (the feet never stand still: a treadmill?)")
+
+
+def _npz(p: Path, robot: Robot | None) -> Demonstration:
+    import json
+
+    from .errors import RobotMismatchError
+    from .motion import RobotRecord
+
+    rec = RobotRecord.from_npz(p)
+    motion = Motion.from_npz(p)
+    if rec is None:
+        if robot is None:
+            raise RobotMismatchError(
+                f"{p} records no robot (written without Motion.to_npz(path, robot=)); pass "
+                "its robot (robot=; CLI: --demonstrator NAME|URDF)")
+        note = "gdimitate NPZ (no robot recorded; robot as given)"
+    else:
+        if robot is None:
+            if rec.kind == "memory":
+                raise RobotMismatchError(
+                    f"{p}: its robot {rec.name!r} was built in memory and cannot be rebuilt "
+                    "from the file; pass it (robot=; CLI: --demonstrator)")
+            if rec.kind == "bvh":
+                from .bvh import read_bvh
+
+                robot = read_bvh(rec.source, name=rec.name)[0]
+            else:
+                robot = Robot.load(rec.source, package_dir=rec.package_dir or None,
+                                   legs=json.loads(rec.legs) if rec.legs else None,
+                                   contacts=json.loads(rec.contacts) if rec.contacts else None)
+        if robot.fingerprint != rec.fingerprint:
+            raise RobotMismatchError(
+                f"{p} was written for robot {rec.name!r} ({rec.kind} {rec.source}, fingerprint "
+                f"{rec.fingerprint}); {robot.name!r} has fingerprint {robot.fingerprint}: its "
+                "joints, placements, inertias or limits differ (the model file changed?)")
+        note = f"gdimitate NPZ of robot {rec.name!r} ({rec.kind}, fingerprint checked)"
+    if tuple(robot.joint_names) != motion.joint_names:
+        raise RobotMismatchError(f"{p}: the motion's joints {list(motion.joint_names)[:6]}… "
+                                 f"are not robot {robot.name!r}'s {list(robot.joint_names)[:6]}…")
+    forces = None
+    return Demonstration(robot, motion, forces, str(p), note)

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from .errors import InvalidInputError, TimeGridError, UnknownNameError
 
-__all__ = ["Motion", "check_time", "differentiate"]
+__all__ = ["Motion", "RobotRecord", "check_time", "differentiate"]
 
 
 def check_time(t: np.ndarray) -> np.ndarray:
@@ -131,12 +132,33 @@ class Motion:
         d.update(changes)
         return Motion(**d)
 
-    def to_npz(self, path) -> None:
+    def to_npz(self, path, robot=None, extra: Mapping[str, np.ndarray] | None = None) -> None:
         """Save as NPZ: ``t``, ``q``, ``joint_names``, ``joint_nq``, ``base_nq``,
-        ``contact_left``, ``contact_right``."""
-        np.savez(path, t=self.t, q=self.q, joint_names=np.array(self.joint_names),
-                 joint_nq=np.array(self.joint_nq), base_nq=self.base_nq,
-                 **{f"contact_{k}": v for k, v in self.contact.items()})
+        ``contact_left``, ``contact_right``, and ``v``, ``a`` where the motion has them.
+
+        ``robot``: the :class:`~gdimitate.Robot` the motion belongs to; its
+        :class:`RobotRecord` (``robot_name``, ``robot_kind``, ``robot_source`` — library
+        name or model file path —, ``robot_fingerprint``, ``robot_package_dir``,
+        ``robot_legs``, ``robot_contacts``) is stored so that the file is read back without
+        naming the robot (:func:`gdimitate.demonstration.load_demonstration`). ``extra``:
+        more arrays to store (e.g. ``wrench_left``); their names must not clash."""
+        arrays = dict(t=self.t, q=self.q, joint_names=np.array(self.joint_names),
+                      joint_nq=np.array(self.joint_nq), base_nq=self.base_nq,
+                      **{f"contact_{k}": v for k, v in self.contact.items()})
+        for name in ("v", "a"):
+            if getattr(self, name) is not None:
+                arrays[name] = getattr(self, name)
+        if robot is not None:
+            if tuple(robot.joint_names) != self.joint_names:
+                raise InvalidInputError(
+                    f"robot {robot.name!r} has joints {list(robot.joint_names)[:6]}…, the "
+                    f"motion {list(self.joint_names)[:6]}…: not this motion's robot")
+            arrays.update(RobotRecord.of(robot).arrays())
+        for k, v in dict(extra or {}).items():
+            if k in arrays:
+                raise InvalidInputError(f"extra array {k!r} clashes with a motion key")
+            arrays[k] = np.asarray(v)
+        np.savez(path, **arrays)
 
     @classmethod
     def from_npz(cls, path) -> Motion:
@@ -154,7 +176,9 @@ class Motion:
             contact = {k[8:]: z[k] for k in z.files if k.startswith("contact_")}
             return cls(t=z["t"], joint_names=tuple(str(s) for s in z["joint_names"]), q=z["q"],
                        contact=contact, base_nq=int(z["base_nq"]),
-                       joint_nq=tuple(int(i) for i in z["joint_nq"]))
+                       joint_nq=tuple(int(i) for i in z["joint_nq"]),
+                       v=z["v"] if "v" in z.files else None,
+                       a=z["a"] if "a" in z.files else None)
 
     def to_csv(self, path, columns: list[str] | None = None) -> None:
         """Write ``time`` and 1-DoF joint columns (all by default) as CSV [s, rad]."""
@@ -162,6 +186,79 @@ class Motion:
         data = np.column_stack([self.t] + [self.column(c) for c in cols])
         np.savetxt(path, data, delimiter=",", header=",".join(["time", *cols]), comments="",
                    fmt="%.9g")
+
+
+_RECORD_KINDS = ("library", "urdf", "osim", "bvh", "memory")
+
+
+@dataclass(frozen=True)
+class RobotRecord:
+    """What a motion file records about its robot (keys ``robot_<field>`` in the NPZ).
+
+    ``name``; ``kind``: ``"library"`` (``source`` = the library name), ``"urdf"``,
+    ``"osim"`` or ``"bvh"`` (``source`` = the model or BVH file's absolute path) or
+    ``"memory"`` (a model built in memory: it cannot be rebuilt from the file);
+    ``fingerprint``: :attr:`Robot.fingerprint`; ``package_dir``: the URDF's package folder
+    (``""`` for none); ``legs``/``contacts``: JSON of the ``legs=``/``contacts=`` given to
+    :meth:`Robot.load` (``""`` when detected)."""
+
+    name: str
+    kind: str
+    source: str
+    fingerprint: str
+    package_dir: str = ""
+    legs: str = ""
+    contacts: str = ""
+
+    @classmethod
+    def of(cls, robot) -> RobotRecord:
+        """The record of a :class:`~gdimitate.Robot`."""
+        import json
+
+        from .library import list_robots
+
+        def plain(x):  # a SoleContact → its fields
+            return {k: getattr(x, k) for k in ("frame", "half_length", "half_width", "mu")}
+
+        given = getattr(robot, "load_args", None) or {}
+        legs = json.dumps(given["legs"]) if given.get("legs") is not None else ""
+        contacts = (json.dumps(given["contacts"], default=plain)
+                    if given.get("contacts") is not None else "")
+        pkg = str(Path(robot.package_dir).resolve()) if robot.package_dir else ""
+        if getattr(robot, "osim", None) is not None and robot.osim.model.path is not None:
+            kind, source = "osim", str(Path(robot.osim.model.path).resolve())
+        elif getattr(robot, "bvh_info", None) is not None:
+            kind, source = "bvh", str(Path(robot.bvh_info.path).resolve())
+        elif robot.name in list_robots() and given.get("spec", robot.name) == robot.name:
+            kind, source = "library", robot.name
+        elif robot.urdf_path is not None:
+            kind, source = "urdf", str(Path(robot.urdf_path).resolve())
+        else:
+            kind, source = "memory", ""
+        return cls(robot.name, kind, source, robot.fingerprint, pkg, legs, contacts)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The NPZ entries (``robot_<field>`` → 0-d string array)."""
+        return {f"robot_{k}": np.array(getattr(self, k))
+                for k in ("name", "kind", "source", "fingerprint", "package_dir", "legs",
+                          "contacts")}
+
+    @classmethod
+    def from_npz(cls, path) -> RobotRecord | None:
+        """The record stored in an NPZ motion file, or ``None`` if it has none (a file
+        written without ``robot=``)."""
+        from .safety import open_npz
+
+        with open_npz(path) as z:
+            if "robot_name" not in z.files:
+                return None
+            rec = cls(**{k: str(z[f"robot_{k}"]) for k in
+                         ("name", "kind", "source", "fingerprint", "package_dir", "legs",
+                          "contacts") if f"robot_{k}" in z.files})
+        if rec.kind not in _RECORD_KINDS:
+            raise InvalidInputError(f"{path}: robot_kind {rec.kind!r} is not one of "
+                                    f"{_RECORD_KINDS}")
+        return rec
 
 
 def differentiate(model, motion: Motion, cutoff_hz: float | None = None) -> Motion:

@@ -385,8 +385,15 @@ class Robot:
         ``contacts``/``legs`` on a library robot override its presets (its URDF is loaded
         with them). Raises :class:`UnknownRobotError` (listing the names) for a name that is
         neither a library robot nor an existing file, :class:`InvalidInputError` for
-        ``legs``/``contacts`` on an ``.osim`` or an unknown extension."""
-        text = str(spec)
+        ``legs``/``contacts`` on an ``.osim`` or an unknown extension. The arguments are kept
+        as ``robot.load_args`` (motion files record them)."""
+        robot = cls._load(str(spec), package_dir, contacts, legs)
+        robot.load_args = {"spec": str(spec), "package_dir": package_dir, "legs": legs,
+                           "contacts": contacts}
+        return robot
+
+    @classmethod
+    def _load(cls, text: str, package_dir, contacts, legs) -> Robot:
         p = Path(text).expanduser()
         if text in list_robots() and not p.suffix:
             if legs is None and contacts is None and package_dir is None:
