@@ -8,6 +8,8 @@ strategy can hold; the plan's own wrenches against the sole's contact wrench con
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -191,6 +193,8 @@ def test_joint_angle_walk_falls_or_slips(walk):
     robot, plan, res = walk
     mt = res.metrics
     assert mt.fell or mt.slip_max > 0.05
+    summary = json.loads(json.dumps(mt.to_dict()))  # JSON-safe
+    assert summary["fell"] is True and summary["fall_time_s"] == pytest.approx(mt.fall_time)
     # the metrics cover single support: forces compared while one foot carries the robot
     assert any(mt.force_vs_plan[s].n > 0 for s in SIDES)
 
