@@ -125,6 +125,16 @@ class AdaptedMotion:
     solver: Any = None
     force_model: str = "segment"
 
+    def save(self, path, format: str = "npz", *, fps: float = 30.0):
+        """Write the motion (and, in ``"npz"``, the contact wrenches and the robot's record)
+        in ``format``: ``"csv"``, ``"npz"``, ``"mujoco"`` or ``"lafan1_csv"``
+        (:func:`gdimitate.export.export_motion` describes each; ``fps`` [Hz] is the
+        ``"lafan1_csv"`` rate). Returns the path written."""
+        from .export import export_motion
+
+        return export_motion(self.robot, self.motion, path, format, wrenches=self.wrenches,
+                             fps=fps)
+
     @property
     def feasible(self) -> bool:
         """The audit's verdict (optimal method); for Eq. (1) and joint copying, whether every

@@ -1,0 +1,298 @@
+"""Write a robot's motion in the formats other tools read, and read them back.
+
+Formats (:data:`FORMATS`; ``gdimitate export`` and :meth:`gdimitate.adapt.AdaptedMotion.save`
+call :func:`export_motion`):
+
+- ``"csv"``: a header row, then one row per frame: ``time`` [s], the floating base's pose
+  ``base_x, base_y, base_z`` [m] and ``base_qx, base_qy, base_qz, base_qw`` (the base link's
+  orientation in the world, unit quaternion, scalar LAST — Pinocchio's order; our planar base
+  written as the same 3-D pose, y = 0), then every joint [rad or m] in Pinocchio order (an
+  unbounded revolute as its angle). A fixed base has no base columns. :func:`read_csv`.
+- ``"npz"``: :meth:`Motion.to_npz` with the robot recorded (name, source, fingerprint: read
+  back with :func:`gdimitate.demonstration.load_demonstration` without naming the robot),
+  ``v``/``a`` ``(T, nv)`` where the motion has them, and, for an adaptor's output, the contact
+  wrenches ``wrench_left``/``wrench_right`` ``(T, 6)`` ``[f; τ]`` [N, N·m] in each sole frame
+  (``wrench_frame_left``/``_right`` name it). :func:`read_wrenches`.
+- ``"mujoco"``: an NPZ with ``time`` ``(T,)``, ``qpos`` ``(T, nq_mj)`` (and ``qvel``
+  ``(T, nv_mj)`` where the motion has ``v``) in MuJoCo's joint order and conventions (free
+  joint: position, then quaternion w, x, y, z; linear velocity in the world, angular in the
+  body) for the model :func:`gdimitate.sim.build_model` makes of the robot; ``joint_names``
+  (MuJoCo's joints in order) and ``mjcf`` (that model's MJCF text, so the file can be played
+  without gdimitate). :func:`read_mujoco`.
+- ``"lafan1_csv"``: the retargeted-motion CSV of unitreerobotics' LAFAN1_Retargeting_Dataset,
+  the input of BeyondMimic's ``whole_body_tracking`` (``scripts/csv_to_npz.py``) and of
+  mjlab's motion-tracking task: no header, one row per frame at a fixed rate (``fps``,
+  default 30 Hz, the dataset's), ``x, y, z`` [m], quaternion ``qx, qy, qz, qw`` (their loader
+  reorders it to w, x, y, z), then the joint angles [rad] in the robot's URDF order (for
+  Unitree G1: left leg, right leg, waist, left arm, right arm — Pinocchio's order). Needs a
+  free-flyer robot with 1-DoF joints; the motion is resampled onto the fps grid (joints and
+  position linearly, the quaternion by slerp). :func:`read_lafan1_csv`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import ExportError, FileFormatError
+from .motion import Motion
+from .robot import PLANAR_BASE, SIDES, Robot
+
+__all__ = ["FORMATS", "MujocoMotion", "export_motion", "read_csv", "read_lafan1_csv",
+           "read_mujoco", "read_wrenches"]
+
+#: Export formats and the file each one writes.
+FORMATS: dict[str, str] = {
+    "csv": "CSV: time, base pose (x, y, z, qx, qy, qz, qw), every joint",
+    "npz": "NPZ: q, v, a, contact wrenches, robot metadata (gdimitate's own)",
+    "mujoco": "NPZ: MuJoCo qpos/qvel for gdimitate.sim's model, with its MJCF",
+    "lafan1_csv": "CSV without header at 30 Hz: x, y, z, qx, qy, qz, qw, joints "
+                  "(LAFAN1 retargeted; BeyondMimic whole_body_tracking / mjlab)",
+}
+BASE_COLUMNS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
+
+
+def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = "npz", *,
+                  wrenches: Mapping[str, np.ndarray] | None = None, fps: float = 30.0
+                  ) -> Path:
+    """Write ``motion`` (of ``robot``) to ``path`` in ``format`` (:data:`FORMATS`).
+
+    ``wrenches``: ``{"left": (T, 6), "right": (T, 6)}`` sole-frame contact wrenches [N, N·m]
+    (``"npz"`` stores them); ``fps`` [Hz]: the frame rate of ``"lafan1_csv"``. Returns the
+    path written. Raises :class:`~gdimitate.errors.ExportError` for an unknown format or a
+    robot/motion the format cannot hold."""
+    if format not in FORMATS:
+        raise ExportError(f"unknown export format {format!r}; choose one of "
+                          + ", ".join(f"{k} ({v})" for k, v in FORMATS.items()))
+    if tuple(robot.joint_names) != motion.joint_names:
+        raise ExportError(f"the motion's joints are not robot {robot.name!r}'s")
+    path = Path(path)
+    writer = {"csv": _write_csv, "npz": _write_npz, "mujoco": _write_mujoco,
+              "lafan1_csv": _write_lafan1}[format]
+    writer(robot, motion, path, wrenches=wrenches, fps=fps)
+    return path
+
+
+# ---------------------------------------------------------------------- base pose
+def _base_joint(robot: Robot) -> int | None:
+    """Pinocchio id of the joint whose body is the floating base (None: fixed base)."""
+    if robot.base == "free":
+        return 1
+    if robot.base == "planar":
+        return robot.model.getJointId(PLANAR_BASE[-1])
+    return None
+
+
+def base_pose(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The base link's world pose ``(T, 7)`` ``[x, y, z, qx, qy, qz, qw]`` for q ``(T, nq)``
+    (forward kinematics; a free-flyer's is ``q[:, :7]`` up to the quaternion's sign)."""
+    j = _base_joint(robot)
+    m, d = robot.model, robot.model.createData()
+    out = np.empty((len(q), 7))
+    for k, qk in enumerate(q):
+        pin.forwardKinematics(m, d, qk)
+        out[k] = pin.SE3ToXYZQUAT(d.oMi[j])
+    if robot.base == "free":  # keep the file's own sign (q and −q are one rotation)
+        flip = np.sum(out[:, 3:7] * q[:, 3:7], axis=1) < 0
+        out[flip, 3:7] *= -1
+    return out
+
+
+def _joint_columns(robot: Robot, q: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """Names and values ``(T, n)`` of every non-base joint (unbounded revolutes as angles)."""
+    m = robot.model
+    names, cols = [], []
+    for j in range(1, m.njoints):
+        jm, name = m.joints[j], m.names[j]
+        if (robot.base == "free" and j == 1) or name in PLANAR_BASE:
+            continue
+        i = jm.idx_q
+        if jm.nq == 1:
+            cols.append(q[:, i])
+        elif jm.nq == 2 and jm.nv == 1:
+            cols.append(np.arctan2(q[:, i + 1], q[:, i]))
+        else:
+            raise ExportError(f"joint {name!r} ({jm.shortname()}) has {jm.nq} coordinates; "
+                              "the CSV formats hold 1-DoF joints only")
+        names.append(name)
+    return names, np.column_stack(cols) if cols else np.zeros((len(q), 0))
+
+
+def _q_from_columns(robot: Robot, pose: np.ndarray | None, joints: np.ndarray,
+                    names: list[str], where: object) -> np.ndarray:
+    """Pinocchio q ``(T, nq)`` from a base pose ``(T, 7)`` and joint columns."""
+    m = robot.model
+    T = joints.shape[0]
+    q = np.tile(pin.neutral(m), (T, 1))
+    for k, name in enumerate(names):
+        jm = m.joints[m.getJointId(name)]
+        if jm.nq == 2:
+            q[:, jm.idx_q], q[:, jm.idx_q + 1] = np.cos(joints[:, k]), np.sin(joints[:, k])
+        else:
+            q[:, jm.idx_q] = joints[:, k]
+    if robot.base == "free":
+        q[:, :7] = pose
+    elif robot.base == "planar":
+        R = [pin.Quaternion(*p[[6, 3, 4, 5]]).normalized().matrix() for p in pose]
+        q[:, robot.idx_q("base_x")] = pose[:, 0]
+        q[:, robot.idx_q("base_z")] = pose[:, 2]
+        q1 = pin.neutral(m)
+        q1[robot.idx_q("base_pitch")] = 1.0  # the pitch axis: the rotation 1 rad makes
+        axis = pin.log3(pin.XYZQUATToSE3(base_pose(robot, q1[None])[0]).rotation)
+        q[:, robot.idx_q("base_pitch")] = [float(pin.log3(r) @ axis) for r in R]
+        back = base_pose(robot, q)
+        err = np.abs(back[:, :3] - pose[:, :3]).max()
+        if err > 1e-6:
+            raise FileFormatError(f"{where}: the base pose is not a sagittal one (x, z, pitch) "
+                                  f"of robot {robot.name!r} (off by {err:.3g} m)")
+    return q
+
+
+# ---------------------------------------------------------------------- csv
+def _write_csv(robot, motion, path, **_) -> None:
+    names, cols = _joint_columns(robot, motion.q)
+    base = [] if robot.base == "fixed" else [base_pose(robot, motion.q)]
+    head = ["time", *(BASE_COLUMNS if base else ()), *names]
+    data = np.column_stack([motion.t, *base, cols])
+    np.savetxt(path, data, delimiter=",", header=",".join(head), comments="", fmt="%.17g")
+
+
+def read_csv(path: str | Path, robot: Robot) -> Motion:
+    """Read a ``"csv"`` export back onto ``robot`` → :class:`Motion` (no contacts, v or a).
+
+    Raises :class:`~gdimitate.errors.FileFormatError` when the header's columns are not the
+    robot's (naming the missing and extra ones)."""
+    path = Path(path)
+    try:
+        head = path.read_text().splitlines()[0].split(",")
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except (OSError, IndexError, ValueError) as e:
+        raise FileFormatError(f"{path}: not a gdimitate CSV export ({e})") from None
+    names, _ = _joint_columns(robot, np.tile(robot.neutral, (1, 1)))
+    want = ["time", *(BASE_COLUMNS if robot.base != "fixed" else ()), *names]
+    if head != want:
+        raise FileFormatError(f"{path}: columns do not match robot {robot.name!r}: missing "
+                              f"{sorted(set(want) - set(head))}, extra "
+                              f"{sorted(set(head) - set(want))}")
+    nb = 7 if robot.base != "fixed" else 0
+    q = _q_from_columns(robot, data[:, 1:1 + nb] if nb else None, data[:, 1 + nb:], names, path)
+    return Motion(t=data[:, 0], joint_names=robot.joint_names, q=q,
+                  base_nq={"free": 7, "planar": 3}.get(robot.base, 0),
+                  joint_nq=tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints)))
+
+
+# ---------------------------------------------------------------------- npz
+def _write_npz(robot, motion, path, wrenches=None, **_) -> None:
+    extra = {}
+    if wrenches is not None:
+        for s in SIDES:
+            w = np.asarray(wrenches[s], dtype=float)
+            if w.shape != (motion.T, 6):
+                raise ExportError(f"wrenches[{s!r}] must have shape ({motion.T}, 6); got "
+                                  f"{w.shape}")
+            extra[f"wrench_{s}"] = w
+            c = robot.contacts.get(s)
+            extra[f"wrench_frame_{s}"] = np.array(c.frame if c else robot.legs[s].sole)
+    with open(path, "wb") as f:  # a file object: np.savez would append ".npz" to a name
+        motion.to_npz(f, robot=robot, extra=extra)
+
+
+def read_wrenches(path: str | Path) -> dict[str, np.ndarray] | None:
+    """The contact wrenches ``{side: (T, 6)}`` of an ``"npz"`` export, or None."""
+    from .safety import open_npz
+
+    with open_npz(path) as z:
+        if not all(f"wrench_{s}" in z.files for s in SIDES):
+            return None
+        return {s: z[f"wrench_{s}"] for s in SIDES}
+
+
+# ---------------------------------------------------------------------- mujoco
+@dataclass(frozen=True)
+class MujocoMotion:
+    """A ``"mujoco"`` export: ``time`` ``(T,)`` [s]; ``qpos`` ``(T, nq_mj)``; ``qvel``
+    ``(T, nv_mj)`` or None; ``joint_names`` (MuJoCo joint order); ``mjcf`` (the model's
+    MJCF text)."""
+
+    time: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray | None
+    joint_names: tuple[str, ...]
+    mjcf: str
+
+
+def _write_mujoco(robot, motion, path, **_) -> None:
+    import mujoco
+
+    from .sim import build_model
+
+    sim = build_model(robot)
+    qpos = np.array([sim.qpos_from_q(q) for q in motion.q])
+    arrays = dict(time=motion.t, qpos=qpos,
+                  joint_names=np.array([mujoco.mj_id2name(sim.mj, mujoco.mjtObj.mjOBJ_JOINT, i)
+                                        for i in range(sim.mj.njnt)]),
+                  mjcf=np.array(sim.spec.to_xml()))
+    if motion.v is not None:
+        arrays["qvel"] = np.array([sim.qvel_from_v(q, v) for q, v in zip(motion.q, motion.v)])
+    with open(path, "wb") as f:
+        np.savez(f, **arrays)
+
+
+def read_mujoco(path: str | Path) -> MujocoMotion:
+    """Read a ``"mujoco"`` export."""
+    from .safety import open_npz
+
+    with open_npz(path, ("time", "qpos", "joint_names", "mjcf")) as z:
+        return MujocoMotion(z["time"], z["qpos"], z["qvel"] if "qvel" in z.files else None,
+                            tuple(str(n) for n in z["joint_names"]), str(z["mjcf"]))
+
+
+# ---------------------------------------------------------------------- lafan1 csv
+def _resample(robot: Robot, motion: Motion, t: np.ndarray) -> np.ndarray:
+    """q ``(len(t), nq)`` at times ``t``: linear in every column, the base quaternion by
+    slerp between the neighbouring frames."""
+    q = np.column_stack([np.interp(t, motion.t, motion.q[:, i]) for i in range(motion.q.shape[1])])
+    k = np.clip(np.searchsorted(motion.t, t, side="right") - 1, 0, motion.T - 2)
+    u = (t - motion.t[k]) / (motion.t[k + 1] - motion.t[k])
+    for r, (i, ui) in enumerate(zip(k, u)):
+        a = pin.Quaternion(*motion.q[i, [6, 3, 4, 5]])
+        b = pin.Quaternion(*motion.q[i + 1, [6, 3, 4, 5]])
+        q[r, 3:7] = a.slerp(float(np.clip(ui, 0.0, 1.0)), b).normalized().coeffs()
+    return q
+
+
+def _write_lafan1(robot, motion, path, fps=30.0, **_) -> None:
+    if robot.base != "free":
+        raise ExportError(f"lafan1_csv holds a free-floating base; robot {robot.name!r} has a "
+                          f"{robot.base} base")
+    if not (np.isfinite(fps) and fps > 0):
+        raise ExportError(f"fps must be a positive number of frames per second; got {fps!r}")
+    n = int(np.floor((motion.t[-1] - motion.t[0]) * fps + 1e-9)) + 1
+    t = motion.t[0] + np.arange(n) / fps
+    q = _resample(robot, motion, t)
+    names, cols = _joint_columns(robot, q)
+    if any(robot.model.joints[robot.model.getJointId(j)].nq != 1 for j in names):
+        raise ExportError("lafan1_csv holds 1-DoF joints only")
+    np.savetxt(path, np.column_stack([q[:, :7], cols]), delimiter=",", fmt="%.17g")
+
+
+def read_lafan1_csv(path: str | Path, robot: Robot, fps: float = 30.0) -> Motion:
+    """Read a ``"lafan1_csv"`` file (ours or the dataset's) onto a free-flyer ``robot``
+    whose 1-DoF joints, in Pinocchio order, are the file's joint columns → :class:`Motion`
+    (``t = k / fps``, no contacts)."""
+    path = Path(path)
+    try:
+        data = np.loadtxt(path, delimiter=",", ndmin=2)
+    except (OSError, ValueError) as e:
+        raise FileFormatError(f"{path}: not a LAFAN1-style CSV of numbers ({e})") from None
+    names, _ = _joint_columns(robot, np.tile(robot.neutral, (1, 1)))
+    if robot.base != "free" or data.shape[1] != 7 + len(names):
+        raise FileFormatError(f"{path}: {data.shape[1]} columns; robot {robot.name!r} needs "
+                              f"7 + {len(names)} (free-flyer pose + its joints)")
+    q = _q_from_columns(robot, data[:, :7], data[:, 7:], names, path)
+    return Motion(t=np.arange(len(data)) / fps, joint_names=robot.joint_names, q=q, base_nq=7,
+                  joint_nq=tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints)))
