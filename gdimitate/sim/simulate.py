@@ -74,7 +74,8 @@ class SimMetrics:
     at their limit, ``torque_saturation_per_joint`` {joint: fraction}; ``joint_rmse`` [rad or
     m] RMS of simulated − planned actuated joint positions, ``joint_rmse_per_joint``;
     ``base_position_rmse`` [m]; ``qp_failures`` control steps whose QP failed (previous torques
-    kept); ``ms_per_step`` wall-clock milliseconds per simulation step (controller included).
+    kept); ``ms_per_step`` wall-clock and ``cpu_ms_per_step`` this process's CPU milliseconds
+    per simulation step (controller included; the CPU figure does not grow on a busy machine).
     """
 
     fell: bool
@@ -93,6 +94,7 @@ class SimMetrics:
     base_position_rmse: float
     qp_failures: int
     ms_per_step: float
+    cpu_ms_per_step: float
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (NaN → ``None``; per-stance slips as lists)."""
@@ -129,6 +131,7 @@ class SimMetrics:
             "joint_rmse_per_joint": num(self.joint_rmse_per_joint),
             "base_position_rmse_m": num(self.base_position_rmse),
             "qp_failures": self.qp_failures, "ms_per_step": num(self.ms_per_step),
+            "cpu_ms_per_step": num(self.cpu_ms_per_step),
         }
 
 
@@ -279,7 +282,7 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
     samples = ref.samples(t0 + control_period * np.arange(n_ctrl))
     base_body = sim.base_body
     fails = 0
-    wall = time.perf_counter()
+    wall, cpu = time.perf_counter(), time.process_time()
     steps = 0
     for k in range(n_ctrl):
         t = t0 + k * control_period
@@ -301,7 +304,8 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
             mujoco.mj_step(sim.mj, data)
             steps += 1
             t += dt
-    ms = 1e3 * (time.perf_counter() - wall) / max(steps, 1)
+    ms = (1e3 * (time.perf_counter() - wall) / max(steps, 1),
+          1e3 * (time.process_time() - cpu) / max(steps, 1))
     return _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, control_period)
 
 
@@ -394,7 +398,8 @@ def _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, period) -> 
         torque_saturation_per_joint={n: float(x) for n, x in zip(act_names, per)},
         joint_rmse=float(np.sqrt(np.mean(dqa**2))) if dqa.size else float("nan"),
         joint_rmse_per_joint={n: float(x) for n, x in zip(act_names, per_joint)},
-        base_position_rmse=base_err, qp_failures=int(fails), ms_per_step=float(ms))
+        base_position_rmse=base_err, qp_failures=int(fails), ms_per_step=float(ms[0]),
+        cpu_ms_per_step=float(ms[1]))
     mo = plan.motion
     return SimResult(
         t=t, q=rec.q, v=rec.v, tau=rec.tau,
