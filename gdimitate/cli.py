@@ -1,4 +1,5 @@
-"""The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``.
+"""The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``,
+``export``.
 
 Ctrl-C (SIGINT) and SIGTERM stop a command cleanly: every meshcat server it started is
 stopped, temporary files are removed, output files are written under a temporary name and
@@ -35,11 +36,92 @@ def _port(text: str) -> int:
     return p
 
 
+def _json_file(path: str | None, what: str):
+    """The JSON object in ``path`` (``--legs``/``--contacts``), or None."""
+    if path is None:
+        return None
+    from .errors import InvalidInputError
+
+    try:
+        value = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as e:
+        raise InvalidInputError(f"{what} {path}: not a readable JSON file ({e})") from None
+    if not isinstance(value, dict):
+        raise InvalidInputError(f"{what} {path}: expected a JSON object "
+                                '{"left": {...}, "right": {...}}')
+    return value
+
+
+def _robot(spec: str, a: argparse.Namespace):
+    """``Robot.load`` of a library name or a .urdf/.osim path with the command's
+    ``--package-dir``/``--contacts``/``--legs``."""
+    from .robot import Robot
+
+    return Robot.load(spec, package_dir=a.package_dir,
+                      contacts=_json_file(a.contacts, "--contacts"),
+                      legs=_json_file(a.legs, "--legs"))
+
+
+def _add_robot_args(p: argparse.ArgumentParser, flag: str, default: str | None,
+                    what: str) -> None:
+    from .library import list_robots
+
+    p.add_argument(flag, default=default,
+                   help=f"{what}: a library name ({', '.join(list_robots())}) or a .urdf/.osim "
+                        "path" + (" (default: %(default)s)" if default else ""))
+    p.add_argument("--package-dir", default=None,
+                   help=f"folder resolving the {flag[2:]} URDF's package:// meshes (default: "
+                        "the URDF's folder)")
+    p.add_argument("--legs", default=None, metavar="FILE.json",
+                   help=f"the {flag[2:]}'s legs where names don't tell them: "
+                        '{"left": {"hip": J, "knee": J, "ankle": J, "sole": FRAME}, "right": …}')
+    p.add_argument("--contacts", default=None, metavar="FILE.json",
+                   help=f"the {flag[2:]}'s sole rectangles: "
+                        '{"left": {"half_length": m, "half_width": m, "frame"?: F, "mu"?: x}, …}')
+
+
+def _add_demonstration_args(p: argparse.ArgumentParser, positional: str, default_note: str
+                            ) -> None:
+    p.add_argument(positional, nargs="?", default=None,
+                   help="demonstration: OpenSim .mot/.sto, .osim (with --coordinates), .bvh or "
+                        f"a gdimitate .npz (default: {default_note})")
+    p.add_argument("--grf", default=None,
+                   help="OpenSim ground-reaction-force .mot/.sto of a .mot/.sto/.osim "
+                        "demonstration (its ExternalLoads .xml is used when it lies beside it)")
+    p.add_argument("--coordinates", default=None,
+                   help="the .mot/.sto joint angles of an .osim demonstration")
+    p.add_argument("--osim", default=None,
+                   help="the OpenSim model of a full-body .mot/.sto demonstration")
+    p.add_argument("--demonstrator", default=None,
+                   help="robot of a .npz that records none (library name or .urdf path)")
+    p.add_argument("--treadmill", action="store_true",
+                   help="keep a treadmill trial's kinematics (default: turned overground "
+                        "when forces are given)")
+
+
+def _demonstration(path: str | None, a: argparse.Namespace):
+    """The command's demonstration (:func:`gdimitate.demonstration.load_demonstration`);
+    ``None`` → ``None``."""
+    if path is None:
+        return None
+    from .demonstration import load_demonstration
+    from .robot import Robot
+
+    robot = None
+    if a.osim is not None:
+        robot = Robot.from_osim(a.osim)
+    elif a.demonstrator is not None:
+        robot = Robot.load(a.demonstrator)
+    return load_demonstration(path, grf=a.grf, coordinates=a.coordinates, robot=robot,
+                              overground=not a.treadmill)
+
+
 def _cmd_demo(a: argparse.Namespace) -> None:
     from .demo import run_demo
 
+    imitator = _robot(a.imitator, a)
     with removed_on_failure(a.out):  # interrupted or failed: no half-written folder
-        run_demo(prepare_output_dir(a.out), imitator=a.imitator, method=a.method)
+        run_demo(prepare_output_dir(a.out), imitator=imitator, method=a.method)
 
 
 def _cmd_paper(a: argparse.Namespace) -> None:
@@ -48,38 +130,27 @@ def _cmd_paper(a: argparse.Namespace) -> None:
     run_paper(a.out)
 
 
-def _load_demonstration(path: str | None, demonstrator: str | None):
-    from .gait import human_walk, read_opensim
-    from .motion import Motion
-    from .robot import Robot
-
-    if path is None:
-        return human_walk()
-    p = Path(path)
-    if p.suffix == ".mot":
-        return read_opensim(p)
-    if p.suffix == ".npz":
-        if not demonstrator:
-            raise GdimitateError("a .npz motion needs --demonstrator ROBOT (its robot's name)")
-        return Robot.from_library(demonstrator), Motion.from_npz(p)
-    raise GdimitateError(f"unknown demonstration format {p.suffix!r}: use .mot (OpenSim) or "
-                         ".npz (gdimitate Motion)")
-
-
 def _cmd_adapt(a: argparse.Namespace) -> None:
     from .adapt import adapt
-    from .robot import Robot
+    from .gait import human_walk
 
     out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
-    robot, motion = _load_demonstration(a.demonstration, a.demonstrator)
-    imitator = Robot.from_library(a.imitator)
+    demo = _demonstration(a.demonstration, a)
+    if demo is None:
+        robot, motion = human_walk()
+        forces = None
+    else:
+        robot, motion, forces = demo.robot, demo.motion, demo.forces
+        print(f"read {demo.source}: {demo.note}", flush=True)
+    imitator = _robot(a.imitator, a)
     print(f"adapting {motion.T} frames of {robot.name} → {imitator.name} "
           f"(method={a.method}, force={a.force}) …", flush=True)
-    result = adapt(motion, robot, imitator, a.method, force=a.force)
+    options = {"forces": forces} if a.method == "optimal" and forces is not None else {}
+    result = adapt(motion, robot, imitator, a.method, force=a.force, **options)
     with atomic_write(out / "imitator_joints.csv") as tmp:
-        result.motion.to_csv(tmp)
+        result.save(tmp, "csv")
     with atomic_write(out / "imitator_motion.npz") as tmp:
-        result.motion.to_npz(tmp)
+        result.save(tmp, "npz")
     with atomic_write(out / "report.json") as tmp:
         tmp.write_text(json.dumps(result.report.to_dict(), indent=2))
     r = result.report
@@ -94,18 +165,15 @@ def _cmd_view(a: argparse.Namespace) -> None:
 
     from .examples import example
     from .metrics import force_direction, sagittal_angles
-    from .motion import Motion
-    from .robot import Robot
     from .viz import Viewer, compare
 
     live = a.html is None
     v = None
     try:
         if a.motion is not None:
-            if not a.robot:
-                raise GdimitateError("a motion file needs --robot NAME (the robot it belongs to)")
-            robot, motion = Robot.from_library(a.robot), Motion.from_npz(a.motion)
-            v = Viewer.start(a.port, a.open)
+            demo = _demonstration(a.motion, a)
+            robot, motion = demo.robot, demo.motion
+            v = Viewer.start(a.port, a.open and live, quiet=not live)
             v.show(robot, motion, force_directions=sagittal_angles(
                 force_direction(robot, motion)) if motion.contact else None)
             v.animate()
@@ -114,12 +182,14 @@ def _cmd_view(a: argparse.Namespace) -> None:
         else:
             print(f"building example {a.example!r} (method={a.method}) …", flush=True)
             ex = example(a.example, a.method)
-            v = compare(ex.demonstrator, ex.demonstration, ex.imitator, ex.adapted,
-                        layout=a.layout, html=a.html, port=a.port, open_browser=a.open,
-                        demo_force=sagittal_angles(
-                            force_direction(ex.demonstrator, ex.demonstration)),
-                        imitator_force=sagittal_angles(
-                            force_direction(ex.imitator, ex.adapted.motion)))
+            # a file only: the server is gone when the command ends, so no URL is printed
+            v = Viewer.start(a.port, a.open and live, quiet=not live)
+            compare(ex.demonstrator, ex.demonstration, ex.imitator, ex.adapted,
+                    layout=a.layout, html=a.html, viewer=v,
+                    demo_force=sagittal_angles(
+                        force_direction(ex.demonstrator, ex.demonstration)),
+                    imitator_force=sagittal_angles(
+                        force_direction(ex.imitator, ex.adapted.motion)))
         if a.html:
             print(f"wrote {a.html} (self-contained; open it in a browser, no network needed)")
         if live:
@@ -140,18 +210,16 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
     from .adapt import adapt
     from .cpg import entrain
     from .gait import human_walk
-    from .motion import Motion
-    from .robot import Robot
 
     if a.motion is not None:
-        if not a.robot:
-            raise GdimitateError("a motion file needs --robot NAME (the robot it belongs to)")
-        robot, motion = Robot.from_library(a.robot), Motion.from_npz(a.motion)
+        demo = _demonstration(a.motion, a)
+        robot, motion = demo.robot, demo.motion
     else:
-        print("no motion given: adapting the shipped real walk to hoap2 (Eq. 1) …", flush=True)
+        robot = _robot(a.robot or "hoap2", a)
+        print(f"no motion given: adapting the shipped real walk to {robot.name} "
+              f"(method={a.method}) …", flush=True)
         human, walk = human_walk()
-        robot = Robot.from_library(a.robot or "hoap2")
-        motion = adapt(walk, human, robot).motion
+        motion = adapt(walk, human, robot, a.method).motion
     out = prepare_output_dir(a.out)
     print(f"entraining a Matsuoka network to {robot.name}'s joints and base "
           f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
@@ -162,7 +230,7 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
     with atomic_write(out / "replay_joints.csv") as tmp:
         cpg.replay.to_csv(tmp)
     with atomic_write(out / "replay_motion.npz") as tmp:
-        cpg.replay.to_npz(tmp)
+        cpg.replay.to_npz(tmp, robot=robot)
     with atomic_write(out / "report.json") as tmp:
         tmp.write_text(json.dumps(
             {"robot": robot.name, "learned_frequency_hz": float(cpg.result.frequency),
@@ -175,43 +243,58 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
               f"frequency error after stop {r['freq_error_after'] * 100:5.2f} %")
 
 
+def _cmd_export(a: argparse.Namespace) -> None:
+    from .export import FORMATS, export_motion, read_wrenches
+
+    demo = _demonstration(a.motion, a)
+    wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
+    out = Path(a.out) if a.out else Path(a.motion).with_suffix(
+        {"csv": ".csv", "npz": ".export.npz", "mujoco": ".mujoco.npz",
+         "lafan1_csv": ".lafan1.csv"}[a.format])
+    with atomic_write(out) as tmp:
+        export_motion(demo.robot, demo.motion, tmp, a.format, wrenches=wrenches, fps=a.fps)
+    print(f"wrote {out} ({FORMATS[a.format]}; robot {demo.robot.name}, {demo.motion.T} frames)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
-    from .library import list_robots
-
     p = argparse.ArgumentParser(
         prog="gdimitate",
         description="Goal-directed imitation of rhythmic motion between robots of different "
                     "bodies (force-direction-preserving retargeting, CPG replay, meshcat).")
     sub = p.add_subparsers(dest="command", required=True)
+    methods = ["optimal", "analytic", "copy"]
+    method_help = ("adaptor: optimal (whole-body, contact-consistent, within the imitator's "
+                   "limits), analytic (the paper's Eq. 1, sagittal), copy (joint angles; the "
+                   "baseline) (default: %(default)s)")
     d = sub.add_parser("demo", help="the main job: real human walk → HOAP-2-sized imitator")
     d.add_argument("--out", default="gdimitate-demo", help="output folder (default: %(default)s)")
-    d.add_argument("--imitator", default="hoap2", choices=list_robots(),
-                   help="imitator robot (default: %(default)s)")
-    d.add_argument("--method", default="optimal", choices=["analytic", "copy", "optimal"],
-                   help="adaptor whose motion is entrained and shown (default: %(default)s)")
+    _add_robot_args(d, "--imitator", "hoap2", "imitator robot")
+    d.add_argument("--method", default="optimal", choices=methods, help=method_help)
     d.set_defaults(func=_cmd_demo)
     pp = sub.add_parser("paper", help="the paper's Figs. 4–13 (in spirit) + summary.json")
     pp.add_argument("--out", default="paper-out", help="output folder (default: %(default)s)")
     pp.set_defaults(func=_cmd_paper)
     ad = sub.add_parser("adapt", help="adapt a demonstration file for an imitator")
-    ad.add_argument("demonstration", nargs="?", default=None,
-                    help="OpenSim .mot or gdimitate .npz (default: the shipped real walk)")
-    ad.add_argument("--demonstrator", default=None, help="robot of a .npz motion")
-    ad.add_argument("--imitator", default="hoap2", choices=list_robots())
-    ad.add_argument("--method", default="analytic", choices=["analytic", "copy", "optimal"])
-    ad.add_argument("--force", default="segment", choices=["segment", "com", "grf"])
+    _add_demonstration_args(ad, "demonstration", "the shipped real walk, sagittal")
+    _add_robot_args(ad, "--imitator", "hoap2", "imitator robot")
+    ad.add_argument("--method", default="optimal", choices=methods, help=method_help)
+    ad.add_argument("--force", default="segment", choices=["segment", "com", "dynamics",
+                                                            "measured"],
+                    help="force-direction model of the goal: segment (hip→sole), com "
+                         "(CoM→sole), dynamics (from the motion), measured (the --grf forces) "
+                         "(default: %(default)s)")
     ad.add_argument("--out", default="gdimitate-adapt", help="output folder (default: %(default)s)")
     ad.set_defaults(func=_cmd_adapt)
     from .examples import EXAMPLES
 
     vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE")
-    vw.add_argument("motion", nargs="?", default=None, help="a gdimitate .npz motion (optional)")
-    vw.add_argument("--robot", default=None, help="robot of the motion file")
+    _add_demonstration_args(vw, "motion", "a built-in --example")
     vw.add_argument("--example", default="human-walk", choices=EXAMPLES,
                     help="built-in example when no motion file is given (default: %(default)s)")
-    vw.add_argument("--method", default="analytic", choices=["analytic", "copy", "optimal"])
-    vw.add_argument("--layout", default="side", choices=["side", "ghost"])
+    vw.add_argument("--method", default="optimal", choices=methods, help=method_help)
+    vw.add_argument("--layout", default="side", choices=["side", "ghost"],
+                    help="example: robots side by side or overlaid (default: %(default)s)")
     vw.add_argument("--html", default=None, help="write a self-contained HTML file and exit")
     vw.add_argument("--port", type=_port, default=None,
                     help="web port of the live viewer (1-65535; default: a free one)")
@@ -220,14 +303,34 @@ def build_parser() -> argparse.ArgumentParser:
                     help="stop the live viewer after this many seconds (default: Ctrl-C)")
     vw.set_defaults(func=_cmd_view)
     en = sub.add_parser("entrain", help="tune a Matsuoka network to a motion and replay it")
-    en.add_argument("motion", nargs="?", default=None,
-                    help="a gdimitate .npz motion (default: the real walk adapted to hoap2)")
-    en.add_argument("--robot", default=None, help="robot of the motion file")
+    _add_demonstration_args(en, "motion", "the real walk adapted to --robot")
+    _add_robot_args(en, "--robot", None, "robot the shipped walk is adapted to when no motion "
+                    "is given (default: hoap2)")
+    en.add_argument("--method", default="optimal", choices=methods, help=method_help)
     en.add_argument("--duration", type=float, default=None,
                     help="seconds of free-running replay (default: the motion's duration)")
     en.add_argument("--out", default="gdimitate-entrain",
                     help="output folder (default: %(default)s)")
     en.set_defaults(func=_cmd_entrain)
+    from .export import FORMATS
+
+    ex = sub.add_parser("export", help="write a motion as CSV, NPZ, MuJoCo qpos or the LAFAN1 "
+                        "CSV that motion-tracking pipelines read")
+    ex.add_argument("motion", help="a motion: gdimitate .npz (e.g. adapt's imitator_motion.npz)"
+                    ", or any demonstration file (.mot/.sto/.osim/.bvh)")
+    ex.add_argument("--format", default="csv", choices=list(FORMATS),
+                    help="; ".join(f"{k}: {v}" for k, v in FORMATS.items())
+                    + " (default: %(default)s)")
+    ex.add_argument("--out", default=None,
+                    help="output file (default: beside the motion, with the format's suffix)")
+    ex.add_argument("--fps", type=float, default=30.0,
+                    help="frame rate of lafan1_csv [Hz] (default: %(default)s)")
+    for flag, what in (("--grf", "forces of a .mot/.sto/.osim motion"),
+                       ("--coordinates", "joint angles of an .osim motion"),
+                       ("--osim", "OpenSim model of a full-body .mot/.sto"),
+                       ("--demonstrator", "robot of a .npz that records none")):
+        ex.add_argument(flag, default=None, help=what)
+    ex.set_defaults(func=_cmd_export, treadmill=False)
     return p
 
 

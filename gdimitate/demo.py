@@ -54,7 +54,7 @@ def _write_html(path: Path, demo_robot, demo, imit, adapted, cpg) -> str:
     return str(path)
 
 
-def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
+def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "hoap2",
              method: str = "optimal", log=print) -> dict[str, Any]:
     """Run the main job and write its files into ``out``; return the summary dict.
 
@@ -73,7 +73,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
         raise InvalidInputError(f"cannot write to output folder {out}: {e}") from None
     log("[1/6] loading the shipped real walk (OpenSim subject01, 60 Hz) …")
     demo_robot, demo = human_walk()
-    imit = Robot.from_library(imitator)
+    imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
     log(f"[2/6] adapting {demo_robot.name} (leg {demo_robot.legs['left'].length:.3f} m) → "
         f"{imit.name} (leg {imit.legs['left'].length:.3f} m), method={method} …")
     results = {"copy": adapt(demo, demo_robot, imit, "copy"),
@@ -84,7 +84,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str = "hoap2",
     rep = adapted.report
     log("[3/6] writing trajectories and plots …")
     adapted.motion.to_csv(out / "imitator_joints.csv")
-    adapted.motion.to_npz(out / "imitator_motion.npz")
+    adapted.motion.to_npz(out / "imitator_motion.npz", robot=imit)
     labels = {"optimal": "optimal adaptor", "analytic": "Eq. (1)", "copy": "joint copy"}
     tracks = [("human demonstrator", demo_robot, demo)] + [
         (f"{imit.name}, {labels[m]}", imit, results[m].motion)

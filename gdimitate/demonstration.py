@@ -86,8 +86,6 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
         raise DemonstrationFormatError(
             f"{p}: unknown demonstration format {p.suffix or '(no extension)'!r}; supported: "
             + "; ".join(f"{k} ({v})" for k, v in SUPPORTED.items()))
-    if not p.is_file():
-        raise DemonstrationFormatError(f"demonstration file not found: {p}")
     if coordinates is not None and suffix != ".osim":
         raise DemonstrationFormatError(f"coordinates= goes with an .osim model; {p} is "
                                        f"{suffix}")

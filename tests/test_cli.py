@@ -83,14 +83,16 @@ def test_console_script_help():
 def test_entrain_command(tmp_path, capsys):
     from gdimitate import Motion
 
-    assert main(["entrain", "--out", str(tmp_path), "--duration", "3"]) == 0
+    # Eq. (1) input: fast (the command's default is the optimal adaptor)
+    assert main(["entrain", "--out", str(tmp_path), "--duration", "3", "--method", "analytic"]
+                ) == 0
     rep = json.loads((tmp_path / "report.json").read_text())
     assert rep["robot"] == "hoap2" and 0.75 < rep["learned_frequency_hz"] < 0.87
     m = Motion.from_npz(tmp_path / "replay_motion.npz")
     assert m.t[-1] == pytest.approx(3.0, abs=0.02)
     assert "left_knee" in capsys.readouterr().out
     # the free-running replay stays in the taught range: the knee's span of the adapted walk
-    # (Eq. (1), the command's default input), ±10 % of that span
+    # (Eq. (1), the input asked for above), ±10 % of that span
     import gdimitate as gd
 
     human, walk = gd.gait.human_walk()
@@ -99,14 +101,19 @@ def test_entrain_command(tmp_path, capsys):
     margin = 0.1 * np.ptp(taught)
     assert taught.min() - margin <= replay.min() and replay.max() <= taught.max() + margin
     assert np.ptp(replay) > 0.8 * np.ptp(taught)  # and it really swings, not a damped copy
-    assert main(["entrain", str(tmp_path / "replay_motion.npz"), "--out", str(tmp_path)]) == 2
+    # the replay records its robot: read back without naming it
+    from gdimitate.demonstration import load_demonstration
+
+    assert load_demonstration(tmp_path / "replay_motion.npz").robot.name == "hoap2"
 
 
 def test_view_html_command(tmp_path):
     page = tmp_path / "case1.html"
-    assert main(["view", "--example", "case-I", "--html", str(page)]) == 0
+    assert main(["view", "--example", "case-I", "--method", "analytic", "--html", str(page)]
+                ) == 0
     from gdimitate.viz import network_references
 
     text = page.read_text()
     assert len(text) > 100_000 and not network_references(text)
-    assert main(["view", "--example", "case-I", "--html", str(tmp_path / "no" / "x.html")]) == 2
+    assert main(["view", "--example", "case-I", "--method", "analytic", "--html",
+                 str(tmp_path / "no" / "x.html")]) == 2
