@@ -1,5 +1,6 @@
 """The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``,
-``export``.
+``export``,
+``batch``.
 
 Ctrl-C (SIGINT) and SIGTERM stop a command cleanly: every meshcat server it started is
 stopped, temporary files are removed, output files are written under a temporary name and
@@ -243,6 +244,28 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
               f"frequency error after stop {r['freq_error_after'] * 100:5.2f} %")
 
 
+def _cmd_batch(a: argparse.Namespace) -> None:
+    from .batch import BatchOptions, run_batch
+
+    options = BatchOptions(a.imitator, method=a.method, force=a.force, simulate=a.simulate,
+                           demonstrator=a.demonstrator)
+    where = (f"Dask scheduler {a.address}" if a.address else
+             f"a local Dask cluster of {a.workers}" if a.executor == "dask" else
+             f"{a.workers} local")
+    print(f"batch: {a.input_dir} → {a.out} ({options.method}, imitator {options.imitator}; "
+          f"{where} worker process(es)) …", flush=True)
+    res = run_batch(a.input_dir, a.out, options, workers=a.workers, executor=a.executor,
+                    address=a.address, pattern=a.pattern, progress=not a.quiet)
+    print(f"{'file':<32} {'status':<8} {'feasible':<8} {'seconds':>8}  error")
+    for r in res.rows:
+        feas = "" if r.feasible is None else ("yes" if r.feasible else "no")
+        secs = "" if r.seconds is None else f"{r.seconds:.2f}"
+        print(f"{r.file:<32} {r.status:<8} {feas:<8} {secs:>8}  {r.error[:100]}")
+    counts = ", ".join(f"{len(res.by_status(s))} {s}" for s in ("done", "skipped", "failed"))
+    print(f"{counts}; {res.wall_s:.1f} s on {res.workers} worker(s), "
+          f"{res.files_per_second:.2f} files/s\nwrote {res.summary_csv}, {res.summary_json}")
+
+
 def _cmd_export(a: argparse.Namespace) -> None:
     from .export import FORMATS, export_motion, read_wrenches
 
@@ -331,6 +354,29 @@ def build_parser() -> argparse.ArgumentParser:
                        ("--demonstrator", "robot of a .npz that records none")):
         ex.add_argument(flag, default=None, help=what)
     ex.set_defaults(func=_cmd_export, treadmill=False)
+    ba = sub.add_parser("batch", help="adapt every demonstration file in a folder, in parallel "
+                        "(process pool or a Dask cluster), resumable, with a summary table")
+    ba.add_argument("input_dir", help="folder of demonstration files (.mot, .sto, .bvh, .npz)")
+    ba.add_argument("--imitator", required=True,
+                    help="imitator robot: a library name or a .urdf/.osim path")
+    ba.add_argument("--out", required=True, help="output folder (results + summary.csv/json)")
+    ba.add_argument("--method", default="optimal", choices=["analytic", "copy", "optimal"],
+                    help="adaptor (default: %(default)s; analytic: planar sagittal inputs)")
+    ba.add_argument("--force", default="segment",
+                    choices=["segment", "com", "dynamics", "measured"])
+    ba.add_argument("--simulate", action="store_true",
+                    help="also replay each result in MuJoCo (optimal method)")
+    ba.add_argument("--demonstrator", default=None,
+                    help="demonstrator model for inputs that need one (full-body .mot: the .osim)")
+    ba.add_argument("--workers", type=int, default=1,
+                    help="worker processes (process pool, local Dask cluster; default: 1)")
+    ba.add_argument("--executor", default="process", choices=["process", "dask"],
+                    help="process: a pool on this machine; dask: a Dask cluster")
+    ba.add_argument("--address", default=None,
+                    help="Dask scheduler to join (tcp://host:8786; default: a local cluster)")
+    ba.add_argument("--pattern", default="*", help="file-name glob in INPUT_DIR (default: *)")
+    ba.add_argument("--quiet", action="store_true", help="no progress bar")
+    ba.set_defaults(func=_cmd_batch)
     return p
 
 

@@ -181,3 +181,9 @@ class RobotMismatchError(InvalidInputError):
 class ExportError(InvalidInputError):
     """An export that cannot be written as asked (unknown format, a motion without the
     velocities or wrenches the format needs, a robot the format cannot describe)."""
+
+
+class BatchError(InvalidInputError):
+    """A batch that cannot start: an input folder that is missing or holds no demonstration
+    files, an output folder that is the input folder, a Dask scheduler out of reach or not
+    installed."""

@@ -1,0 +1,273 @@
+"""Run a folder of demonstrations through :func:`~gdimitate.batch.job.process_file` in
+parallel: a pool of local processes, or the workers of a Dask cluster.
+
+Why Dask (``dask.distributed``) and not Ray: it is a pure-Python install from PyPI
+(``pip install "dask[distributed]"``, about 3 MB with its dependencies) with no daemon to
+manage; the same :class:`distributed.Client` joins an existing scheduler
+(``tcp://host:8786``) or a :class:`distributed.LocalCluster` of worker processes started here,
+and each task is one function call with plain arguments (a path, a folder, frozen options).
+Ray's wheel is about 70 MB, starts a Redis-like control store and raylet per node and brings a
+dashboard and its own object store — more than a batch of independent files needs.
+
+On a cluster, the workers must see the input and output folders at the same paths (a shared
+file system): paths, not data, are sent to them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing as mp
+import os
+import secrets
+import signal
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import BatchError, UnknownNameError
+from .job import BatchOptions, BatchRow, load_robot, process_file, read_finished
+from .table import Progress, write_summary
+
+__all__ = ["EXECUTORS", "INPUT_SUFFIXES", "BatchResult", "find_inputs", "run_batch"]
+
+#: Where the files are processed: local worker processes, or a Dask cluster.
+EXECUTORS = ("process", "dask")
+#: Extensions of the demonstration files a batch picks up (``.osim`` models are not inputs
+#: on their own: pass one as ``BatchOptions.demonstrator``).
+INPUT_SUFFIXES = (".mot", ".sto", ".bvh", ".npz")
+
+Task = tuple[str, str, BatchOptions, str]  # (path, out_dir, options, name in the table)
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """A finished batch: ``rows`` (one :class:`BatchRow` per input, sorted by file name),
+    the summary files ``summary_csv``/``summary_json``, ``wall_s`` [s] (the whole run,
+    worker start included), ``executor``, ``workers`` (worker processes used)."""
+
+    rows: tuple[BatchRow, ...]
+    summary_csv: Path
+    summary_json: Path
+    wall_s: float
+    executor: str
+    workers: int
+
+    def by_status(self, status: str) -> tuple[BatchRow, ...]:
+        """The rows whose status is ``status`` (``"done"``, ``"skipped"``, ``"failed"``)."""
+        return tuple(r for r in self.rows if r.status == status)
+
+    @property
+    def files_per_second(self) -> float:
+        """Files adapted or failed in this run per second of :attr:`wall_s` (skipped files
+        excluded)."""
+        n = sum(r.status != "skipped" for r in self.rows)
+        return n / self.wall_s if self.wall_s > 0 else 0.0
+
+
+def find_inputs(input_dir: str | os.PathLike, pattern: str = "*") -> tuple[Path, ...]:
+    """The demonstration files directly in ``input_dir`` matching the glob ``pattern``, with
+    an extension in :data:`INPUT_SUFFIXES` (hidden files excluded), sorted by name.
+
+    Raises :class:`BatchError` when the folder does not exist or holds no such file."""
+    d = Path(input_dir).expanduser()
+    if not d.is_dir():
+        raise BatchError(f"input folder {d} does not exist or is not a folder")
+    files = sorted(p for p in d.glob(pattern) if p.is_file() and not p.name.startswith(".")
+                   and p.suffix.lower() in INPUT_SUFFIXES)
+    if not files:
+        raise BatchError(f"no demonstration files matching {pattern!r} in {d} (extensions "
+                         f"read: {', '.join(INPUT_SUFFIXES)})")
+    return tuple(files)
+
+
+def _failed(task: Task, why: str) -> BatchRow:
+    path, _, options, name = task
+    return BatchRow(file=name, output="", status="failed", method=options.method,
+                    imitator=options.imitator, error=why)
+
+
+# ------------------------------------------------------------------------- process pool
+def _worker_init() -> None:
+    # Ctrl-C reaches the whole foreground process group: the workers leave it to the parent,
+    # which stops them (terminate) after cancelling what is queued.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _context() -> mp.context.BaseContext:
+    # forkserver: workers fork from a clean server that imported gdimitate once (not from this
+    # process and its threads); spawn where there is none (Windows, macOS without it).
+    if "forkserver" in mp.get_all_start_methods():
+        ctx = mp.get_context("forkserver")
+        ctx.set_forkserver_preload(["gdimitate.batch.job"])
+        return ctx
+    return mp.get_context("spawn")
+
+
+def _stop_pool(ex: ProcessPoolExecutor) -> None:
+    """Cancel queued work and end the worker processes now (no orphans)."""
+    stop = getattr(ex, "terminate_workers", None)  # Python >= 3.14
+    if callable(stop):
+        stop()
+        return
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    for p in procs:
+        p.join(5)
+        if p.is_alive():
+            p.kill()
+            p.join(1)
+
+
+def _run_process(tasks: Sequence[Task], workers: int, on_row: Callable[[BatchRow], None]
+                 ) -> int:
+    ex = ProcessPoolExecutor(max_workers=workers, mp_context=_context(),
+                             initializer=_worker_init)
+    finished = False
+    try:
+        futures = {ex.submit(process_file, *t): t for t in tasks}
+        for f in as_completed(futures):
+            try:
+                row = f.result()
+            except Exception as e:  # noqa: BLE001 — a worker that died (BrokenProcessPool)
+                row = _failed(futures[f], f"{type(e).__name__}: {e} (a worker process died; "
+                              "rerun the batch: finished files are skipped)")
+            on_row(row)
+        finished = True
+    finally:
+        if not finished:
+            _stop_pool(ex)
+        ex.shutdown(wait=True, cancel_futures=True)
+    return workers
+
+
+# ------------------------------------------------------------------------- Dask
+def _dask():
+    try:
+        import distributed
+    except ImportError:
+        raise BatchError("executor 'dask' needs dask.distributed: pip install "
+                         "'dask[distributed]'") from None
+    return distributed
+
+
+def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
+              on_row: Callable[[BatchRow], None]) -> int:
+    distributed = _dask()
+    cluster = None
+    if address is None:  # a cluster of `workers` processes on this machine, for this batch
+        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
+                                           processes=True, host="127.0.0.1",
+                                           dashboard_address=None)
+        address = cluster.scheduler_address
+    try:
+        try:
+            client = distributed.Client(address, timeout="20s")
+        except (OSError, TimeoutError) as e:
+            raise BatchError(f"cannot reach the Dask scheduler at {address!r}: {e} (start one "
+                             "with `dask scheduler` and workers with `dask worker ADDRESS`, "
+                             "or leave --address out for a local cluster)") from None
+        finished = False
+        futures = []
+        try:
+            n = len(client.scheduler_info().get("workers", {}))
+            token = secrets.token_hex(4)
+            futures = [client.submit(process_file, *t, key=f"gdimitate-batch-{token}-{i}",
+                                     pure=False) for i, t in enumerate(tasks)]
+            task_of = {f.key: t for f, t in zip(futures, tasks)}
+            for f in distributed.as_completed(futures):
+                try:
+                    row = f.result()
+                except Exception as e:  # noqa: BLE001 — KilledWorker, lost connection
+                    row = _failed(task_of[f.key], f"{type(e).__name__}: {e}")
+                on_row(row)
+            finished = True
+        finally:
+            if not finished and futures:
+                with contextlib.suppress(Exception):
+                    client.cancel(futures)
+            client.close()
+    finally:
+        if cluster is not None:
+            cluster.close()
+    return n
+
+
+# ------------------------------------------------------------------------- the batch
+def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
+              options: BatchOptions, *, workers: int = 1, executor: str = "process",
+              address: str | None = None, pattern: str = "*",
+              progress: bool = True) -> BatchResult:
+    """Adapt every demonstration file in ``input_dir`` (:func:`find_inputs`) for
+    ``options.imitator`` and write the results and a summary table into ``out_dir``.
+
+    - ``workers``: worker processes (``"process"``, and a local Dask cluster);
+    - ``executor``: ``"process"`` (a pool on this machine) or ``"dask"`` (``address``:
+      ``"tcp://host:port"`` of a running Dask scheduler, whose workers are used; ``None``: a
+      local cluster of ``workers`` processes, started and stopped here);
+    - resumable: a file whose output exists, is complete and was made with the same options
+      is skipped (its row is kept, status ``"skipped"``); a file that fails becomes a
+      ``"failed"`` row and the others go on; an interrupt (Ctrl-C) stops the workers, writes
+      the summary of what finished and propagates;
+    - ``progress``: a progress bar on stderr.
+
+    Writes ``<input>.<imitator>.<method>.npz`` (+ ``.json`` record) per file and
+    ``summary.csv``/``summary.json``. Raises :class:`BatchError` (no inputs, an output folder
+    that is the input folder, a scheduler out of reach), :class:`UnknownNameError` (executor;
+    :class:`~gdimitate.errors.UnknownRobotError` for the imitator, before any work),
+    :class:`~gdimitate.errors.OutputError` (an output folder that cannot be written).
+    """
+    from ..safety import check_count, prepare_output_dir
+
+    if executor not in EXECUTORS:
+        raise UnknownNameError("executor", executor, EXECUTORS)
+    workers = check_count("workers", workers, 1, 1024)
+    if address is not None and executor != "dask":
+        raise BatchError(f"address= is for executor 'dask' (a Dask scheduler); executor "
+                         f"{executor!r} runs on this machine")
+    if executor == "dask":
+        _dask()
+    for spec in (options.imitator, options.demonstrator):
+        if spec:  # a wrong name or model fails here, before any worker starts
+            load_robot(spec)
+    files = find_inputs(input_dir, pattern)
+    out = prepare_output_dir(out_dir)
+    if out.resolve() == Path(input_dir).expanduser().resolve():
+        raise BatchError(f"the output folder {out} is the input folder: give another --out "
+                         "(the results would be read as inputs next time)")
+    start = time.perf_counter()
+    rows: dict[str, BatchRow] = {}
+    bar = Progress(len(files), enabled=progress)
+    tasks: list[Task] = []
+    for f in files:
+        row = read_finished(f, out, options)
+        if row is None:
+            tasks.append((str(f), str(out), options, f.name))
+        else:
+            rows[f.name] = row
+            bar.update(row)
+
+    def on_row(row: BatchRow) -> None:
+        rows[row.file] = row
+        bar.update(row)
+
+    used = workers
+    meta = {"executor": executor, "address": address, "workers": workers,
+            "options": options.key(), "inputs": len(files)}
+    complete = False
+    try:
+        if tasks and executor == "process":
+            used = _run_process(tasks, min(workers, len(tasks)), on_row)
+        elif tasks:
+            used = _run_dask(tasks, workers, address, on_row)
+        complete = True
+    finally:
+        wall = time.perf_counter() - start
+        ordered = tuple(rows[f.name] for f in files if f.name in rows)
+        meta.update(workers=used, wall_s=wall, complete=complete)
+        csv_path, json_path = write_summary(ordered, out, meta)
+    return BatchResult(rows=ordered, summary_csv=csv_path, summary_json=json_path,
+                       wall_s=wall, executor=executor, workers=used)

@@ -1,0 +1,271 @@
+"""gdimitate.batch: a folder of demonstrations through a process pool and a real local Dask
+cluster (2 workers). The reference for every number is the same file adapted directly in this
+process with ``gd.adapt`` (and ``gd.sim.simulate``): a batch must reproduce it exactly."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import psutil
+import pytest
+
+import gdimitate as gd
+from gdimitate.batch import BatchOptions, BatchRow, output_paths, process_file, run_batch
+from gdimitate.errors import (
+    BatchError,
+    InvalidInputError,
+    UnknownNameError,
+    UnknownRobotError,
+)
+
+ANALYTIC = BatchOptions("hoap2", method="analytic")
+
+
+def _mot_slices(folder: Path, starts: list[int], rows: int, prefix: str = "walk") -> list[Path]:
+    """Slices of the shipped sagittal walk (60 Hz) as OpenSim .mot files."""
+    lines = gd.gait.human_walk_path().read_text().splitlines()
+    end = next(i for i, line in enumerate(lines) if line.strip().lower() == "endheader")
+    head, data = lines[: end + 2], [line for line in lines[end + 2:] if line.strip()]
+    out = []
+    for k, s in enumerate(starts):
+        p = folder / f"{prefix}{k}.mot"
+        p.write_text("\n".join(head + data[s: s + rows]) + "\n")
+        out.append(p)
+    return out
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("demos")
+    _mot_slices(d, [0, 30, 60], 60)
+    (d / "broken.mot").write_text("not an OpenSim file\n")
+    (d / "notes.txt").write_text("not a demonstration: ignored\n")
+    return d
+
+
+def _direct(path: Path, method: str = "analytic"):
+    robot, motion = gd.gait.read_opensim(path)
+    return gd.adapt(motion, robot, gd.Robot.from_library("hoap2"), method, verbose=False) \
+        if method == "optimal" else gd.adapt(motion, robot, gd.Robot.from_library("hoap2"),
+                                             method)
+
+
+def _check_against_direct(res, inputs: Path, out: Path) -> None:
+    done = res.by_status("done") + res.by_status("skipped")
+    assert sorted(r.file for r in done) == ["walk0.mot", "walk1.mot", "walk2.mot"]
+    for r in done:
+        ref = _direct(inputs / r.file)
+        got = gd.Motion.from_npz(out / r.output)
+        assert got.joint_names == ref.motion.joint_names
+        np.testing.assert_array_equal(got.t, ref.motion.t)
+        np.testing.assert_allclose(got.q, ref.motion.q, rtol=0, atol=1e-12)
+        for s in ("left", "right"):
+            np.testing.assert_array_equal(got.contact[s], ref.motion.contact[s])
+        rep = ref.report
+        assert r.feasible == ref.feasible
+        assert r.frames == ref.motion.T == 60
+        assert r.infeasible_frames == sum(rep.infeasible_frames.values())
+        assert r.force_direction_error_max_rad == pytest.approx(rep.force_direction_error_max,
+                                                                abs=1e-12)
+        assert r.joint_limit_violation_max_rad == pytest.approx(rep.joint_limit_violation_max,
+                                                                abs=1e-12)
+        assert r.ground_penetration_max_m == pytest.approx(rep.ground_penetration_max,
+                                                           abs=1e-12)
+        assert r.audit_binding is None and r.sim_fell is None  # not applicable here
+    (bad,) = res.by_status("failed")
+    assert bad.file == "broken.mot" and bad.output == ""
+    assert bad.error.startswith("InvalidInputError") and "endheader" in bad.error
+
+
+def _read_csv(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_process_pool_batch_matches_direct_adaptation(inputs, tmp_path, capsys):
+    out = tmp_path / "out"
+    res = run_batch(inputs, out, ANALYTIC, workers=2)
+    assert [r.file for r in res.rows] == ["broken.mot", "walk0.mot", "walk1.mot", "walk2.mot"]
+    _check_against_direct(res, inputs, out)
+    # the files ran in worker processes (not here), at most 2 of them, all ended now
+    pids = {int(r.worker.rsplit(":", 1)[1]) for r in res.rows}
+    assert os.getpid() not in pids and 1 <= len(pids) <= 2 and res.workers == 2
+    time.sleep(0.5)
+    assert not [p for p in pids if psutil.pid_exists(p)
+                and psutil.Process(p).status() != psutil.STATUS_ZOMBIE]
+    # summary table: CSV and JSON hold the same rows as the result
+    table = _read_csv(res.summary_csv)
+    assert [t["file"] for t in table] == [r.file for r in res.rows]
+    assert list(table[0]) == list(BatchRow.columns())
+    for t, r in zip(table, res.rows):
+        assert t["status"] == r.status and t["error"] == r.error
+        if r.status == "done":
+            assert float(t["force_direction_error_max_rad"]) == r.force_direction_error_max_rad
+            assert float(t["seconds"]) == r.seconds > 0
+            assert t["feasible"] == str(r.feasible) and t["sim_fell"] == ""
+    js = json.loads(res.summary_json.read_text())
+    assert js["rows"] == [r.to_dict() for r in res.rows]
+    assert js["meta"]["complete"] is True and js["meta"]["inputs"] == 4
+    # a progress line per file on stderr (not a terminal here)
+    err = capsys.readouterr().err
+    assert err.count(" files ") == 4 and "4/4 files  1 failed" in err
+
+
+def test_resume_skips_finished_outputs_and_retries_the_rest(inputs, tmp_path):
+    out = tmp_path / "out"
+    first = run_batch(inputs, out, ANALYTIC, workers=1, progress=False)
+    stamps = {r.file: (out / r.output).stat().st_mtime_ns for r in first.by_status("done")}
+    again = run_batch(inputs, out, ANALYTIC, workers=1, progress=False)
+    assert [r.status for r in again.rows] == ["failed", "skipped", "skipped", "skipped"]
+    for r, r0 in zip(again.rows[1:], first.rows[1:]):  # the earlier run's row, kept
+        assert r.seconds == r0.seconds and r.feasible == r0.feasible
+        assert (out / r.output).stat().st_mtime_ns == stamps[r.file]
+    # incomplete outputs are redone: an NPZ without its record (interrupted before the record
+    # was renamed into place), a corrupt record, a record of other options
+    npz1, rec1 = output_paths(inputs / "walk1.mot", out, ANALYTIC)
+    rec1.unlink()
+    _, rec2 = output_paths(inputs / "walk2.mot", out, ANALYTIC)
+    rec2.write_text("{not json")
+    third = run_batch(inputs, out, ANALYTIC, workers=1, progress=False)
+    assert [r.status for r in third.rows] == ["failed", "skipped", "done", "done"]
+    _check_against_direct(third, inputs, out)
+    assert not list(out.glob(".*.tmp*"))  # atomic writes leave no temporary files
+    # other options: other outputs, nothing reused
+    copy = run_batch(inputs, out, BatchOptions("hoap2", method="copy"), workers=1,
+                     progress=False)
+    assert [r.status for r in copy.rows] == ["failed", "done", "done", "done"]
+    assert npz1.is_file() and all(r.output.endswith(".hoap2.copy.npz")
+                                  for r in copy.by_status("done"))
+
+
+def test_local_dask_cluster_two_workers(inputs, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        worker_pids = set(client.run(os.getpid).values())
+        assert len(worker_pids) == 2
+        out = tmp_path / "dask"
+        res = run_batch(inputs, out, ANALYTIC, executor="dask",
+                        address=cluster.scheduler_address, progress=False)
+        assert res.workers == 2 and res.executor == "dask"
+        _check_against_direct(res, inputs, out)
+        used = {int(r.worker.rsplit(":", 1)[1]) for r in res.rows}
+        assert used <= worker_pids  # every file ran on the cluster's workers
+        js = json.loads(res.summary_json.read_text())
+        assert js["meta"]["address"] == cluster.scheduler_address
+
+
+def test_optimal_with_simulation_row_matches_direct_run(tmp_path):
+    (path,) = _mot_slices(tmp_path, [0], 40)
+    opts = BatchOptions("hoap2", method="optimal", simulate=True)
+    row = process_file(path, tmp_path, opts)
+    assert row.status == "done", row.error
+    ref = _direct(path, "optimal")
+    a = ref.audit
+    assert row.feasible == ref.feasible == bool(a.feasible)
+    assert row.audit_binding == ";".join(a.binding)
+    assert row.torque_ratio_max == pytest.approx(max(j.torque_ratio for j in a.joints
+                                                     if np.isfinite(j.torque_ratio)), rel=1e-9)
+    assert row.base_residual_max == pytest.approx(a.base_residual.value, abs=1e-9)
+    assert row.penetration_max_m == pytest.approx(a.penetration.depth, abs=1e-12)
+    assert row.cop_margin_min_m == pytest.approx(min(f.cop.value for f in a.feet.values()
+                                                     if f.stance_knots), abs=1e-12)
+    m = gd.sim.simulate(ref.robot, ref).metrics
+    assert row.sim_fell == m.fell and row.sim_qp_failures == m.qp_failures
+    assert row.sim_slip_max_m == pytest.approx(m.slip_max, abs=1e-9)
+    assert row.sim_joint_rmse == pytest.approx(m.joint_rmse, abs=1e-9)
+    # the NPZ carries the plan: Motion.from_npz reads it; v, a and wrenches ride along
+    npz, _ = output_paths(path, tmp_path, opts)
+    np.testing.assert_allclose(gd.Motion.from_npz(npz).q, ref.motion.q, atol=1e-9)
+    with np.load(npz) as z:
+        np.testing.assert_allclose(z["v"], ref.motion.v, atol=1e-9)
+        np.testing.assert_allclose(z["wrench_left"], ref.wrenches["left"], atol=1e-6)
+
+
+def test_bad_options_and_folders(inputs, tmp_path):
+    with pytest.raises(InvalidInputError, match="needs method='optimal'"):
+        BatchOptions("hoap2", method="analytic", simulate=True)
+    with pytest.raises(UnknownNameError, match="valid methods"):
+        BatchOptions("hoap2", method="fast")
+    with pytest.raises(UnknownNameError, match="valid executors: 'process', 'dask'"):
+        run_batch(inputs, tmp_path / "o", ANALYTIC, executor="ray")
+    with pytest.raises(BatchError, match="address= is for executor 'dask'"):
+        run_batch(inputs, tmp_path / "o", ANALYTIC, address="tcp://127.0.0.1:8786")
+    with pytest.raises(UnknownRobotError, match="hoap2"):
+        run_batch(inputs, tmp_path / "o", BatchOptions("no_such_robot", method="analytic"))
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(BatchError, match="no demonstration files"):
+        run_batch(tmp_path / "empty", tmp_path / "o", ANALYTIC)
+    with pytest.raises(BatchError, match="does not exist"):
+        run_batch(tmp_path / "missing", tmp_path / "o", ANALYTIC)
+    with pytest.raises(BatchError, match="is the input folder"):
+        run_batch(inputs, inputs, ANALYTIC)
+    with pytest.raises(InvalidInputError, match="workers must be >= 1"):
+        run_batch(inputs, tmp_path / "o", ANALYTIC, workers=0)
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def _session_processes(sid: int) -> list[psutil.Process]:
+    alive = []
+    for p in psutil.process_iter(["pid", "status"]):
+        try:
+            if os.getsid(p.pid) == sid and p.info["status"] != psutil.STATUS_ZOMBIE:
+                alive.append(p)
+        except (ProcessLookupError, PermissionError, psutil.Error):
+            pass
+    return alive
+
+
+@pytest.mark.slow
+def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path):
+    demos = tmp_path / "demos"
+    demos.mkdir()
+    _mot_slices(demos, [0, 10, 20, 30, 40, 50, 60, 70], 40)
+    out = tmp_path / "out"
+    err = tmp_path / "stderr.txt"
+    with open(err, "w") as fe:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "gdimitate.cli", "batch", str(demos), "--imitator", "hoap2",
+             "--out", str(out), "--workers", "2"], stdout=subprocess.DEVNULL, stderr=fe,
+            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 90
+        while "1/8 files" not in err.read_text() and time.monotonic() < deadline:
+            assert proc.poll() is None, err.read_text()
+            time.sleep(0.1)
+        assert "1/8 files" in err.read_text(), "no file finished in 90 s"
+        kids = psutil.Process(proc.pid).children(recursive=True)
+        workers = [c.pid for c in kids if c.ppid() != proc.pid]  # the fork server's children
+        assert len(workers) >= 2, [c.cmdline() for c in kids]
+        os.kill(proc.pid, signal.SIGINT)
+        rc = proc.wait(30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert rc == 130, err.read_text()
+    assert "interrupted" in err.read_text()
+    assert not [w for w in workers if psutil.pid_exists(w)
+                and psutil.Process(w).status() != psutil.STATUS_ZOMBIE]  # stopped, not left
+    # no orphan: the workers were ended; the fork server exits once it sees its parent gone
+    # (it unloads gdimitate's native libraries first, which can take a second)
+    deadline = time.monotonic() + 15
+    while _session_processes(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not _session_processes(proc.pid)
+    js = json.loads((out / "summary.json").read_text())
+    assert js["meta"]["complete"] is False
+    done = [r for r in js["rows"] if r["status"] == "done"]
+    assert 1 <= len(done) < 8
+    for r in done:  # what finished is complete and readable; nothing half-written remains
+        t = gd.Motion.from_npz(out / r["output"]).t  # the optimal method's 50 Hz knots
+        assert abs(t[-1] - t[0] - r["duration_s"]) <= 1 / 50 + 1e-9
+    assert not list(out.glob(".*.tmp*"))
