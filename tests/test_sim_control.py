@@ -157,6 +157,7 @@ def test_weight_shift_follows_the_plan(robots):
     assert pl.max() - pl.min() > 0.3 * mg  # a real weight shift
     assert np.corrcoef(fl, pl)[0, 1] > 0.98
     assert np.sqrt(np.mean((fl - pl) ** 2)) < 0.05 * mg
+    assert max(mt.plan_stance_foot_speed_max.values()) < 1e-3  # IK kept the feet still
     com_err = np.linalg.norm(robot.com(res.q) - robot.com(res.plan_q), axis=1)
     assert com_err.max() < 0.01
     for s in SIDES:

@@ -95,26 +95,29 @@ def _ik(robot: Robot, q: np.ndarray, com: np.ndarray, feet: dict, base_rot: np.n
         pin.updateFramePlacements(m, d)
         c = pin.centerOfMass(m, d, q)
         Jc = pin.jacobianCenterOfMass(m, d, q, False)
-        rows, errs = [Jc], [com - c]
+        rows, errs = [Jc[:2]], [(com - c)[:2]]  # horizontal only: height is free
         for s in SIDES:
             rows.append(pin.getFrameJacobian(m, d, fids[s], _LOCAL))
             errs.append(pin.log6(d.oMf[fids[s]].actInv(feet[s])).vector)
         rows.append(pin.getJointJacobian(m, d, bid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[3:])
         errs.append(pin.log3(base_rot @ d.oMi[bid].rotation.T))
         J, e = np.vstack(rows), np.concatenate(errs)
-        dq = J.T @ np.linalg.solve(J @ J.T + 1e-8 * np.eye(J.shape[0]), e)
+        dq = J.T @ np.linalg.solve(J @ J.T + 1e-6 * np.eye(J.shape[0]), e)
         q = pin.integrate(m, q, dq)
     return q
 
 
 def sway_plan(robot: Robot, duration: float, amplitude: float, period: float,
               rate: float = 100.0, axis: int | None = None) -> Plan:
-    """Sway the centre of mass along world ``axis`` (default: y, or x for planar models) as
-    ``c = c₀ + amplitude · (1 − cos(2πt/period))/2`` [m] (out to ``amplitude`` and back each
-    period, starting at rest), feet and base orientation fixed, both feet in stance."""
+    """Sway the centre of mass along world ``axis`` (0 or 1; default: y, or x for planar
+    models) as ``c = c₀ + amplitude · (1 − cos(2πt/period))/2`` [m] (out to ``amplitude`` and
+    back each period, starting at rest), feet and base orientation fixed, the CoM height left
+    free (straight knees make it singular), both feet in stance."""
     if not (duration > 0 and period > 0):
         raise SimulationError("duration and period must be > 0 s")
     ax = (0 if robot.base == "planar" else 1) if axis is None else int(axis)
+    if ax not in (0, 1):
+        raise SimulationError(f"axis must be 0 (x) or 1 (y); got {axis!r}")
     t = np.arange(0.0, duration + 0.5 / rate, 1.0 / rate)
     m, d = robot.model, robot.model.createData()
     q0 = robot.neutral.copy()

@@ -75,7 +75,11 @@ class SimMetrics:
     m] RMS of simulated − planned actuated joint positions, ``joint_rmse_per_joint``;
     ``base_position_rmse`` [m]; ``qp_failures`` control steps whose QP failed (previous torques
     kept); ``ms_per_step`` wall-clock and ``cpu_ms_per_step`` this process's CPU milliseconds
-    per simulation step (controller included; the CPU figure does not grow on a busy machine).
+    per simulation step (controller included; the CPU figure does not grow on a busy machine);
+    ``plan_stance_foot_speed_max`` {side: [m/s]} the plan's own largest sole speed at a knot
+    where it says that foot is in stance (a held foot cannot move: a plan whose stance foot
+    moves — e.g. takes off during its last stance knot — asks the floor for a push that no
+    foot on the floor gets).
     """
 
     fell: bool
@@ -95,6 +99,7 @@ class SimMetrics:
     qp_failures: int
     ms_per_step: float
     cpu_ms_per_step: float
+    plan_stance_foot_speed_max: dict[str, float]
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (NaN → ``None``; per-stance slips as lists)."""
@@ -132,6 +137,7 @@ class SimMetrics:
             "base_position_rmse_m": num(self.base_position_rmse),
             "qp_failures": self.qp_failures, "ms_per_step": num(self.ms_per_step),
             "cpu_ms_per_step": num(self.cpu_ms_per_step),
+            "plan_stance_foot_speed_max_m_s": num(self.plan_stance_foot_speed_max),
         }
 
 
@@ -306,7 +312,8 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
             t += dt
     ms = (1e3 * (time.perf_counter() - wall) / max(steps, 1),
           1e3 * (time.process_time() - cpu) / max(steps, 1))
-    return _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, control_period)
+    return _finish(robot, sim, plan, ref, rec, demo_forces, fall, fails, ms, dt,
+                   control_period)
 
 
 class _Recorder:
@@ -357,7 +364,17 @@ class _Recorder:
         self.n = n
 
 
-def _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, period) -> SimResult:
+def _stance_speed(plan, ref: Reference) -> dict[str, float]:
+    out = {}
+    for s in SIDES:
+        st = plan.motion.contact[s]
+        speed = np.linalg.norm(ref.foot_va[s][:, 0, :3], axis=1)
+        out[s] = float(speed[st].max()) if st.any() else 0.0
+    return out
+
+
+def _finish(robot, sim, plan, ref, rec, demo_forces, fall, fails, ms, dt, period
+            ) -> SimResult:
     m = robot.model
     t = rec.t
     ft, reason = fall_time(t, rec.height, rec.plan_height, rec.tilt, fall)
@@ -399,7 +416,8 @@ def _finish(robot, sim, plan, rec, demo_forces, fall, fails, ms, dt, period) -> 
         joint_rmse=float(np.sqrt(np.mean(dqa**2))) if dqa.size else float("nan"),
         joint_rmse_per_joint={n: float(x) for n, x in zip(act_names, per_joint)},
         base_position_rmse=base_err, qp_failures=int(fails), ms_per_step=float(ms[0]),
-        cpu_ms_per_step=float(ms[1]))
+        cpu_ms_per_step=float(ms[1]),
+        plan_stance_foot_speed_max=_stance_speed(plan, ref))
     mo = plan.motion
     return SimResult(
         t=t, q=rec.q, v=rec.v, tau=rec.tau,
