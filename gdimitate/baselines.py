@@ -17,11 +17,14 @@ output:
 - :func:`diff_ik` — a per-frame kinematic retargeter of the kind today's humanoid tools use
   (differential inverse kinematics on scaled keypoints with joint limits, built on Pink,
   S. Caron et al., https://github.com/stephane-caron/pink): per frame, frame tasks on the
-  imitator's pelvis, torso, knees and soles towards the demonstrator's keypoints scaled by the
-  leg-length ratio about the point under the demonstrator's start (the floor stays at z = 0);
-  a stance foot's target is held, flat on the floor, where it landed; a posture task towards
-  the neutral pose; position and velocity limits; one QP (DAQP) per iteration, the velocity
-  integrated over the frame period.
+  imitator's pelvis and torso (orientation), hips and knees (position) and soles (pose)
+  towards the demonstrator's keypoints scaled by the leg-length ratio about the point under
+  the demonstrator's start (the floor stays at z = 0); a stance foot is held, flat on the
+  floor (z = 0, yaw only), where it was when it touched down — by the QP's equality
+  constraints once it is there (by cost on the touchdown frame, and where the constraints
+  leave the QP without a solution); a posture task towards the neutral pose; Pink's position
+  and velocity limits; a few QPs (DAQP) per frame, each velocity integrated over its share of
+  the frame period.
 
 Both give a :class:`BaselinePlan`: ``motion`` with ``v``, ``a`` (central differences,
 :func:`gdimitate.motion.differentiate`) and the demonstrator's stance schedule, and the
@@ -85,7 +88,9 @@ class IKOptions:
     towards the imitator's neutral pose; ``iterations``: QP iterations per frame, each
     integrating over ``frame period / iterations``, and more, up to ``max_iterations``, while
     a stance foot is farther than ``tolerance`` [-] (the norm of its pose error, m and rad
-    together) from where it is held; ``damping`` (Levenberg–Marquardt, Pink's
+    together) from where it is held — each extra iteration integrates over the sub-step
+    again, so the velocity limits hold over a frame only with ``max_iterations ==
+    iterations`` (the default); ``damping`` (Levenberg–Marquardt, Pink's
     ``damping``); ``solver``: a qpsolvers name (``"daqp"``, ``"proxqp"``, …); ``settle``: extra
     iterations on the first frame, from the neutral pose, to reach the first targets;
     ``velocity_limits``: apply the model's velocity limits (Pink's ``VelocityLimit``);
@@ -99,8 +104,8 @@ class IKOptions:
     swing_foot: float = 1.0
     stance_foot: float = 100.0
     posture: float = 1e-2
-    iterations: int = 2
-    max_iterations: int = 20
+    iterations: int = 4
+    max_iterations: int = 4
     tolerance: float = 1e-3
     damping: float = 1e-8
     solver: str = "daqp"

@@ -1,0 +1,231 @@
+"""Baselines in the physics-check harness: the same demonstration retargeted several ways, each
+audited (``gdimitate.audit.audit``) and simulated (``gdimitate.sim.simulate``) alike.
+
+Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]``.
+Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``).
+
+The demonstration is the shipped 3-D walk (OpenSim subject01, 211 frames at 60 Hz, measured
+ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
+
+- ``copy`` — joint-angle copy: 3-D (``gdimitate.baselines.joint_copy``) onto the free-flyer
+  robots, the planar copy (``adapt(method="copy")``: sagittal hip/knee/ankle angles) onto the
+  HOAP-2-sized planar model;
+- ``Eq. (1)`` — the paper's analytic adaptor (``adapt(method="analytic")``), planar only;
+- ``diff IK`` — a per-frame kinematic retargeter of the kind today's humanoid tools use:
+  differential IK on leg-length-scaled keypoints with joint limits, on Pink
+  (``gdimitate.baselines.diff_ik``); free-flyer robots;
+- ``optimal`` — gdimitate's whole-body adaptor (``adapt(method="optimal", force="measured")``).
+
+Kinematic methods get the wrenches their motion implicitly asks of the floor
+(``estimate_wrenches(method="lstsq")``: no cone). Columns: frames/s of the retargeting (the
+optimal: knots / wall time); CoP out: stance knots of either foot whose wrench has its centre
+of pressure outside the sole or pulls on the floor, in % of all stance knots (the audit's
+``cop:<side>`` and ``normal:<side>`` checks); τ/τmax: the audit's worst torque ratio; plan
+push err: RMS angle between the plan's push and the measured one (the audit's
+``force_direction``); fell: seconds after the start when the simulated robot fell ("no" if it
+walked the whole plan); slip: the simulation's largest stance-foot slip; sim push RMSE: RMS
+error of the simulated push against the measured one in single support (sagittal / frontal
+angle, until the fall; planar robots: sagittal only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+import gdimitate as gd
+from gdimitate.audit import audit
+from gdimitate.baselines import diff_ik, joint_copy, kinematic_plan
+
+SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class Row:
+    """One method on one robot (units in the column names of :func:`table`)."""
+
+    robot: str
+    method: str
+    frames_per_s: float
+    cop_out_pct: float
+    torque_ratio: float
+    plan_push_deg: float
+    fell_after: float | None
+    slip_cm: float
+    sim_sag_deg: float
+    sim_front_deg: float
+    feasible: bool
+    note: str = ""
+
+
+def _pooled(agreements: dict, attr: str) -> float:
+    n = sum(a.n for a in agreements.values() if np.isfinite(getattr(a, attr)))
+    if n == 0:
+        return float("nan")
+    return float(np.sqrt(sum(a.n * getattr(a, attr) ** 2 for a in agreements.values()
+                             if np.isfinite(getattr(a, attr))) / n))
+
+
+def evaluate(robot, plan, frames_per_s: float, forces, method: str, note: str = "") -> Row:
+    """Audit and simulate ``plan`` (``.motion`` with v, a; ``.wrenches``; ``.contacts``)
+    against the measured ``forces``."""
+    mo = plan.motion
+    push = measured_push(forces, mo.t)
+    if robot.base == "planar":  # the plane has no lateral push: compare in the x–z plane
+        push = {s: _unit_xz(p) for s, p in push.items()}
+    rep = audit(robot, mo, plan.wrenches, plan.contacts, target=push)
+    stance = sum(int(np.sum(mo.contact[s])) for s in SIDES)
+    out = 0
+    for s in SIDES:
+        ok = rep.check_knots(f"cop:{s}") & rep.check_knots(f"normal:{s}")
+        out += int(np.sum(np.asarray(mo.contact[s], bool) & ~ok))
+    ratios = [j.torque_ratio for j in rep.joints if np.isfinite(j.torque_ratio)]
+    fd = [f for f in rep.force_direction_error.values() if f is not None and f.knots]
+    plan_push = float(np.sqrt(sum(f.knots * f.error_rms ** 2 for f in fd)
+                              / max(sum(f.knots for f in fd), 1)))
+    res = gd.sim.simulate(robot, plan, demo_forces=forces)
+    m = res.metrics
+    vs = m.force_vs_demo or {}
+    return Row(robot.name, method, frames_per_s, 100.0 * out / max(stance, 1),
+               max(ratios, default=float("nan")), float(np.degrees(plan_push)),
+               None if m.fall_time is None else float(m.fall_time - mo.t[0]),
+               100.0 * m.slip_max, _pooled(vs, "rmse_sagittal_deg"),
+               float("nan") if robot.base == "planar" else _pooled(vs, "rmse_frontal_deg"),
+               bool(rep.feasible), note)
+
+
+def _unit_xz(p: np.ndarray) -> np.ndarray:
+    p = np.array(p, dtype=float)
+    p[:, 1] = 0.0
+    with np.errstate(invalid="ignore"):
+        return p / np.linalg.norm(p, axis=1, keepdims=True)
+
+
+def measured_push(forces, t: np.ndarray) -> dict[str, np.ndarray]:
+    """The demonstrator's measured unit push on the ground ``{side: (T, 3)}`` on the times
+    ``t`` [s] (linear interpolation; NaN where the foot carries no measured force)."""
+    out = {}
+    for s in SIDES:
+        f = forces[s]
+        F = np.column_stack([np.interp(t, forces.t, f.force[:, i]) for i in range(3)])
+        on = np.interp(t, forces.t, f.contact.astype(float)) > 0.5
+        n = np.linalg.norm(F, axis=1)
+        u = np.full_like(F, np.nan)
+        ok = on & (n > 1e-9)
+        u[ok] = -F[ok] / n[ok, None]
+        out[s] = u
+    return out
+
+
+def _timed(f):
+    t0 = time.perf_counter()
+    out = f()
+    return out, time.perf_counter() - t0
+
+
+def _optimal(demo, demonstrator, robot, forces, rows):
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            a, sec = _timed(lambda: gd.adapt(demo, demonstrator, robot, method="optimal",
+                                             force="measured", forces=forces, verbose=False))
+    except Exception as e:  # report, don't hide: the adaptor is the product under test
+        rows.append(Row(robot.name, "optimal", float("nan"), *[float("nan")] * 3, None,
+                        *[float("nan")] * 3, False, f"failed: {type(e).__name__}: {e}"[:120]))
+        return
+    rows.append(evaluate(robot, a, a.motion.T / sec, forces, "optimal",
+                         f"{a.motion.T} knots"))
+
+
+def run(robots: list[str], optimal: bool = True) -> list[Row]:
+    """Every method on every robot in ``robots`` (library names)."""
+    demonstrator, demo, forces = gd.gait.human_walk_3d()
+    rows: list[Row] = []
+    for name in robots:
+        robot = gd.Robot.from_library(name)
+        if robot.base == "planar":
+            for method, label in (("copy", "copy (planar)"), ("analytic", "Eq. (1)")):
+                a, sec = _timed(lambda m=method, r=robot: gd.adapt(demo, demonstrator, r,
+                                                                    method=m))
+                plan = kinematic_plan(robot, a.motion, method, sec)
+                bad = sum(a.report.infeasible_frames.values())
+                rows.append(evaluate(robot, plan, demo.T / sec, forces, label,
+                                     f"{bad} leg-frames unreachable" if bad else ""))
+        else:
+            plan = joint_copy(demo, demonstrator, robot)
+            rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "copy (3-D)"))
+            plan = diff_ik(demo, demonstrator, robot)
+            note = (f"keypoint error median {100 * np.median(plan.residual):.1f} cm; "
+                    f"{int(plan.relaxed.sum())} frames feet held by cost")
+            rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "diff IK (Pink)",
+                                 note))
+        if optimal:
+            _optimal(demo, demonstrator, robot, forces, rows)
+    return rows
+
+
+def _f(x: float, fmt: str) -> str:
+    return "—" if x is None or not np.isfinite(x) else format(x, fmt)
+
+
+def table(rows: list[Row]) -> str:
+    """The rows as a markdown table."""
+    head = ("| robot | method | frames/s | CoP out [% stance] | τ/τmax | plan push err [deg] "
+            "| fell [s] | slip [cm] | sim push RMSE sag/front [deg] | audit | notes |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|")
+    lines = [head]
+    for r in rows:
+        fell = "no" if r.fell_after is None else f"{r.fell_after:.2f}"
+        if not np.isfinite(r.frames_per_s):
+            fell = "—"
+        lines.append(
+            f"| {r.robot} | {r.method} | {_f(r.frames_per_s, ',.0f')} | "
+            f"{_f(r.cop_out_pct, '.0f')} | {_f(r.torque_ratio, '.1f')} | "
+            f"{_f(r.plan_push_deg, '.1f')} | {fell} | {_f(r.slip_cm, '.1f')} | "
+            f"{_f(r.sim_sag_deg, '.1f')} / {_f(r.sim_front_deg, '.1f')} | "
+            f"{'feasible' if r.feasible else 'infeasible'} | {r.note} |")
+    return "\n".join(lines)
+
+
+def negative_control(rows: list[Row]) -> str:
+    """The physics check's negative control in words: does the 3-D joint copy fall or slip
+    more than 5 cm on each free-flyer robot?"""
+    out = []
+    for r in rows:
+        if r.method != "copy (3-D)":
+            continue
+        fails = r.fell_after is not None or r.slip_cm > 5.0
+        out.append(f"- {r.robot}: the 3-D joint copy "
+                   + (f"fell after {r.fell_after:.2f} s" if r.fell_after is not None
+                      else "did not fall")
+                   + f", slip {r.slip_cm:.1f} cm — the negative control "
+                   + ("fails the physics check, as it must." if fails else
+                      "PASSES the physics check (see tests/test_baselines.py)."))
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--robots", nargs="+", default=["hoap2", "talos", "g1"])
+    p.add_argument("--no-optimal", action="store_true", help="skip gdimitate's own adaptor")
+    p.add_argument("--out", default=str(Path(__file__).with_name("peers.md")))
+    a = p.parse_args(argv)
+    t0 = time.perf_counter()
+    rows = run(a.robots, optimal=not a.no_optimal)
+    text = (table(rows) + "\n\nNegative control (physics check):\n" + negative_control(rows)
+            + f"\n\nDemonstration: OpenSim subject01 walk (3-D, measured GRF), 211 frames, 3.5 s; "
+            f"simulation: MuJoCo, 1 kHz QP tracking controller; run took "
+            f"{time.perf_counter() - t0:.0f} s.\n")
+    print(text)
+    Path(a.out).write_text("# Baselines in the physics-check harness\n\n"
+                           "Written by `python benchmarks/peers.py`; columns explained in its "
+                           "docstring.\n\n" + text)
+
+
+if __name__ == "__main__":
+    main()
