@@ -113,7 +113,8 @@ class AdaptedMotion:
     - ``audit`` (optimal only): :class:`gdimitate.audit.AuditReport` recomputed from
       ``motion`` and ``wrenches`` with Pinocchio (``audit.feasible``, ``audit.binding``);
     - ``solver`` (optimal only): :class:`gdimitate.retarget.SolverInfo`;
-    - ``force_model``: the force-direction model of the goal.
+    - ``force_model``: the force-direction model of the goal;
+    - ``frame_feasible`` (streaming mode only): ``(T,)`` per-frame audit flags.
     """
 
     motion: Motion
@@ -124,6 +125,7 @@ class AdaptedMotion:
     audit: Any = None
     solver: Any = None
     force_model: str = "segment"
+    frame_feasible: np.ndarray | None = None
 
     def save(self, path, format: str = "npz", *, fps: float = 30.0):
         """Write the motion (and, in ``"npz"``, the contact wrenches and the robot's record)

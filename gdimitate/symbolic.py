@@ -434,6 +434,28 @@ class SymbolicModel:
 
         return self._cached(("jac", name), make)
 
+    def placement(self, name: str) -> Placement:
+        """World ``(R (3, 3), p (3,))`` of frame ``name`` as SX expressions in :attr:`q` (they
+        share the forward pass with every other expression of this model)."""
+        return self._frame_placement(name)[1]
+
+    def rnea_contact_expr(self, frames: Sequence[str], wrenches: Sequence[ca.SX]) -> ca.SX:
+        """The expression of :meth:`rnea_contact` in :attr:`q`, :attr:`v`, :attr:`a` and the
+        given world-aligned ``(6,)`` wrench expressions (shares the forward pass)."""
+        extra: dict[int, list[Motion]] = {}
+        for name, w in zip(frames, wrenches):
+            jid, (_, pf) = self._frame_placement(name)
+            rj, pj = self._omi[jid]
+            fl = ca.mtimes(rj.T, w[:3])
+            fa = ca.mtimes(rj.T, w[3:] + _cross(pf - pj, w[:3]))
+            extra.setdefault(jid, []).append((fl, fa))
+        return self._backward(extra)
+
+    @property
+    def com_expr(self) -> ca.SX:
+        """Centre of mass ``(3,)`` as an SX expression in :attr:`q`."""
+        return self._com
+
     def rnea_contact(self, frames: Sequence[str]) -> ca.Function:
         """Inverse dynamics with contact wrenches at the named frames.
 

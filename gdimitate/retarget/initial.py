@@ -34,17 +34,18 @@ def initial_q(demonstrator: Robot, imitator: Robot, tg: Targets, q_index: np.nda
 
 def consistent_start(model: pin.Model, t: np.ndarray, q: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(q, v, a)`` with ``q_{k+1} = q_k ⊕ h v_k`` and ``v_{k+1} = v_k + h a_k`` exactly."""
+    """``(q, v, a)`` with ``q_{k+1} = q_k ⊕ h v_{k+1}`` and ``v_{k+1} = v_k + h a_k``
+    exactly."""
     T = len(q)
     h = np.diff(t)
     v = np.zeros((T, model.nv))
     for k in range(T - 1):
-        v[k] = pin.difference(model, q[k], q[k + 1]) / h[k]
+        v[k + 1] = pin.difference(model, q[k], q[k + 1]) / h[k]
     if T > 1:
-        v[-1] = v[-2]
+        v[0] = v[1]
     qq = q.copy()
     for k in range(T - 1):  # re-integrate so the start meets the integration rows exactly
-        qq[k + 1] = pin.integrate(model, qq[k], h[k] * v[k])
+        qq[k + 1] = pin.integrate(model, qq[k], h[k] * v[k + 1])
     a = np.zeros_like(v)
     for k in range(T - 1):
         a[k] = (v[k + 1] - v[k]) / h[k]

@@ -115,10 +115,15 @@ class Knot:
         p.add("weights", 9)
         p.add("tan2", 1)
         p.add("f_min", 1)
-        self.x = ca.SX.sym("x", v.size)
+        # q, v, a are the symbolic model's own symbols, so that kinematics, centre of mass
+        # and dynamics share one forward pass
+        self._w = {side: ca.SX.sym(f"w_{side}", self.nw) for side in SIDES}
+        self.s_plus = ca.SX.sym("s_plus", self.slack_rows)
+        self.s_minus = ca.SX.sym("s_minus", self.slack_rows)
+        self.x = ca.vertcat(s.q, s.v, s.a, *[self._w[side] for side in SIDES], self.s_plus,
+                            self.s_minus)
         self.p = ca.SX.sym("p", p.size)
-        self.q, self.v, self.a = self.x[v["q"]], self.x[v["v"]], self.x[v["a"]]
-        self.s_plus, self.s_minus = self.x[v["s_plus"]], self.x[v["s_minus"]]
+        self.q, self.v, self.a = s.q, s.v, s.a
         self._slack_used = 0
         self._kin()
 
@@ -140,7 +145,7 @@ class Knot:
 
     def wrench_local(self, side: str) -> ca.SX:
         """``(6,)`` ``[f; τ]`` of a foot in its sole frame (planar: f_y = τ_x = τ_z = 0)."""
-        w = self.x[self.var[f"w_{side}"]]
+        w = self._w[side]
         if self.planar:
             z = ca.SX(0)
             return ca.vertcat(w[0], z, w[1], z, w[2], z)
@@ -148,19 +153,18 @@ class Knot:
 
     # ------------------------------------------------------------------ kinematics
     def _kin(self) -> None:
-        s, q = self.sym, self.q
+        s = self.sym
         self.sole_p, self.sole_R = {}, {}
         self.hip, self.knee, self.ankle = {}, {}, {}
         for side in SIDES:
             c = self.contacts[side]
-            self.sole_p[side] = s.frame_position(c.frame)(q)
-            self.sole_R[side] = s.frame_rotation(c.frame)(q)
+            self.sole_R[side], self.sole_p[side] = s.placement(c.frame)
             leg = self.leg[side]
             # every joint has a JOINT frame of its own name in a Pinocchio model
-            self.hip[side] = s.frame_position(leg.hip)(q)
-            self.knee[side] = s.frame_position(leg.knee)(q)
-            self.ankle[side] = s.frame_position(leg.ankle or leg.sole)(q)
-        self.com = s.com(q)
+            self.hip[side] = s.placement(leg.hip)[1]
+            self.knee[side] = s.placement(leg.knee)[1]
+            self.ankle[side] = s.placement(leg.ankle or leg.sole)[1]
+        self.com = s.com_expr
 
     def wrench_world(self, side: str) -> ca.SX:
         """The foot's wrench in world axes at the sole origin ``(6,)``."""

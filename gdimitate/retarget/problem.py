@@ -32,7 +32,6 @@ CACHE_SIZE = 8
 _CACHE: OrderedDict[tuple, Compiled] = OrderedDict()
 _SYM: OrderedDict[str, SymbolicModel] = OrderedDict()
 BUILD_COUNT = 0
-EXPAND = True
 """How many NLPs this process has built (a cached call leaves it unchanged)."""
 
 IPOPT_DEFAULTS = {
@@ -57,7 +56,7 @@ def fingerprint(robot: Robot) -> str:
         fr = m.frames[m.getFrameId(c.frame)]
         h.update(f"{_side}:{c.frame}:{fr.parentJoint}".encode())
         h.update(np.asarray(fr.placement.homogeneous).tobytes())
-    for s, leg in sorted(robot.legs.items()):
+    for _, leg in sorted(robot.legs.items()):
         h.update(repr(leg).encode())
     return h.hexdigest()
 
@@ -141,12 +140,43 @@ def compiled(robot: Robot, flags: Flags, segment_frames: tuple[str, ...], q_inde
     return c, False
 
 
+def _pair_functions(k: Knot) -> ca.Function:
+    """Rows linking knot k − 1 (``x0``) to knot k (``x``): integration, then contact hold."""
+    step = integration.step_function(k)
+    x0 = ca.SX.sym("x_prev", k.var.size)
+    hold = ca.Function("hold", [k.x], [contact.hold_quantities(k)])
+    rows = ca.vertcat(step(x0, k.x, k.p), contact.hold_rows(hold(x0), hold(k.x), k.planar))
+    return ca.Function("pair", [x0, k.x, k.p], [rows])
+
+
+def _blockdiag(M: ca.MX, n: int) -> ca.MX:
+    """``(r, n·m)`` horizontally stacked blocks → their ``(r·m, n·m)`` block diagonal."""
+    return ca.diagcat(*ca.horzsplit(M, n))
+
+
+def _pair_spread(nx: int, T: int) -> ca.DM:
+    """``(2·nx·(T−1), nx·T)``: the columns of pair j = (knot j, knot j + 1) → those knots."""
+    rows, cols = [], []
+    for j in range(T - 1):
+        for i in range(2 * nx):
+            rows.append(2 * nx * j + i)
+            cols.append(nx * j + i)
+    sp = ca.Sparsity.triplet(2 * nx * (T - 1), nx * T, rows, cols)
+    return ca.DM(sp, 1.0)
+
+
 def _build(robot: Robot, flags: Flags, segment_frames: tuple[str, ...], q_index: tuple,
            T: int, ipopt: dict) -> Compiled:
+    """Build the NLP of one shape. The derivatives IPOPT needs are written per knot (SX:
+    constraint Jacobian, cost gradient, Hessian of the knot's Lagrangian) and per pair of
+    knots, mapped over the knots and assembled into the sparse block structure; CasADi's
+    MX-level differentiation of the mapped graph is never used (it is two orders of magnitude
+    slower here)."""
     global BUILD_COUNT
     sym = symbolic_model(robot)
     k = Knot(robot, sym, flags, slack_rows(robot, flags))
-    # ---- one knot: constraint rows, cost residuals, L1 penalty, hold quantities
+    nx = k.var.size
+    # ---- one knot: constraint rows, cost, hold quantities
     base_rows, tau_rows = PER_KNOT[0].expr(k)
     g_parts = [base_rows, tau_rows] + [m.expr(k) for m in PER_KNOT[1:]]
     g_parts.append(integration.quaternion_row(k))
@@ -155,31 +185,56 @@ def _build(robot: Robot, flags: Flags, segment_frames: tuple[str, ...], q_index:
                      tasks.joints.residual(k, q_index), tasks.smoothness.residual(k),
                      tasks.wrench.residual(k))
     l1 = k.weight(8) * (ca.sum1(k.s_plus) + ca.sum1(k.s_minus))
-    hq = contact.hold_quantities(k)
-    knot_fun = ca.Function("knot", [k.x, k.p], [gk, res, l1, hq])
+    fk = (ca.sumsqr(res) + l1) / T
+    ngk = int(gk.shape[0])
+    lam_k, sigma = ca.SX.sym("lam", ngk), ca.SX.sym("sigma")
+    hk = ca.triu(ca.hessian(sigma * fk + ca.dot(lam_k, gk), k.x)[0])
+    knot_fun = ca.Function("knot", [k.x, k.p], [gk, res, l1, contact.hold_quantities(k)])
+    kf = ca.Function("knot_f", [k.x, k.p], [fk, ca.gradient(fk, k.x)])
+    kg = ca.Function("knot_g", [k.x, k.p], [gk, ca.jacobian(gk, k.x)])
+    kh = ca.Function("knot_h", [k.x, k.p, sigma, lam_k], [hk])
     tau_fun = ca.Function("tau", [k.x, k.p], [PER_KNOT[0].torques(k)])
-    step = integration.step_function(k)
-    # ---- all knots
-    X = ca.MX.sym("X", k.var.size, T)
+    # ---- pairs of knots
+    pair = _pair_functions(k)
+    x0s, x1s = ca.SX.sym("x0", nx), ca.SX.sym("x1", nx)
+    gs = pair(x0s, x1s, k.p)
+    ns = int(gs.shape[0])
+    mu = ca.SX.sym("mu", ns)
+    xx = ca.vertcat(x0s, x1s)
+    pg = ca.Function("pair_g", [x0s, x1s, k.p], [gs, ca.jacobian(gs, xx)])
+    ph = ca.Function("pair_h", [x0s, x1s, k.p, mu], [ca.hessian(ca.dot(mu, gs), xx)[0]])
+    # ---- all knots (MX): values and the assembled derivatives
+    X = ca.MX.sym("X", nx, T)
     P = ca.MX.sym("P", k.par.size, T)
-    Gk, R, L1, H = knot_fun.map(T)(X, P)
-    g = [ca.vec(Gk)]
-    if T > 1:
-        g.append(ca.vec(step.map(T - 1)(X[:, :-1], X[:, 1:], P[:, 1:])))
-        g.append(ca.vec(contact.hold_rows(H[:, :-1], H[:, 1:], k.planar)))
-    G = ca.vertcat(*g)
-    f = (ca.sumsqr(R) + ca.sum2(L1)) / T
     z, p = ca.vec(X), ca.vec(P)
-    progress = Progress(f"progress_{BUILD_COUNT}", int(z.shape[0]), int(G.shape[0]),
-                        int(p.shape[0]))
-    opts = {"print_time": False, "iteration_callback": progress, "expand": EXPAND,
-            "ipopt": {**IPOPT_DEFAULTS, **ipopt}}
+    F, GF = kf.map(T)(X, P)
+    Gk, JK = kg.map(T)(X, P)
+    g_list, j_list = [ca.vec(Gk)], [_blockdiag(JK, nx)]
+    ng = ngk * T + ns * (T - 1)
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
+    H = _blockdiag(kh.map(T)(X, P, lam_f, ca.reshape(lam_g[:ngk * T], ngk, T)), nx)
+    if T > 1:
+        E = _pair_spread(nx, T)
+        Gs, JS = pg.map(T - 1)(X[:, :-1], X[:, 1:], P[:, 1:])
+        g_list.append(ca.vec(Gs))
+        j_list.append(ca.mtimes(_blockdiag(JS, 2 * nx), E))
+        HS = ph.map(T - 1)(X[:, :-1], X[:, 1:], P[:, 1:],
+                           ca.reshape(lam_g[ngk * T:], ns, T - 1))
+        H = H + ca.triu(ca.mtimes([E.T, _blockdiag(HS, 2 * nx), E]))
+    G, JG, f = ca.vertcat(*g_list), ca.vertcat(*j_list), ca.sum2(F)
+    grad_f = ca.Function("grad_f", [z, p], [f, ca.vec(GF)], ["x", "p"], ["f", "grad_f_x"])
+    jac_g = ca.Function("jac_g", [z, p], [G, JG], ["x", "p"], ["g", "jac_g_x"])
+    hess = ca.Function("hess_lag", [z, p, lam_f, lam_g], [ca.triu(H)],
+                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+    progress = Progress(f"progress_{BUILD_COUNT}", int(z.shape[0]), ng, int(p.shape[0]))
+    opts = {"print_time": False, "iteration_callback": progress, "grad_f": grad_f,
+            "jac_g": jac_g, "hess_lag": hess, "ipopt": {**IPOPT_DEFAULTS, **ipopt}}
     solver = ca.nlpsol(f"retarget_{BUILD_COUNT}", "ipopt", {"x": z, "p": p, "f": f, "g": G},
                        opts)
     g_fun = ca.Function("g", [z, p], [G])
     BUILD_COUNT += 1
-    return Compiled(solver, k, g_fun, tau_fun, T, k.var.size, int(gk.shape[0]),
-                    int(G.shape[0]), progress, segment_frames, knot_fun)
+    return Compiled(solver, k, g_fun, tau_fun, T, nx, ngk, ng, progress, segment_frames,
+                    knot_fun)
 
 
 def row_bounds(c: Compiled, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
@@ -188,12 +243,10 @@ def row_bounds(c: Compiled, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
     lo = np.concatenate([p[0] for p in parts], axis=1).ravel()
     hi = np.concatenate([p[1] for p in parts], axis=1).ravel()
     los, his = [lo], [hi]
-    if spec.T > 1:
+    if spec.T > 1:  # per pair of knots: integration rows (= 0), then the hold rows
         n_step = c.knot.sym.nq + c.knot.sym.nv
-        los.append(np.zeros(n_step * (spec.T - 1)))
-        his.append(np.zeros(n_step * (spec.T - 1)))
         hl, hh = contact.hold_bounds(spec)
-        # hold rows are stacked (n_hold, T − 1) column-major: knot by knot
-        los.append(hl.ravel())
-        his.append(hh.ravel())
+        z = np.zeros((spec.T - 1, n_step))
+        los.append(np.concatenate([z, hl], axis=1).ravel())
+        his.append(np.concatenate([z, hh], axis=1).ravel())
     return np.concatenate(los), np.concatenate(his)

@@ -101,8 +101,9 @@ def _contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:
 
 def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: Weights,
           lim_opts: Limits, copts: Contact, cs: dict[str, SoleContact],
-          q_start: np.ndarray | None = None) -> Numbers:
-    """Parameters, bounds and warm start of a demonstration for a compiled problem."""
+          x_start: np.ndarray | None = None) -> Numbers:
+    """Parameters, bounds and warm start of a demonstration for a compiled problem
+    (``x_start`` ``(n_x, T)``: a given start, e.g. the previous frame's in streaming)."""
     k = c.knot
     T = tg.T
     lay, var = k.par, k.var
@@ -152,20 +153,11 @@ def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: 
         lbx[sl, ~tg.stance[s]] = ubx[sl, ~tg.stance[s]] = 0.0
     for name in ("s_plus", "s_minus"):
         lbx[var[name]] = ubx[var[name]] = 0.0
-    # ---- warm start
-    q0 = initial_q(demonstrator, imitator, tg, qi) if q_start is None else q_start
-    q0 = q0.copy()
-    q0[:, qi[fz]] = lim.freeze_at[fz]
-    lo, hi = np.where(np.isfinite(lim.lower), lim.lower, -1e9), np.where(
-        np.isfinite(lim.upper), lim.upper, 1e9)
-    q0[:, qi] = np.clip(q0[:, qi], lo, hi)
-    q0, v0, a0 = consistent_start(imitator.model, tg.t, q0)
-    v0[:, vi] = np.clip(v0[:, vi], -lim.velocity, lim.velocity)
-    x0 = np.zeros((var.size, T))
-    x0[var["q"]], x0[var["v"]], x0[var["a"]] = q0.T, v0.T, a0.T
-    start = robot_motion(imitator, tg.t, q0, tg.stance).replace(v=v0, a=a0)
-    for s, wv in initial_wrenches(imitator, start, cs, copts.f_min, k.nw).items():
-        x0[var[f"w_{s}"]] = wv.T
+    if x_start is None:
+        x0 = _warm_start(c, tg, imitator, demonstrator, lim, copts, cs)
+    else:
+        x0 = np.array(x_start, dtype=float)
+    q0 = x0[var["q"]].T
     # the start's horizontal base position is the motion's origin
     base_xy = [0, 1] if imitator.base == "free" else [imitator.idx_q("base_x")]
     lbx[qs + np.array(base_xy), 0] = ubx[qs + np.array(base_xy), 0] = q0[0, base_xy]
@@ -177,6 +169,49 @@ def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: 
                    n_base=len(k.base_idx), n_act=len(k.act_idx))
     lbg, ubg = pb.row_bounds(c, spec)
     return Numbers(P, lbx, ubx, x0, lbg, ubg, spec, lim)
+
+
+def _warm_start(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot,
+                lim: limits.Resolved, copts: Contact, cs: dict[str, SoleContact]) -> np.ndarray:
+    """``(n_x, T)``: :mod:`.initial`'s configurations inside the limits, integration-consistent
+    velocities and accelerations, wrenches from a per-knot QP."""
+    k, var = c.knot, c.knot.var
+    qi, vi, fz = lim.q_index, k.act_idx, lim.frozen
+    q0 = initial_q(demonstrator, imitator, tg, qi).copy()
+    q0[:, qi[fz]] = lim.freeze_at[fz]
+    lo = np.where(np.isfinite(lim.lower), lim.lower, -1e9)
+    hi = np.where(np.isfinite(lim.upper), lim.upper, 1e9)
+    q0[:, qi] = np.clip(q0[:, qi], lo, hi)
+    q0, v0, a0 = consistent_start(imitator.model, tg.t, q0)
+    v0[:, vi] = np.clip(v0[:, vi], -lim.velocity, lim.velocity)
+    x0 = np.zeros((var.size, tg.T))
+    x0[var["q"]], x0[var["v"]], x0[var["a"]] = q0.T, v0.T, a0.T
+    start = robot_motion(imitator, tg.t, q0, tg.stance).replace(v=v0, a=a0)
+    for s, wv in initial_wrenches(imitator, start, cs, copts.f_min, k.nw).items():
+        x0[var[f"w_{s}"]] = wv.T
+    return x0
+
+
+def limited_robot(robot: Robot, lim: limits.Resolved) -> Robot:
+    """A copy of ``robot`` whose model carries the limits the motion was adapted to (the
+    URDF's with :class:`~.params.Limits` overrides), for the audit."""
+    import copy
+
+    import pinocchio as pin
+
+    out = copy.copy(robot)
+    m = pin.Model(robot.model)
+    vi = np.asarray([robot.idx_v(n) for n in lim.names], int)
+    el, vl = np.array(m.effortLimit), np.array(m.velocityLimit)
+    lo, hi = np.array(m.lowerPositionLimit), np.array(m.upperPositionLimit)
+    el[vi], vl[vi] = lim.effort, lim.velocity
+    big = np.finfo(float).max
+    lo[lim.q_index] = np.where(np.isfinite(lim.lower), lim.lower, -big)
+    hi[lim.q_index] = np.where(np.isfinite(lim.upper), lim.upper, big)
+    m.effortLimit, m.velocityLimit = el, vl
+    m.lowerPositionLimit, m.upperPositionLimit = lo, hi
+    out.model, out.data = m, m.createData()
+    return out
 
 
 def _group_names(c: pb.Compiled, lim: limits.Resolved, planar: bool, cone_mode: bool
@@ -209,9 +244,9 @@ def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unme
     rest = viol[T * n:]
     if T > 1 and rest.size:
         n_step = c.knot.sym.nq + c.knot.sym.nv
-        st = rest[: n_step * (T - 1)].reshape(T - 1, n_step).max(axis=1)
+        pr = rest.reshape(T - 1, -1)
+        st, ho = pr[:, :n_step].max(axis=1), pr[:, n_step:].max(axis=1)
         worst["integration"] = (float(st.max()), int(np.argmax(st)) + 1)
-        ho = rest[n_step * (T - 1):].reshape(T - 1, -1).max(axis=1)
         worst["contact hold (slip)"] = (float(ho.max()), int(np.argmax(ho)) + 1)
     out = [Unmet(k_, v, kk) for k_, (v, kk) in worst.items() if v > tol]
     return tuple(sorted(out, key=lambda u: -u.violation))
@@ -305,7 +340,6 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
                   cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
     q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
-    imitator = _with_contacts(imitator, cs)
     t0 = time.perf_counter()
     c, cached = pb.compiled(imitator, flags, tuple(bmap.segments.values()), q_index, tg.T,
                             options.get("ipopt"))
@@ -322,8 +356,6 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
         z2, st2 = run_solver(c, num, x_start, True, verbose, "least-infeasible")
         iters += int(st2.get("iter_count", 0))
         bad2 = unmet(c, num, _zero_slacks(c, z2, tg.T), tol)
-        if _worse(bad2, bad) and st.get("success") is False and not bad:
-            pass
         z, st, bad = _zero_slacks(c, z2, tg.T), st2, bad2
     info = SolverInfo(status=str(st.get("return_status")),
                       success=bool(st.get("success")) and not bad and not elastic,
@@ -333,17 +365,6 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                       constraints=int(np.sum(np.isfinite(num.lbg) | np.isfinite(num.ubg))),
                       unmet=bad)
     return package(c, num, z, tg, demonstrator, imitator, cs, force, copts, info)
-
-
-def _with_contacts(robot: Robot, cs: dict[str, SoleContact]) -> Robot:
-    """``robot`` itself when its contacts are ``cs`` (the sizes and μ are parameters, so the
-    NLP does not depend on them)."""
-    return robot
-
-
-def _worse(a: tuple[Unmet, ...], b: tuple[Unmet, ...]) -> bool:
-    return max((u.violation for u in a), default=0.0) > max((u.violation for u in b),
-                                                             default=0.0)
 
 
 def _zero_slacks(c: pb.Compiled, z: np.ndarray, T: int) -> np.ndarray:
@@ -397,7 +418,7 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
         from ..audit import audit
 
         target = tg.push if force in ("measured", "dynamics") else None
-        aud = audit(imitator, motion, W, cs, target=target,
+        aud = audit(limited_robot(imitator, num.lim), motion, W, cs, target=target,
                     cone_half_angle=copts.cone_half_angle)
     except ImportError:  # the audit's checks are not installed yet
         aud = None

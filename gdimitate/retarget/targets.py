@@ -24,8 +24,9 @@ class Targets:
     """Per knot ``k`` of ``t`` ``(T,)`` [s]: ``stance`` ``{side: (T,) bool}`` (the imitator's
     contacts) and ``swing`` (feet held above the floor: not in the demonstrator's stance —
     under the ``"anchor"`` rule a second stance foot is neither); ``height`` ``{side: (T,)}``,
-    ``placement`` ``{side: (T, 2)}``, ``shank`` and ``thigh`` ``{side: (T, 3)}`` unit vectors (the demonstrator's scaled keypoints), ``foot``
-    ``{side: (T, 3, 3)}`` its sole frames' world rotations;
+    ``placement`` ``{side: (T, 2)}``, ``shank`` and ``thigh`` ``{side: (T, 3)}`` unit vectors
+    (the demonstrator's scaled keypoints), ``foot`` ``{side: (T, 3, 3)}`` its sole frames'
+    world rotations;
     ``segments`` ``(T, n_seg, 3, 3)`` world rotations; ``joints`` ``(T, n_act)`` joint targets
     [rad] and ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
     push on the ground (NaN where there is none); ``demo``: the resampled demonstration."""

@@ -21,8 +21,7 @@ RELAX = True
 def torques(k: Knot) -> ca.SX:
     """Generalised forces ``(nv,)`` [N, N·m] the actuators must supply at this knot."""
     frames = [k.contacts[s].frame for s in ("left", "right")]
-    f = k.sym.rnea_contact(frames)
-    return f(k.q, k.v, k.a, k.wrench_world("left"), k.wrench_world("right"))
+    return k.sym.rnea_contact_expr(frames, [k.wrench_world(s) for s in ("left", "right")])
 
 
 def expr(k: Knot) -> tuple[ca.SX, ca.SX]:

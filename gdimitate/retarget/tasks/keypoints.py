@@ -49,6 +49,6 @@ def residual(k: Knot, segment_frames: tuple[str, ...]) -> ca.SX:
         out.append(k.weight(7) * (ca.vec(k.sole_R[s]) - k.P(f"foot_{s}")))
     tgt = k.P("torso")
     for i, f in enumerate(segment_frames):
-        R = k.sym.frame_rotation(f)(k.q)
+        R = k.sym.placement(f)[0]
         out.append(w[4] * (ca.vec(R) - tgt[9 * i: 9 * i + 9]))
     return ca.vertcat(*out)
