@@ -244,7 +244,7 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
               f"frequency error after stop {r['freq_error_after'] * 100:5.2f} %")
 
 
-def _cmd_batch(a: argparse.Namespace) -> None:
+def _cmd_batch(a: argparse.Namespace) -> int:
     from .batch import BatchOptions, run_batch
 
     options = BatchOptions(a.imitator, method=a.method, force=a.force, simulate=a.simulate,
@@ -264,6 +264,7 @@ def _cmd_batch(a: argparse.Namespace) -> None:
     counts = ", ".join(f"{len(res.by_status(s))} {s}" for s in ("done", "skipped", "failed"))
     print(f"{counts}; {res.wall_s:.1f} s on {res.workers} worker(s), "
           f"{res.files_per_second:.2f} files/s\nwrote {res.summary_csv}, {res.summary_json}")
+    return 1 if res.by_status("failed") else 0
 
 
 def _cmd_export(a: argparse.Namespace) -> None:
@@ -391,8 +392,9 @@ def _on_signal(signum: int, frame: object) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``gdimitate`` command: 0 on success, 2 on an error (message on
-    stderr), 130 after Ctrl-C, 143 after SIGTERM."""
+    """Entry point of the ``gdimitate`` command: 0 on success, 1 when ``batch`` finished with
+    failed files (listed in its summary), 2 on an error (message on stderr), 130 after
+    Ctrl-C, 143 after SIGTERM."""
     args = build_parser().parse_args(argv)
     previous = {}
     try:
@@ -401,7 +403,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:  # not the main thread: leave signals alone
         pass
     try:
-        args.func(args)
+        status = args.func(args)  # batch: 1 when some files failed
     except GdimitateError as e:
         print(f"gdimitate {args.command}: error: {e}", file=sys.stderr)
         return 2
@@ -414,7 +416,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-    return 0
+    return int(status or 0)
 
 
 if __name__ == "__main__":

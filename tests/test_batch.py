@@ -269,3 +269,24 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path):
         t = gd.Motion.from_npz(out / r["output"]).t  # the optimal method's 50 Hz knots
         assert abs(t[-1] - t[0] - r["duration_s"]) <= 1 / 50 + 1e-9
     assert not list(out.glob(".*.tmp*"))
+
+
+def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
+    from gdimitate.cli import main
+
+    out = tmp_path / "cli"
+    args = ["batch", str(inputs), "--imitator", "hoap2", "--out", str(out), "--method",
+            "analytic", "--workers", "2", "--quiet"]
+    assert main(args) == 1  # finished, but broken.mot failed
+    text = capsys.readouterr().out
+    assert "3 done, 0 skipped, 1 failed" in text and "InvalidInputError" in text
+    assert len(_read_csv(out / "summary.csv")) == 4
+    good = tmp_path / "good"
+    good.mkdir()
+    for name in ("walk0.mot", "walk1.mot", "walk2.mot"):
+        (good / name).write_bytes((inputs / name).read_bytes())
+    assert main([*args[:1], str(good), *args[2:]]) == 0
+    assert main([*args[:1], str(good), *args[2:]]) == 0  # all skipped now
+    assert "0 done, 3 skipped, 0 failed" in capsys.readouterr().out
+    assert main(["batch", str(good), "--imitator", "nobody", "--out", str(out)]) == 2
+    assert "unknown robot 'nobody'" in capsys.readouterr().err

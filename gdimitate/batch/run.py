@@ -1,13 +1,13 @@
 """Run a folder of demonstrations through :func:`~gdimitate.batch.job.process_file` in
 parallel: a pool of local processes, or the workers of a Dask cluster.
 
-Why Dask (``dask.distributed``) and not Ray: it is a pure-Python install from PyPI
-(``pip install "dask[distributed]"``, about 3 MB with its dependencies) with no daemon to
-manage; the same :class:`distributed.Client` joins an existing scheduler
+Why Dask (``dask.distributed``) and not Ray: dask and distributed are pure Python from PyPI
+(``pip install "dask[distributed]"``, 33 MB installed with their dependencies) with no daemon
+to manage; the same :class:`distributed.Client` joins an existing scheduler
 (``tcp://host:8786``) or a :class:`distributed.LocalCluster` of worker processes started here,
 and each task is one function call with plain arguments (a path, a folder, frozen options).
-Ray's wheel is about 70 MB, starts a Redis-like control store and raylet per node and brings a
-dashboard and its own object store — more than a batch of independent files needs.
+Ray is a large compiled wheel that runs its own control store, a raylet per node, an object
+store and a dashboard — more than a batch of independent files needs.
 
 On a cluster, the workers must see the input and output folders at the same paths (a shared
 file system): paths, not data, are sent to them.
