@@ -397,7 +397,6 @@ def diff_ik(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None,
 
     held: dict[str, np.ndarray] = {}
     relaxed = np.zeros(demo.T, bool)
-    extra = np.zeros(demo.T, int)
 
     def iterate(k: int, n: int, dt: float) -> None:
         hard, soft = [], [posture]
@@ -420,39 +419,37 @@ def diff_ik(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None,
                     continue
             task.set_target(pin.SE3(target))
             soft.append(task)
-        for _ in range(n):
-            try:
-                vel = solve(soft, hard, dt)
-            except NoSolutionFound:  # the held feet cannot be kept exactly: as costs instead
-                relaxed[k] = True
-                try:
-                    vel = solve(soft + hard, [], dt)
-                except NoSolutionFound as e:
-                    raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
-                                      f"(t = {demo.t[k]:.3f} s): {e}") from None
-            config.integrate_inplace(vel, dt)
-        for _ in range(o.max_iterations - n):  # the held feet not there yet: iterate on
-            err = [np.linalg.norm(pin.log6(config.get_transform_frame_to_world(
-                kp.frames[f"sole_{s}"]).actInv(pin.SE3(held[s]))).vector)
-                for s in SIDES if contact[s][k]]
-            if max(err, default=0.0) <= o.tolerance:
-                break
-            extra[k] += 1
-            try:
-                vel = solve(soft, hard, dt)
-            except NoSolutionFound:
-                relaxed[k] = True
-                vel = solve(soft + hard, [], dt)
-            config.integrate_inplace(vel, dt)
+        for i in range(max(o.max_iterations, n)):
+            if i >= n and held_error(k) <= o.tolerance:
+                break  # extra iterations only while a held foot is not there yet
+            config.integrate_inplace(solve(k, soft, hard, dt), dt)
 
-    def solve(soft, hard, dt):
-        return pink.solve_ik(config, soft, dt, solver=o.solver, damping=o.damping,
-                             limits=limits, constraints=hard or None, safety_break=False)
+    def held_error(k: int) -> float:
+        return max((np.linalg.norm(pin.log6(config.get_transform_frame_to_world(
+            kp.frames[f"sole_{s}"]).actInv(pin.SE3(held[s]))).vector)
+            for s in SIDES if contact[s][k]), default=0.0)
+
+    def solve(k: int, soft: list, hard: list, dt: float) -> np.ndarray:
+        def qp(cost: list, equal: list) -> np.ndarray:
+            return pink.solve_ik(config, cost, dt, solver=o.solver, damping=o.damping,
+                                 limits=limits, constraints=equal or None, safety_break=False)
+        try:
+            return qp(soft, hard)
+        except NoSolutionFound as e:
+            if not hard:
+                raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
+                                  f"(t = {demo.t[k]:.3f} s): {e}") from None
+        relaxed[k] = True  # the held feet cannot be kept exactly: as costs instead
+        try:
+            return qp(soft + hard, [])
+        except NoSolutionFound as e:
+            raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
+                              f"(t = {demo.t[k]:.3f} s): {e}") from None
 
     t_loop = 0.0
     for k in range(demo.T):
         if k == 0:
-            iterate(0, o.settle, 1.0 / 60.0)
+            iterate(0, o.settle, float(period[0]))
         else:
             t0 = time.perf_counter()
             iterate(k, o.iterations, period[k] / o.iterations)
