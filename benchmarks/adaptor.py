@@ -1,83 +1,128 @@
-"""Adaptor speed: analytic Eq. (1), optimal trajectory solve, per-frame (streaming) mode.
+"""Whole-body optimal adaptor: speed and memory (issue 9).
 
-Run: ``python benchmarks/adaptor.py``. Prints one table (markdown). "set-up" is building the
-CasADi NLP (symbolic expansion and IPOPT's derivative functions) — paid once per problem shape
-(imitator, knot count, force model, …) and process, then reused from the cache; "solve" is
-IPOPT's wall time from the Eq. (1) warm start; "first call" / "cached call" are the end-to-end
-times of ``adapt(..., method="optimal")`` (set-up, Eq. (1) warm start, solve and report) on a
-fresh cache and on a second call with the same robot pair and knot count.
+Run: ``python benchmarks/adaptor.py [--knots 100] [--robots talos,g1,icub] [--frames 30]``.
+Each humanoid row runs in its own Python process (so that "first call" includes building the
+NLP and peak memory is that process's): one gait cycle of the shipped real 3-D walk (left heel
+strike to the next), resampled to ``--knots`` knots, whole body, ``force="measured"``; then
+the same call again (the cached NLP). Also: the planar HOAP-2-sized Case II (100 knots,
+cached) and the streaming mode's frames per second on Talos. Prints a markdown table with
+the sagittal optimiser's figures (the removed ``gdimitate.optimal``) as the baseline.
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import subprocess
+import sys
+import textwrap
 import time
 
-import numpy as np
+BASELINE = {"talos": "cached 1.1 s, first 8.6 s (sagittal, not contact-consistent)",
+            "icub": "4.8 GB peak (sagittal)"}
 
-from gdimitate.adapt import adapt
-from gdimitate.cases import paper_case
-from gdimitate.gait import human_walk
-from gdimitate.optimal import problem, slice_motion
-from gdimitate.robot import Robot
-from gdimitate.walking import GaitSpec
-
-
-def _best(f, n=3):
-    ts = []
-    for _ in range(n):
+_CHILD = textwrap.dedent("""
+    import json, resource, sys, time, warnings
+    import numpy as np
+    warnings.simplefilter("ignore")
+    import gdimitate as gd
+    from gdimitate.contact import ContactForces, FootForces
+    name, N = sys.argv[1], int(sys.argv[2])
+    h, m, f = gd.gait.human_walk_3d()
+    c = m.contact["left"]
+    s0, s1 = (np.flatnonzero(c[1:] & ~c[:-1]) + 1)[:2]
+    sl = slice(s0, s1 + 1)
+    demo = m.replace(t=m.t[sl], q=m.q[sl], contact={k: v[sl] for k, v in m.contact.items()})
+    fs = ContactForces(f.t[sl], {k: FootForces(f[k].force[sl], f[k].cop[sl], f[k].torque[sl],
+                                               f[k].contact[sl]) for k in ("left", "right")})
+    rate = (N - 1) / (demo.t[-1] - demo.t[0]) * (1 + 1e-9)
+    robot = gd.Robot.from_library(name)
+    out = {}
+    for label in ("first", "cached"):
         t0 = time.perf_counter()
-        out = f()
-        ts.append(time.perf_counter() - t0)
-    return min(ts), out
+        r = gd.adapt(demo, h, robot, method="optimal", force="measured", forces=fs, rate=rate,
+                     verbose=False)
+        out[label] = time.perf_counter() - t0
+        out[label + "_iterations"] = r.solver.iterations
+        out[label + "_status"] = r.solver.status
+    out["knots"] = r.solver.knots
+    out["feasible"] = bool(r.audit.feasible)
+    out["binding"] = list(r.audit.binding[:3])
+    out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print("RESULT " + json.dumps(out))
+""")
 
 
-def _optimal_row(name: str, goal: str, f) -> tuple[str, ...]:
-    """One optimal-adaptor row: first call on an empty NLP cache, then the best of two cached
-    calls (end to end), with the solve times of both."""
-    problem.clear_cache()
+def humanoid(name: str, knots: int) -> dict:
+    p = subprocess.run([sys.executable, "-c", _CHILD, name, str(knots)], capture_output=True,
+                       text=True)
+    for line in p.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    return {"error": (p.stderr or p.stdout)[-400:]}
+
+
+def planar_case2() -> dict:
+    from gdimitate.adapt import adapt
+    from gdimitate.cases import paper_case
+
+    d, i, m = paper_case("II")
+    rate = 99 / (m.t[-1] - m.t[0]) * (1 + 1e-9)
+    out = {}
+    for label in ("first", "cached"):
+        t0 = time.perf_counter()
+        r = adapt(m, d, i, method="optimal", rate=rate, verbose=False)
+        out[label] = time.perf_counter() - t0
+    out["feasible"] = bool(r.audit.feasible)
+    out["knots"] = r.solver.knots
+    return out
+
+
+def streaming(frames: int) -> dict:
+    import numpy as np
+
+    import gdimitate as gd
+
+    h, m, f = gd.gait.human_walk_3d()
+    robot = gd.Robot.from_library("talos")
+    sa = gd.retarget.StreamingAdaptor(h, robot, "segment", dt=m.dt)
+    sa.step(m.q[0], {s: bool(m.contact[s][0]) for s in ("left", "right")})  # builds
     t0 = time.perf_counter()
-    r1 = f()
-    first = time.perf_counter() - t0
-    built = problem.BUILD_COUNT
-    cached, r = _best(f, n=2)
-    assert problem.BUILD_COUNT == built, "the cached call rebuilt the NLP"
-    s1, s = r1.report.solver, r.report.solver
-    return (name, f"first call {first:.2f} s (solve {s1['time_s']:.2f} s)",
-            f"cached call {cached:.2f} s (solve {s['time_s']:.2f} s; set-up+report "
-            f"{cached - s['time_s']:.2f} s)", f"{goal} end to end",
-            f"{s['status']}, {s['iterations']} it, feasible={r.report.all_feasible}")
+    ok = []
+    for k in range(1, frames + 1):
+        r = sa.step(m.q[k], {s: bool(m.contact[s][k]) for s in ("left", "right")})
+        ok.append(r.previous_feasible)
+    dt = time.perf_counter() - t0
+    return {"frames_per_s": frames / dt, "feasible_frames": int(np.sum(ok)), "frames": frames}
 
 
 def main() -> None:
-    rows = []
-    # analytic adaptor frames/s (Case I, 241 frames)
-    d, i, m = paper_case("I")
-    dt, _ = _best(lambda: adapt(m, d, i, method="analytic"))
-    rows.append(("analytic Eq. (1), Case I → HOAP-2", f"{m.T / dt:,.0f} frames/s", "—",
-                 "—", f"{m.T} frames, report included"))
-    # optimal: one gait cycle of 100 knots on the HOAP-2-sized model
-    cyc = GaitSpec(period=1.0, cycles=1, rate=100.0)
-    d, i, m = paper_case("II", cyc)
-    demo = slice_motion(m, slice(0, 100))
-    rows.append(_optimal_row("optimal, Case II → HOAP-2, 100 knots", "≤ 1 s",
-                             lambda: adapt(demo, d, i, method="optimal")))
-    # optimal: one gait cycle of 100 knots on Talos (real human walk, 60 Hz → 100 frames)
-    hd, hm = human_walk()
-    talos = Robot.from_library("talos")
-    demo = slice_motion(hm, slice(0, 100))
-    rows.append(_optimal_row("optimal, human walk → Talos, 100 knots", "≤ 10 s",
-                             lambda: adapt(demo, hd, talos, method="optimal")))
-    # per-frame mode on Talos
-    tot, r = _best(lambda: adapt(hm, hd, talos, method="optimal", mode="per_frame"), n=2)
-    s = r.report.solver
-    rows.append(("per-frame, human walk → Talos", f"{s['frames_per_s']:.0f} frames/s",
-                 f"end-to-end {hm.T / tot:.0f} frames/s", "≥ 100 frames/s (baseline 35–70)",
-                 f"{hm.T} frames, {r.report.infeasible_frames['left']} flagged"))
-    print("| case | measured | also | goal / baseline | notes |")
-    print("|---|---|---|---|---|")
-    for row in rows:
-        print("| " + " | ".join(row) + " |")
-    print(f"\n(numpy {np.__version__}; single process; times are wall clock on this machine)")
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--knots", type=int, default=100)
+    ap.add_argument("--robots", default="talos,g1,icub")
+    ap.add_argument("--frames", type=int, default=30)
+    a = ap.parse_args()
+    rows = ["| case | goal | first call | cached call | peak memory | audit | baseline |",
+            "|---|---|---|---|---|---|---|"]
+    for name in a.robots.split(","):
+        r = humanoid(name, a.knots)
+        if "error" in r:
+            rows.append(f"| {name} | | error: {r['error']!r} | | | | |")
+            continue
+        aud = "feasible" if r["feasible"] else "infeasible: " + ", ".join(r["binding"])
+        rows.append(f"| 3-D walk → {name}, {r['knots']} knots | ≤ 60 s / ≤ 10 s / ≤ 2 GB | "
+                    f"{r['first']:.1f} s ({r['first_iterations']} it.) | {r['cached']:.1f} s "
+                    f"({r['cached_iterations']} it.) | {r['peak_mb']:.0f} MB | {aud} | "
+                    f"{BASELINE.get(name, '')} |")
+    p = planar_case2()
+    rows.append(f"| Case II → HOAP-2-sized, {p['knots']} knots | ≤ 1 s cached | "
+                f"{p['first']:.2f} s | {p['cached']:.2f} s | | "
+                f"{'feasible' if p['feasible'] else 'infeasible'} | |")
+    s = streaming(a.frames)
+    rows.append(f"| streaming, 3-D walk → Talos | ≥ 200 frames/s | | "
+                f"{s['frames_per_s']:.1f} frames/s | | {s['feasible_frames']}/{s['frames']} "
+                "frames feasible | |")
+    print("\n".join(rows))
 
 
 if __name__ == "__main__":

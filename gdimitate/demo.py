@@ -103,6 +103,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "hoap2"
         "frames": demo.T,
         "duration_s": float(demo.t[-1]),
         "adaptor": rep.to_dict(),
+        "audit": adapted.audit.to_dict() if adapted.audit is not None else None,
         **{f"{m}_baseline": results[m].report.to_dict() for m in results if m != method},
         "joint_limit_margin_min_rad": {j: float(m.min()) for j, m in margins.items()},
         "step_length_over_leg_length": {
@@ -130,17 +131,19 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "hoap2"
     log("[6/6] done.\n")
     cols = [m for m in ("optimal", "analytic", "copy") if m in results]
     reps = {m: results[m].report for m in cols}
-    eq1_limits = rep.extra.get("analytic", {}) if method == "optimal" else {}
-
     def row(label, fn):
         return (label, "  ".join(f"{fn(m):>16}" for m in cols))
 
-    def torque(m):
-        if reps[m].torque_ratio_max:
-            return f"{max(reps[m].torque_ratio_max.values()):.2f}"
-        if m == "analytic" and eq1_limits.get("torque_ratio_max"):
-            return f"{max(eq1_limits['torque_ratio_max'].values()):.2f}"
-        return "—"
+    def torque(m):  # the audit's recomputation (optimal method: it has wrenches)
+        aud = results[m].audit
+        ratios = [j.torque_ratio for j in aud.joints if np.isfinite(j.torque_ratio)] if aud \
+            else []
+        return f"{max(ratios):.2f}" if ratios else "—"
+
+    def physical(m):
+        aud = results[m].audit
+        return "—" if aud is None else ("yes" if aud.feasible else
+                                        "no: " + ", ".join(aud.binding[:2]))
 
     hk = [j for j in rep_cpg if j.split("_")[-1] in ("hip", "knee")]
     rows = [
@@ -156,6 +159,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "hoap2"
         row("joint-limit excess [deg]",
             lambda m: f"{np.degrees(reps[m].joint_limit_violation_max):.2f}"),
         row("max |torque| / limit", torque),
+        row("physically feasible", physical),
         row("ground penetration [mm]", lambda m: f"{reps[m].ground_penetration_max * 1e3:.1f}"),
         ("CPG learned frequency", f"{cpg.result.frequency:.4f} Hz"),
         ("CPG tracking nRMSE max", f"{max(rep_cpg[j]['nrmse_entrained'] for j in hk) * 100:.1f} %"

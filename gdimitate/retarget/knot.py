@@ -3,7 +3,8 @@ quantities (CasADi SX) that tasks and constraints are written in.
 
 Variables of knot k, stacked in this order (:class:`Layout`): ``q`` ``(nq,)``, ``v`` ``(nv,)``,
 ``a`` ``(nv,)`` (Pinocchio's conventions), one contact wrench per foot in its sole frame at the
-sole origin — ``[f; τ]`` ``(6,)``, or ``(f_x, f_z, τ_y)`` ``(3,)`` for planar models — and the
+sole origin, divided by the robot's weight m·g — ``[f; τ]`` ``(6,)``, or ``(f_x, f_z, τ_y)``
+``(3,)`` for planar models — and the
 elastic slacks ``s⁺, s⁻ ≥ 0`` of every relaxable row (fixed at 0 except in the
 least-infeasible fallback). Parameters of knot k are named blocks of one vector (targets, the
 force-direction frame, sole sizes, weights, step ``h``), so the NLP built from these
@@ -144,8 +145,10 @@ class Knot:
         return self.s_plus[i:i + n] - self.s_minus[i:i + n]
 
     def wrench_local(self, side: str) -> ca.SX:
-        """``(6,)`` ``[f; τ]`` of a foot in its sole frame (planar: f_y = τ_x = τ_z = 0)."""
-        w = self._w[side]
+        """``(6,)`` ``[f; τ]`` [N, N·m] of a foot in its sole frame (planar: f_y = τ_x = τ_z =
+        0). The decision variables are this wrench divided by m·g (scaling: a standing foot's
+        variables are of order 1, like the configuration's)."""
+        w = self.mg * self._w[side]
         if self.planar:
             z = ca.SX(0)
             return ca.vertcat(w[0], z, w[1], z, w[2], z)

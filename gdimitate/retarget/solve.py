@@ -188,7 +188,7 @@ def _warm_start(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robo
     x0[var["q"]], x0[var["v"]], x0[var["a"]] = q0.T, v0.T, a0.T
     start = robot_motion(imitator, tg.t, q0, tg.stance).replace(v=v0, a=a0)
     for s, wv in initial_wrenches(imitator, start, cs, copts.f_min, k.nw).items():
-        x0[var[f"w_{s}"]] = wv.T
+        x0[var[f"w_{s}"]] = wv.T / k.mg  # the variables are wrenches over m·g
     return x0
 
 
@@ -381,7 +381,7 @@ def wrenches_of(c: pb.Compiled, Z: np.ndarray) -> dict[str, np.ndarray]:
     f_y = τ_x = τ_z = 0)."""
     out = {}
     for s in SIDES:
-        w = Z[c.knot.var[f"w_{s}"]].T
+        w = Z[c.knot.var[f"w_{s}"]].T * c.knot.mg
         if c.knot.planar:
             full = np.zeros((len(w), 6))
             full[:, [0, 2, 4]] = w

@@ -11,5 +11,5 @@ from ..knot import Knot
 
 
 def residual(k: Knot) -> ca.SX:
-    w = ca.vertcat(*[k.x[k.var[f"w_{s}"]] for s in SIDES])
-    return k.weight(6) * w / k.mg  # √weight
+    w = ca.vertcat(*[k.x[k.var[f"w_{s}"]] for s in SIDES])  # already over m·g
+    return k.weight(6) * w  # √weight
