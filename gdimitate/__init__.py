@@ -16,6 +16,7 @@ from . import bvh, gait, metrics, opensim, oscillator, planar, retarget, sim
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
 from .cpg import CPGReplay, entrain
+from .demonstration import Demonstration, load_demonstration
 from .errors import (
     GdimitateError,
     InvalidInputError,
@@ -30,10 +31,11 @@ from .errors import (
     URDFError,
     ViewerError,
 )
+from .export import export_motion
 from .library import list_robots
 from .motion import Motion
-from .retarget import Limits, StreamingAdaptor, Weights
 from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
+from .retarget import Limits, StreamingAdaptor, Weights
 from .robot import Leg, Robot
 from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
@@ -43,6 +45,7 @@ __all__ = [
     "AdaptationReport",
     "AdaptedMotion",
     "CPGReplay",
+    "Demonstration",
     "GaitSpec",
     "GdimitateError",
     "HUMAN_GAIT",
@@ -69,8 +72,10 @@ __all__ = [
     "adapt",
     "bvh",
     "entrain",
+    "export_motion",
     "gait",
     "list_robots",
+    "load_demonstration",
     "metrics",
     "opensim",
     "oscillator",

@@ -138,10 +138,11 @@ class Motion:
 
         ``robot``: the :class:`~gdimitate.Robot` the motion belongs to; its
         :class:`RobotRecord` (``robot_name``, ``robot_kind``, ``robot_source`` — library
-        name or model file path —, ``robot_fingerprint``, ``robot_package_dir``,
-        ``robot_legs``, ``robot_contacts``) is stored so that the file is read back without
-        naming the robot (:func:`gdimitate.demonstration.load_demonstration`). ``extra``:
-        more arrays to store (e.g. ``wrench_left``); their names must not clash."""
+        name or model file path —, ``robot_urdf``, ``robot_fingerprint``,
+        ``robot_package_dir``, ``robot_legs``, ``robot_contacts``) is stored so that the
+        file is read back without naming the robot
+        (:func:`gdimitate.demonstration.load_demonstration`). ``extra``: more arrays to store
+        (e.g. ``wrench_left``); their names must not clash."""
         arrays = dict(t=self.t, q=self.q, joint_names=np.array(self.joint_names),
                       joint_nq=np.array(self.joint_nq), base_nq=self.base_nq,
                       **{f"contact_{k}": v for k, v in self.contact.items()})
@@ -200,7 +201,9 @@ class RobotRecord:
     ``"memory"`` (a model built in memory: it cannot be rebuilt from the file);
     ``fingerprint``: :attr:`Robot.fingerprint`; ``package_dir``: the URDF's package folder
     (``""`` for none); ``legs``/``contacts``: JSON of the ``legs=``/``contacts=`` given to
-    :meth:`Robot.load` (``""`` when detected)."""
+    :meth:`Robot.load` (``""`` when detected); ``urdf``: the URDF file the model was read
+    from (``""`` for in-memory models; for ``.osim``/``.bvh`` robots a converted file that
+    may be temporary)."""
 
     name: str
     kind: str
@@ -209,6 +212,7 @@ class RobotRecord:
     package_dir: str = ""
     legs: str = ""
     contacts: str = ""
+    urdf: str = ""
 
     @classmethod
     def of(cls, robot) -> RobotRecord:
@@ -235,13 +239,14 @@ class RobotRecord:
             kind, source = "urdf", str(Path(robot.urdf_path).resolve())
         else:
             kind, source = "memory", ""
-        return cls(robot.name, kind, source, robot.fingerprint, pkg, legs, contacts)
+        urdf = str(Path(robot.urdf_path).resolve()) if robot.urdf_path else ""
+        return cls(robot.name, kind, source, robot.fingerprint, pkg, legs, contacts, urdf)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The NPZ entries (``robot_<field>`` → 0-d string array)."""
         return {f"robot_{k}": np.array(getattr(self, k))
                 for k in ("name", "kind", "source", "fingerprint", "package_dir", "legs",
-                          "contacts")}
+                          "contacts", "urdf")}
 
     @classmethod
     def from_npz(cls, path) -> RobotRecord | None:
@@ -254,7 +259,7 @@ class RobotRecord:
                 return None
             rec = cls(**{k: str(z[f"robot_{k}"]) for k in
                          ("name", "kind", "source", "fingerprint", "package_dir", "legs",
-                          "contacts") if f"robot_{k}" in z.files})
+                          "contacts", "urdf") if f"robot_{k}" in z.files})
         if rec.kind not in _RECORD_KINDS:
             raise InvalidInputError(f"{path}: robot_kind {rec.kind!r} is not one of "
                                     f"{_RECORD_KINDS}")
