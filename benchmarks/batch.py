@@ -23,15 +23,15 @@ from gdimitate.gait import human_walk_path
 
 
 def write_inputs(folder: Path, files: int, frames: int) -> None:
-    """``files`` slices of ``frames`` rows of the shipped walk, start shifted by 10 rows each."""
+    """``files`` slices of ``frames`` rows of the shipped walk, start shifted by 5 rows each."""
     lines = human_walk_path().read_text().splitlines()
     end = next(i for i, line in enumerate(lines) if line.strip().lower() == "endheader")
     head, rows = lines[: end + 2], [line for line in lines[end + 2:] if line.strip()]
-    if frames + 10 * (files - 1) > len(rows):
+    if frames + 5 * (files - 1) > len(rows):
         raise SystemExit(f"{files} files of {frames} frames do not fit in {len(rows)} rows")
     for k in range(files):
         (folder / f"walk{k:02d}.mot").write_text(
-            "\n".join(head + rows[10 * k: 10 * k + frames]) + "\n")
+            "\n".join(head + rows[5 * k: 5 * k + frames]) + "\n")
 
 
 def main() -> None:
