@@ -249,11 +249,11 @@ def _cmd_batch(a: argparse.Namespace) -> int:
 
     options = BatchOptions(a.imitator, method=a.method, force=a.force, simulate=a.simulate,
                            demonstrator=a.demonstrator)
-    where = (f"Dask scheduler {a.address}" if a.address else
-             f"a local Dask cluster of {a.workers}" if a.executor == "dask" else
-             f"{a.workers} local")
+    where = (f"the workers of Dask scheduler {a.address}" if a.address else
+             f"a local Dask cluster of {a.workers} worker process(es)" if a.executor == "dask"
+             else f"{a.workers} local worker process(es)")
     print(f"batch: {a.input_dir} → {a.out} ({options.method}, imitator {options.imitator}; "
-          f"{where} worker process(es)) …", flush=True)
+          f"{where}) …", flush=True)
     res = run_batch(a.input_dir, a.out, options, workers=a.workers, executor=a.executor,
                     address=a.address, pattern=a.pattern, progress=not a.quiet)
     print(f"{'file':<32} {'status':<8} {'feasible':<8} {'seconds':>8}  error")
