@@ -277,7 +277,8 @@ def _cmd_export(a: argparse.Namespace) -> None:
          "lafan1_csv": ".lafan1.csv"}[a.format])
     with atomic_write(out) as tmp:
         export_motion(demo.robot, demo.motion, tmp, a.format, wrenches=wrenches, fps=a.fps)
-    print(f"wrote {out} ({FORMATS[a.format]}; robot {demo.robot.name}, {demo.motion.T} frames)")
+    print(f"wrote {out} ({FORMATS[a.format]}; robot {demo.robot.name}, from {demo.motion.T} "
+          "frames)")
 
 
 def build_parser() -> argparse.ArgumentParser:
