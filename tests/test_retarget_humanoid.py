@@ -1,0 +1,87 @@
+"""The real 3-D walk (OpenSim subject01) adapted to Talos, G1 and iCub by the whole-body
+optimal adaptor, judged by Pinocchio directly (not the optimiser): base rows of the inverse
+dynamics on the output's own (q, v, a) and wrenches, torques against the effort limits,
+forward differences of q against v and the velocity limits, every stance foot's cone, every
+sole corner against the floor, and the force direction against the measured one. Where the
+robot cannot, the result must say so (``feasible=False`` with the binding constraints).
+One gait cycle at 20 knots/s keeps each robot to a few minutes on two cores."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import gdimitate as gd
+from gdimitate.contact import ContactForces, FootForces
+from gdimitate.metrics import force_direction
+from gdimitate.retarget import resample
+from gdimitate.robot import SIDES
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def walk():
+    h, m, f = gd.gait.human_walk_3d()
+    c = m.contact["left"]
+    s0, s1 = (np.flatnonzero(c[1:] & ~c[:-1]) + 1)[:2]
+    sl = slice(s0, s1 + 1)
+    demo = m.replace(t=m.t[sl], q=m.q[sl], contact={k: v[sl] for k, v in m.contact.items()})
+    fs = ContactForces(f.t[sl], {k: FootForces(f[k].force[sl], f[k].cop[sl], f[k].torque[sl],
+                                               f[k].contact[sl]) for k in SIDES})
+    return h, demo, fs
+
+
+def _check(robot, r, target):
+    m, data = robot.model, robot.data
+    M = r.motion
+    worst_base, worst_tau = 0.0, 0.0
+    act = list(range(6, m.nv))
+    for k in range(M.T):
+        tau = pin.rnea(m, data, M.q[k], M.v[k], M.a[k]).copy()
+        pin.computeJointJacobians(m, data, M.q[k])
+        pin.framesForwardKinematics(m, data, M.q[k])
+        for s in SIDES:
+            J = pin.getFrameJacobian(m, data, m.getFrameId(r.contacts[s].frame), pin.LOCAL)
+            tau -= J.T @ r.wrenches[s][k]
+        worst_base = max(worst_base, np.abs(tau[:6]).max())
+        worst_tau = max(worst_tau, np.max(np.abs(tau[act]) / m.effortLimit[act]))
+    assert worst_base <= 1e-6
+    assert worst_tau <= 1.001
+    h = np.diff(M.t)
+    fd = np.array([pin.difference(m, M.q[k], M.q[k + 1]) / h[k] for k in range(M.T - 1)])
+    np.testing.assert_allclose(fd, M.v[1:], atol=1e-8)
+    assert np.max(np.abs(fd[:, 6:]) / m.velocityLimit[6:]) <= 1.01
+    for s in SIDES:
+        c, st, w = r.contacts[s], M.contact[s], r.wrenches[s]
+        assert np.all(w[st, 2] >= 0)
+        assert np.all(np.hypot(w[st, 0], w[st, 1]) <= c.mu * w[st, 2] * (1 + 1e-6))
+        cop = np.column_stack([-w[st, 4], w[st, 3]]) / w[st, 2:3]
+        assert np.all(np.abs(cop[:, 0]) <= c.half_length + 1e-6)
+        assert np.all(np.abs(cop[:, 1]) <= c.half_width + 1e-6)
+        fid = m.getFrameId(c.frame)
+        for k in range(M.T):
+            pin.framesForwardKinematics(m, data, M.q[k])
+            R, p = data.oMf[fid].rotation, data.oMf[fid].translation
+            assert np.min(p[2] + c.corners() @ R[2]) >= -1e-3
+            if st[k] and np.all(np.isfinite(target[s][k])):
+                f_world = R @ w[k, :3]
+                cosang = -f_world @ target[s][k] / np.linalg.norm(f_world)
+                assert cosang >= np.cos(1e-3)
+
+
+@pytest.mark.parametrize("name", ["talos", "g1", "icub"])
+def test_real_walk_to_humanoid(walk, name):
+    h, demo, fs = walk
+    robot = gd.Robot.from_library(name)
+    r = gd.adapt(demo, h, robot, method="optimal", force="measured", forces=fs, rate=20,
+                 verbose=False)
+    target = {s: d.vector for s, d in force_direction(
+        h, resample(h, demo, 20).replace(contact=r.motion.contact), "measured",
+        forces=fs).items()}
+    if r.audit.feasible:
+        _check(robot, r, target)
+    else:  # the robot cannot: the result says which constraint binds
+        assert r.audit.binding and not r.solver.success
+        assert r.solver.unmet
