@@ -290,3 +290,28 @@ def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
     assert "0 done, 3 skipped, 0 failed" in capsys.readouterr().out
     assert main(["batch", str(good), "--imitator", "nobody", "--out", str(out)]) == 2
     assert "unknown robot 'nobody'" in capsys.readouterr().err
+
+
+def test_measured_forces_beside_a_demonstration_are_used(tmp_path):
+    from gdimitate.demonstration import load_demonstration
+
+    folder = gd.gait.human_walk_path().parent
+    demos = tmp_path / "demos"
+    demos.mkdir()
+    (demos / "walk.mot").write_bytes(gd.gait.human_walk_path().read_bytes())
+    (demos / "walk_grf.mot").write_bytes((folder / "walk_gait1018_subject01_grf.mot")
+                                         .read_bytes())
+    res = run_batch(demos, tmp_path / "out", ANALYTIC, progress=False)
+    assert [r.file for r in res.rows] == ["walk.mot"]  # the GRF file is no input of its own
+    (row,) = res.rows
+    assert row.status == "done", row.error
+    d = load_demonstration(demos / "walk.mot", grf=demos / "walk_grf.mot")
+    assert "measured vertical GRF" in d.note  # the sagittal reader: stance from the GRF
+    ref = gd.adapt(d.motion, d.robot, gd.Robot.from_library("hoap2"), "analytic")
+    got = gd.Motion.from_npz(tmp_path / "out" / row.output)
+    np.testing.assert_allclose(got.q, ref.motion.q, rtol=0, atol=1e-12)
+    for s in ("left", "right"):  # the measured stance, not the kinematic one
+        np.testing.assert_array_equal(got.contact[s], d.motion.contact[s])
+    plain = load_demonstration(demos / "walk.mot")
+    assert any(not np.array_equal(plain.motion.contact[s], d.motion.contact[s])
+               for s in ("left", "right"))

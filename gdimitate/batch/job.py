@@ -19,12 +19,10 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..errors import InvalidInputError, UnknownNameError
 
-__all__ = ["BatchOptions", "BatchRow", "STATUSES", "load_robot", "output_paths",
-           "process_file", "read_finished"]
+__all__ = ["BatchOptions", "BatchRow", "GRF_SUFFIX", "STATUSES", "grf_file", "load_robot",
+           "output_paths", "process_file", "read_finished"]
 
 #: Row statuses: adapted in this run, finished by an earlier run (its output kept), failed.
 STATUSES = ("done", "skipped", "failed")
@@ -185,29 +183,31 @@ def load_robot(spec: str):
     return Robot.load(spec)
 
 
+#: Stem suffix of a ground-reaction-force file that belongs to the demonstration beside it
+#: (``walk.mot`` + ``walk_grf.mot``); such files are not inputs of their own.
+GRF_SUFFIX = "_grf"
+
+
+def grf_file(path: Path) -> Path | None:
+    """The measured ground reaction forces of demonstration ``path``: ``<stem>_grf.mot`` or
+    ``<stem>_grf.sto`` beside it, or ``None``."""
+    for ext in (".mot", ".sto"):
+        g = path.with_name(f"{path.stem}{GRF_SUFFIX}{ext}")
+        if g.is_file():
+            return g
+    return None
+
+
 def _load(path: Path, options: BatchOptions):
-    """``(demonstrator, motion, forces)`` of one input file."""
+    """``(demonstrator, motion, forces)`` of one input file
+    (:func:`gdimitate.demonstration.load_demonstration`, with its GRF file where one lies
+    beside it)."""
     from ..demonstration import load_demonstration
 
     robot = load_robot(options.demonstrator) if options.demonstrator else None
-    try:
-        d = load_demonstration(path, robot=robot)
-    except NotImplementedError:  # the loader's API landed before its body: the two readers
-        return _load_fallback(path)
+    grf = grf_file(path) if path.suffix.lower() in (".mot", ".sto") else None
+    d = load_demonstration(path, robot=robot, grf=grf)
     return d.robot, d.motion, d.forces
-
-
-def _load_fallback(path: Path):
-    from ..bvh import read_bvh
-    from ..errors import DemonstrationFormatError
-    from ..gait import read_opensim
-
-    if path.suffix.lower() in (".mot", ".sto"):
-        return (*read_opensim(path), None)
-    if path.suffix.lower() == ".bvh":
-        return (*read_bvh(path), None)
-    raise DemonstrationFormatError(f"{path}: cannot read {path.suffix!r} files yet; use .mot, "
-                                   ".sto or .bvh")
 
 
 def _finite(x: Any) -> float | None:
@@ -240,23 +240,13 @@ def _sim_metrics(m) -> dict[str, Any]:
 
 
 def _save(adapted, path: Path) -> None:
-    """The adapted motion as NPZ: :meth:`AdaptedMotion.save` where it exists, else the keys
-    of :meth:`Motion.to_npz` (so :meth:`Motion.from_npz` reads it) plus ``v``, ``a`` ``(T, nv)``
-    and ``wrench_left``/``wrench_right`` ``(T, 6)`` where the method made them."""
+    """The adapted motion as NPZ (:meth:`AdaptedMotion.save`: the motion with ``v``/``a``,
+    the contact wrenches and the imitator's record, read back by
+    :func:`gdimitate.demonstration.load_demonstration` and :meth:`Motion.from_npz`)."""
     from ..safety import atomic_write
 
     with atomic_write(path) as tmp:
-        save = getattr(adapted, "save", None)
-        if callable(save):
-            save(tmp)
-            return
-        mo = adapted.motion
-        extra = {k: x for k, x in (("v", mo.v), ("a", mo.a)) if x is not None}
-        for side, w in (adapted.wrenches or {}).items():
-            extra[f"wrench_{side}"] = np.asarray(w)
-        np.savez(tmp, t=mo.t, q=mo.q, joint_names=np.array(mo.joint_names),
-                 joint_nq=np.array(mo.joint_nq), base_nq=mo.base_nq,
-                 **{f"contact_{k}": c for k, c in mo.contact.items()}, **extra)
+        adapted.save(tmp)
 
 
 def _adapt_one(path: Path, options: BatchOptions) -> tuple[Any, dict[str, Any]]:

@@ -27,7 +27,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import BatchError, UnknownNameError
-from .job import BatchOptions, BatchRow, load_robot, process_file, read_finished
+from .job import (
+    GRF_SUFFIX,
+    BatchOptions,
+    BatchRow,
+    load_robot,
+    process_file,
+    read_finished,
+)
 from .table import Progress, write_summary
 
 __all__ = ["EXECUTORS", "INPUT_SUFFIXES", "BatchResult", "find_inputs", "run_batch"]
@@ -68,14 +75,16 @@ class BatchResult:
 
 def find_inputs(input_dir: str | os.PathLike, pattern: str = "*") -> tuple[Path, ...]:
     """The demonstration files directly in ``input_dir`` matching the glob ``pattern``, with
-    an extension in :data:`INPUT_SUFFIXES` (hidden files excluded), sorted by name.
+    an extension in :data:`INPUT_SUFFIXES`, sorted by name; hidden files and ground-reaction-
+    force files (``<stem>_grf.mot``/``.sto``, read with the demonstration ``<stem>.mot``)
+    excluded.
 
     Raises :class:`BatchError` when the folder does not exist or holds no such file."""
     d = Path(input_dir).expanduser()
     if not d.is_dir():
         raise BatchError(f"input folder {d} does not exist or is not a folder")
     files = sorted(p for p in d.glob(pattern) if p.is_file() and not p.name.startswith(".")
-                   and p.suffix.lower() in INPUT_SUFFIXES)
+                   and p.suffix.lower() in INPUT_SUFFIXES and not p.stem.endswith(GRF_SUFFIX))
     if not files:
         raise BatchError(f"no demonstration files matching {pattern!r} in {d} (extensions "
                          f"read: {', '.join(INPUT_SUFFIXES)})")
