@@ -17,15 +17,20 @@ ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
 - ``optimal`` — gdimitate's whole-body adaptor (``adapt(method="optimal", force="measured")``).
 
 Kinematic methods get the wrenches their motion implicitly asks of the floor
-(``estimate_wrenches(method="lstsq")``: no cone). Columns: frames/s of the retargeting (the
-optimal: knots / wall time); CoP out: stance knots of either foot whose wrench has its centre
-of pressure outside the sole or pulls on the floor, in % of all stance knots (the audit's
-``cop:<side>`` and ``normal:<side>`` checks); τ/τmax: the audit's worst torque ratio; plan
-push err: RMS angle between the plan's push and the measured one (the audit's
-``force_direction``); fell: seconds after the start when the simulated robot fell ("no" if it
-walked the whole plan); slip: the simulation's largest stance-foot slip; sim push RMSE: RMS
-error of the simulated push against the measured one in single support (sagittal / frontal
-angle, until the fall; planar robots: sagittal only).
+(``estimate_wrenches(method="lstsq")``: no cone). Columns:
+
+- frames/s: demonstration frames per second of the retargeting's wall time (kinematic
+  methods: wrenches not included; optimal: the whole ``adapt`` call, on its 50 Hz knots);
+- CoP out: stance knots of either foot whose wrench has its centre of pressure outside the
+  sole or pulls on the floor, in % of all stance knots (the audit's ``cop:<side>`` and
+  ``normal:<side>`` checks);
+- τ/τmax: the audit's worst torque ratio over the actuated joints;
+- plan push err: RMS angle between the plan's push and the measured one (the audit's
+  ``force_direction``);
+- fell: seconds after the start when the simulated robot fell ("no": it walked the plan);
+- slip: the simulation's largest stance-foot slip;
+- sim push RMSE: RMS error of the simulated push against the measured one in single support
+  (sagittal / frontal angle, until the fall; planar robots: sagittal only).
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ from __future__ import annotations
 import argparse
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -138,8 +143,13 @@ def _optimal(demo, demonstrator, robot, forces, rows):
         rows.append(Row(robot.name, "optimal", float("nan"), *[float("nan")] * 3, None,
                         *[float("nan")] * 3, False, f"failed: {type(e).__name__}: {e}"[:120]))
         return
-    rows.append(evaluate(robot, a, a.motion.T / sec, forces, "optimal",
-                         f"{a.motion.T} knots"))
+    row = evaluate(robot, a, demo.T / sec, forces, "optimal",
+                   f"{a.motion.T} knots, {sec:.0f} s")
+    if not row.feasible:
+        binding = audit(robot, a.motion, a.wrenches, a.contacts,
+                        target=measured_push(forces, a.motion.t)).binding
+        row = replace(row, note=f"{row.note}; audit fails {', '.join(binding[:3])}")
+    rows.append(row)
 
 
 def run(robots: list[str], optimal: bool = True) -> list[Row]:
@@ -184,7 +194,8 @@ def table(rows: list[Row]) -> str:
         if not np.isfinite(r.frames_per_s):
             fell = "—"
         lines.append(
-            f"| {r.robot} | {r.method} | {_f(r.frames_per_s, ',.0f')} | "
+            f"| {r.robot} | {r.method} | "
+            f"{_f(r.frames_per_s, ',.0f' if r.frames_per_s >= 10 else '.2g')} | "
             f"{_f(r.cop_out_pct, '.0f')} | {_f(r.torque_ratio, '.1f')} | "
             f"{_f(r.plan_push_deg, '.1f')} | {fell} | {_f(r.slip_cm, '.1f')} | "
             f"{_f(r.sim_sag_deg, '.1f')} / {_f(r.sim_front_deg, '.1f')} | "
