@@ -102,7 +102,9 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "hoap2"
         "method": method,
         "frames": demo.T,
         "duration_s": float(demo.t[-1]),
-        "adaptor": rep.to_dict(),
+        "adaptor": {**rep.to_dict(), **({"torque_ratio_max": {
+            j.name: j.torque_ratio for j in adapted.audit.joints}, "feasible_physically":
+            bool(adapted.audit.feasible)} if adapted.audit is not None else {})},
         "audit": adapted.audit.to_dict() if adapted.audit is not None else None,
         **{f"{m}_baseline": results[m].report.to_dict() for m in results if m != method},
         "joint_limit_margin_min_rad": {j: float(m.min()) for j, m in margins.items()},
