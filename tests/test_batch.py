@@ -226,7 +226,8 @@ def _session_processes(sid: int) -> list[psutil.Process]:
 
 
 @pytest.mark.slow
-def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path):
+@pytest.mark.parametrize("executor", ["process", "dask"])
+def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor):
     demos = tmp_path / "demos"
     demos.mkdir()
     _mot_slices(demos, [0, 10, 20, 30, 40, 50, 60, 70], 40)
@@ -235,7 +236,8 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path):
     with open(err, "w") as fe:
         proc = subprocess.Popen(
             [sys.executable, "-m", "gdimitate.cli", "batch", str(demos), "--imitator", "hoap2",
-             "--out", str(out), "--workers", "2"], stdout=subprocess.DEVNULL, stderr=fe,
+             "--out", str(out), "--workers", "2", "--executor", executor],
+            stdout=subprocess.DEVNULL, stderr=fe,
             start_new_session=True)
     try:
         deadline = time.monotonic() + 90
@@ -244,7 +246,10 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path):
             time.sleep(0.1)
         assert "1/8 files" in err.read_text(), "no file finished in 90 s"
         kids = psutil.Process(proc.pid).children(recursive=True)
-        workers = [c.pid for c in kids if c.ppid() != proc.pid]  # the fork server's children
+        # the workers: all but multiprocessing's resource tracker and the pool's fork server
+        # (whose children, the pool's workers, carry its command line too)
+        workers = [c.pid for c in kids if "resource_tracker" not in " ".join(c.cmdline())
+                   and not (c.ppid() == proc.pid and "forkserver" in " ".join(c.cmdline()))]
         assert len(workers) >= 2, [c.cmdline() for c in kids]
         os.kill(proc.pid, signal.SIGINT)
         rc = proc.wait(30)
@@ -255,8 +260,8 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path):
     assert "interrupted" in err.read_text()
     assert not [w for w in workers if psutil.pid_exists(w)
                 and psutil.Process(w).status() != psutil.STATUS_ZOMBIE]  # stopped, not left
-    # no orphan: the workers were ended; the fork server exits once it sees its parent gone
-    # (it unloads gdimitate's native libraries first, which can take a second)
+    # no orphan: the workers were ended; the fork server (pool) exits once it sees its parent
+    # gone (it unloads gdimitate's native libraries first, which can take a second)
     deadline = time.monotonic() + 15
     while _session_processes(proc.pid) and time.monotonic() < deadline:
         time.sleep(0.2)
