@@ -320,3 +320,37 @@ def test_measured_forces_beside_a_demonstration_are_used(tmp_path):
     plain = load_demonstration(demos / "walk.mot")
     assert any(not np.array_equal(plain.motion.contact[s], d.motion.contact[s])
                for s in ("left", "right"))
+
+
+def _bvh_slices(folder: Path, starts: list[int], frames: int) -> list[Path]:
+    """Slices of the shipped CMU walk (BVH, 120 Hz; frame 0 is its T-pose, left out)."""
+    src = (Path(gd.__file__).parent / "data" / "gait" / "cmu_02_01" / "cmu_02_01.bvh"
+           ).read_text().splitlines()
+    i = next(k for k, line in enumerate(src) if line.startswith("Frames:"))
+    rows = src[i + 2:]
+    out = []
+    for k, s in enumerate(starts):
+        p = folder / f"cmu{k}.bvh"
+        p.write_text("\n".join(src[:i] + [f"Frames: {frames}", src[i + 1]]
+                               + rows[s: s + frames]) + "\n")
+        out.append(p)
+    return out
+
+
+@pytest.mark.slow
+def test_bvh_batch_optimal_matches_direct_adaptation(tmp_path):
+    from gdimitate.demonstration import load_demonstration
+
+    demos = tmp_path / "demos"
+    demos.mkdir()
+    _bvh_slices(demos, [1, 41, 81], 40)
+    opts = BatchOptions("hoap2", method="optimal")
+    res = run_batch(demos, tmp_path / "out", opts, workers=2, progress=False)
+    assert [r.status for r in res.rows] == ["done"] * 3, [r.error for r in res.rows]
+    hoap2 = gd.Robot.from_library("hoap2")
+    for r in res.rows:
+        d = load_demonstration(demos / r.file)
+        ref = gd.adapt(d.motion, d.robot, hoap2, "optimal", verbose=False)
+        got = gd.Motion.from_npz(tmp_path / "out" / r.output)
+        assert r.feasible == ref.feasible and r.audit_binding == ";".join(ref.audit.binding)
+        np.testing.assert_allclose(got.q, ref.motion.q, rtol=0, atol=1e-8)
