@@ -96,7 +96,7 @@ class StreamingAdaptor:
                       segments=len(self.body_map.segments))
         q_index = tuple(int(imitator.idx_q(j)) for j in self._act_names)
         self._c, _ = pb.compiled(imitator, flags, tuple(self.body_map.segments.values()),
-                                 q_index, 2, ipopt)
+                                 q_index, 2, {"max_iter": 60, **(ipopt or {})})
         self.reset()
 
     def reset(self) -> None:

@@ -2,7 +2,8 @@
 
 ``rnea(q, v, a) − Σ_c J_c(q)ᵀ w_c = Sᵀ τ`` (Featherstone's recursive Newton-Euler with the
 contact wrenches inside the recursion, :meth:`gdimitate.symbolic.SymbolicModel.rnea_contact`):
-the unactuated base rows vanish (divided by m·g: equalities, never relaxed) and each actuated
+the unactuated base rows vanish (in N and N·m, so that IPOPT's absolute constraint tolerance
+is the audit's: equalities, never relaxed) and each actuated
 joint's ``τ_j / τ_max,j`` lies in [−1, 1] (relaxable). A joint the user freezes still has its
 torque counted here.
 """
@@ -25,9 +26,9 @@ def torques(k: Knot) -> ca.SX:
 
 
 def expr(k: Knot) -> tuple[ca.SX, ca.SX]:
-    """``(base rows / (m·g) (nb,), τ_act / τ_max (n_act,) + slack)``."""
+    """``(base rows [N, N·m] (nb,), τ_act / τ_max (n_act,) + slack)``."""
     tau = torques(k)
-    base = tau[k.base_idx.tolist()] / k.mg
+    base = tau[k.base_idx.tolist()]
     act = tau[k.act_idx.tolist()] * k.P("inv_effort")
     return base, act + k.slack(len(k.act_idx))
 
