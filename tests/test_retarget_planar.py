@@ -208,3 +208,17 @@ def test_ctrl_c_stops_the_solve(tmp_path):
     assert p.returncode != 0
     assert "KeyboardInterrupt" in err
     assert "finished" not in out
+
+
+def test_frozen_joint_is_held_and_its_torque_still_counts(case2):
+    d, i, m = case2
+    r = adapt(_slice(m, 0, 40), d, i, method="optimal", rate=25, verbose=False,
+              limits=Limits(freeze=("left_ankle",), freeze_at={"left_ankle": 0.05}))
+    col = r.motion.q[:, i.idx_q("left_ankle")]
+    np.testing.assert_allclose(col, 0.05, atol=1e-12)
+    j = next(j for j in r.audit.joints if j.name == "left_ankle")
+    assert j.torque_max > 0.0 and np.isfinite(j.torque_ratio)  # counted against its limit
+    with pytest.raises(InvalidInputError, match="mu"):
+        adapt(m, d, i, method="optimal", verbose=False, contacts={"left": {"mu": 0.0}})
+    with pytest.raises(UnknownNameError, match="actuated joint"):
+        adapt(m, d, i, method="optimal", verbose=False, limits=Limits(freeze=("nope",)))
