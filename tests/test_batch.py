@@ -354,3 +354,19 @@ def test_bvh_batch_optimal_matches_direct_adaptation(tmp_path):
         got = gd.Motion.from_npz(tmp_path / "out" / r.output)
         assert r.feasible == ref.feasible and r.audit_binding == ";".join(ref.audit.binding)
         np.testing.assert_allclose(got.q, ref.motion.q, rtol=0, atol=1e-8)
+
+
+def test_imitator_model_file_named_relative_runs_by_absolute_path(inputs, tmp_path,
+                                                                  monkeypatch):
+    repo = Path(__file__).resolve().parents[1]
+    monkeypatch.chdir(repo)
+    res = run_batch(inputs, tmp_path / "urdf", BatchOptions("urdf/hoap2.urdf",
+                                                            method="analytic"),
+                    workers=2, progress=False)
+    done = res.by_status("done")
+    assert len(done) == 3
+    assert {r.imitator for r in done} == {str(repo / "urdf" / "hoap2.urdf")}
+    for r in done:  # the same model as the library's hoap2: the same motion
+        assert r.output == f"{r.file}.hoap2.analytic.npz"
+        np.testing.assert_allclose(gd.Motion.from_npz(tmp_path / "urdf" / r.output).q,
+                                   _direct(inputs / r.file).motion.q, rtol=0, atol=1e-12)

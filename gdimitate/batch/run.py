@@ -16,6 +16,7 @@ file system): paths, not data, are sent to them.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import multiprocessing as mp
 import os
 import secrets
@@ -206,6 +207,18 @@ def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
 
 
 # ------------------------------------------------------------------------- the batch
+def _absolute_models(options: BatchOptions) -> BatchOptions:
+    """Model files (``.urdf``/``.osim``) named by absolute path, so that workers started
+    elsewhere (another folder, a cluster node) find them."""
+    def absolute(spec: str | None) -> str | None:
+        if spec and Path(spec).suffix.lower() in (".urdf", ".osim") and Path(spec).is_file():
+            return str(Path(spec).expanduser().resolve())
+        return spec
+
+    return dataclasses.replace(options, imitator=absolute(options.imitator),
+                               demonstrator=absolute(options.demonstrator))
+
+
 def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
               options: BatchOptions, *, workers: int = 1, executor: str = "process",
               address: str | None = None, pattern: str = "*",
@@ -239,6 +252,7 @@ def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
                          f"{executor!r} runs on this machine")
     if executor == "dask":
         _dask()
+    options = _absolute_models(options)
     for spec in (options.imitator, options.demonstrator):
         if spec:  # a wrong name or model fails here, before any worker starts
             load_robot(spec)
