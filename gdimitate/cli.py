@@ -212,6 +212,7 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
     from .cpg import entrain
     from .gait import human_walk
 
+    out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
     if a.motion is not None:
         demo = _demonstration(a.motion, a)
         robot, motion = demo.robot, demo.motion
@@ -221,7 +222,6 @@ def _cmd_entrain(a: argparse.Namespace) -> None:
               f"(method={a.method}) …", flush=True)
         human, walk = human_walk()
         motion = adapt(walk, human, robot, a.method).motion
-    out = prepare_output_dir(a.out)
     print(f"entraining a Matsuoka network to {robot.name}'s joints and base "
           f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
           flush=True)

@@ -46,6 +46,10 @@ __all__ = ["SelfAdjustResult", "self_adjust", "state_features"]
 
 Readout = Literal["network", "own", "output"]
 
+#: Largest |target| accepted: beyond it the squares in the read-out fit and the error measures
+#: overflow float64 (whose largest square root is 1.3e154).
+MAX_TARGET = 1e100
+
 
 def state_features(states: np.ndarray, readout: Readout) -> np.ndarray:
     """Read-out features from states ``(4, T, n)`` → ``(T, n, m)`` (``m`` per joint).
@@ -325,6 +329,9 @@ def self_adjust(
     names = tuple(joint_names) if joint_names is not None else tuple(f"joint{j}" for j in range(n))
     if len(names) != n:
         raise OscillatorError(f"{len(names)} joint_names for {n} target columns")
+    if np.max(np.abs(x)) > MAX_TARGET:
+        raise OscillatorError(f"targets reach {np.max(np.abs(x)):.3g}; beyond {MAX_TARGET:g} "
+                              "the fit's float64 arithmetic overflows: rescale them (radians)")
     _check_options(harmonics=harmonics, frequency=frequency, initial_frequency=initial_frequency,
                    ratio=ratio, b=b, w=w, input_gain=input_gain, lock_margin=lock_margin,
                    coupling_gain=coupling_gain, readout=readout, teach_cycles=teach_cycles,
@@ -415,4 +422,8 @@ def self_adjust(
             "teacher_fit_nrmse": float(teacher.fit_nrmse[j]),
             "input_gain_k": float(unit.k[j]) if np.ndim(unit.k) else float(unit.k),
         }
+    bad = [f"{j}.{k}" for j, r in report.items() for k, v in r.items() if not np.isfinite(v)]
+    if bad:
+        raise OscillatorError(f"the tuned network's output is not finite ({bad[:4]}); the "
+                              "targets cannot be replayed as given")
     return dataclasses.replace(result, report=report)

@@ -7,7 +7,8 @@ server listens on ``--host`` only (default 127.0.0.1; meshcat's own listens on e
 interface). It prints ``zmq_url=...`` and ``web_url=...`` on two lines of stdout (which the
 parent sends to a file and reads), or, when a port cannot be bound, a ``cannot bind`` line,
 and exits with status 3. With ``--parent-pid`` it exits as soon as that process is gone (so
-it is never left running when its owner is killed, even with SIGKILL).
+it is never left running when its owner is killed, even with SIGKILL), deleting the files
+named by ``--owned-files`` (its temporary log and ready file) on the way out.
 """
 
 from __future__ import annotations
@@ -38,6 +39,8 @@ def main() -> int:
     parser.add_argument("--port", type=int, required=True)
     parser.add_argument("--host", default="127.0.0.1", help="web server address")
     parser.add_argument("--parent-pid", type=int, default=None)
+    parser.add_argument("--owned-files", nargs="*", default=[],
+                        help="temporary files of the parent to delete if it dies first")
     args = parser.parse_args()
 
     import tornado.ioloop
@@ -67,6 +70,11 @@ def main() -> int:
     if args.parent_pid is not None:
         def watch() -> None:
             if not _parent_alive(args.parent_pid):
+                for f in args.owned_files:
+                    try:
+                        os.unlink(f)
+                    except OSError:
+                        pass
                 bridge.ioloop.stop()
 
         tornado.ioloop.PeriodicCallback(watch, PARENT_POLL_MS).start()

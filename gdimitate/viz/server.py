@@ -248,7 +248,9 @@ class MeshcatServer:
                 proc = subprocess.Popen(
                     [sys.executable, "-u", str(_SERVE_SCRIPT),
                      "--zmq-url", f"tcp://{_LOCALHOST}:{zmq_p}", "--port", str(web_p),
-                     "--host", str(host), "--parent-pid", str(os.getpid())],
+                     "--host", str(host), "--parent-pid", str(os.getpid()),
+                     "--owned-files", str(ready_path),
+                     *([str(log_path)] if owns_log and log_path is not None else [])],
                     stdout=ready_out, stderr=out if out is not None else subprocess.DEVNULL,
                     stdin=subprocess.DEVNULL, start_new_session=True,
                 )

@@ -1,0 +1,246 @@
+"""Issue 11, robustness: the model's physics is checked, and every entry point raises our own
+exceptions with a message that says what to fix (each case failed before the fix: a −6.98 kg
+robot loaded, bare KeyError/EOFError/UnicodeDecodeError/OverflowError escaped, reordered
+joints and NaN options were accepted silently)."""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import gdimitate as gd
+from gdimitate.cli import main
+from gdimitate.errors import (
+    FileFormatError,
+    InvalidInputError,
+    OscillatorError,
+    UnitsWarning,
+    URDFError,
+    ViewerError,
+)
+from gdimitate.gait import human_walk_path, read_mot
+from gdimitate.motion import Motion
+from gdimitate.robot import Robot
+from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+from gdimitate.viz import Viewer
+from gdimitate.viz.server import MeshcatServer
+
+HOAP2 = planar_biped_urdf(PLANAR_MODELS["hoap2"])
+
+
+# ------------------------------------------------------------------------- 5. model physics
+def _link_block(text: str, link: str) -> tuple[int, int]:
+    i = text.index(f'<link name="{link}">')
+    return i, text.index("</link>", i)
+
+
+def _edit_link(link: str, old: str, new: str, text: str = HOAP2) -> str:
+    i, j = _link_block(text, link)
+    block, n = re.subn(old, new, text[i:j], count=1)
+    assert n == 1, (old, text[i:j])
+    return text[:i] + block + text[j:]
+
+
+def _load(tmp_path, text: str) -> Robot:
+    p = tmp_path / "robot.urdf"
+    p.write_text(text)
+    return Robot.from_urdf(p)
+
+
+def _urdf_mass(text: str) -> float:
+    return sum(float(m) for m in re.findall(r'<mass value="([^"]+)"', text))
+
+
+@pytest.mark.parametrize("link, old, new, says", [
+    ("left_thigh", r'<mass value="[^"]+"/>', '<mass value="-6.98"/>', "mass -6.98 kg"),
+    ("left_thigh", r'<mass value="[^"]+"/>', '<mass value="nan"/>', "must be finite"),
+    ("torso", r'ixx="[^"]+"', 'ixx="-0.001"', "not positive semi-definite"),
+    ("torso", r'izz="[^"]+"', 'izz="0.2"', "triangle inequality"),
+    ("torso", r'iyy="[^"]+"', 'iyy="inf"', "must be finite"),
+    ("torso", r'<origin xyz="[^"]+"', '<origin xyz="0 nan 0"', "three finite numbers"),
+])
+def test_impossible_inertial_data_is_refused_naming_the_link(tmp_path, link, old, new, says):
+    with pytest.raises(URDFError, match=re.escape(says)) as e:
+        _load(tmp_path, _edit_link(link, old, new))
+    assert repr(link) in str(e.value)
+
+
+def test_massless_moving_leaf_is_refused_massless_frames_are_fine(tmp_path):
+    zero = ('<mass value="0"/>\n      <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" '
+            'izz="0"/>')
+    pattern = r'<mass value="[^"]+"/>\s*<inertia [^>]*/>'
+    # the foot hangs on the (revolute) ankle with nothing below it: the ankle moves nothing
+    with pytest.raises(URDFError, match="'left_foot' hangs on the moving joint 'left_ankle'"):
+        _load(tmp_path, _edit_link("left_foot", pattern, zero))
+    # a massless shank is fine: the foot below it has mass
+    text = _edit_link("left_shank", pattern, zero)
+    # and so is a massless frame on a fixed joint (a sole marker)
+    text = text.replace("</robot>", '<link name="left_marker"/><joint name="left_marker_fix" '
+                        'type="fixed"><parent link="left_foot"/><child link="left_marker"/>'
+                        '<origin xyz="0 0 -0.01"/></joint></robot>')
+    robot = _load(tmp_path, text)
+    assert robot.mass == pytest.approx(_urdf_mass(text), rel=1e-12)
+    assert robot.mass == pytest.approx(pin.computeTotalMass(pin.buildModelFromXML(text)),
+                                       rel=1e-12)
+    # an explicit exemption, for models that are massless on purpose
+    robot = Robot.from_urdf(_write(tmp_path, _edit_link("left_foot", pattern, zero)),
+                            massless_joints=("left_ankle",))
+    assert robot.legs["left"].ankle == "left_ankle"
+
+
+def _write(tmp_path, text: str):
+    p = tmp_path / "exempt.urdf"
+    p.write_text(text)
+    return p
+
+
+# ------------------------------------------------------------------------- 6. entry points
+def _motion(robot: Robot, T: int = 150, rate: float = 60.0, amp: float = 0.3) -> Motion:
+    t = np.arange(T) / rate
+    q = np.tile(robot.neutral, (T, 1))
+    w = 2 * np.pi * 0.8 * t
+    for side, phase in (("left", 0.0), ("right", np.pi)):
+        q[:, robot.idx_q(f"{side}_hip")] += amp * np.sin(w + phase)
+        q[:, robot.idx_q(f"{side}_knee")] += -0.4 - amp * np.sin(w + phase + 1.0)
+    return Motion(t, robot.joint_names, q)
+
+
+@pytest.fixture(scope="module")
+def hoap2() -> Robot:
+    return Robot.from_library("hoap2")
+
+
+def test_npz_files_that_are_not_motions(tmp_path, hoap2):
+    good = tmp_path / "good.npz"
+    _motion(hoap2).to_npz(good)
+    assert Motion.from_npz(good).T == 150
+    cases = {
+        "empty.npz": (b"", "is empty"),
+        "table.npz": (b"time,left_hip\n0,0.1\n0.1,0.2\n", "looks like text"),
+        "short.npz": (b"PK\x03\x04\x14\x00", "not a readable NPZ"),
+    }
+    for name, (data, says) in cases.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(FileFormatError, match=says):
+            Motion.from_npz(tmp_path / name)
+    z = dict(np.load(good))
+    np.savez(tmp_path / "nokey.npz", **{k: v for k, v in z.items() if k != "q"})
+    with pytest.raises(FileFormatError, match=r"lacks the keys \['q'\]"):
+        Motion.from_npz(tmp_path / "nokey.npz")
+    np.savez(tmp_path / "pickled.npz", **{**z, "joint_names": np.array([{"a": 1}])})
+    with pytest.raises(FileFormatError, match="pickled Python objects"):
+        Motion.from_npz(tmp_path / "pickled.npz")
+    with pytest.raises(FileFormatError, match="no such NPZ file"):
+        Motion.from_npz(tmp_path / "absent.npz")
+
+
+def test_binary_and_empty_mot_files(tmp_path):
+    p = tmp_path / "walk.mot"
+    p.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(FileFormatError, match="not UTF-8 text"):
+        read_mot(p)
+    p.write_text("Coordinates\nendheader\n")
+    with pytest.raises(FileFormatError, match="no column names"):
+        read_mot(p)
+    p.write_text("Coordinates\nendheader\ntime\ta\ta\n0\t1\t2\n")
+    with pytest.raises(FileFormatError, match="repeated column names"):
+        read_mot(p)
+
+
+def _mot(path, degrees: bool, values) -> None:
+    rows = "\n".join(f"{i / 60:.4f}\t{v:.6f}\t{0.9:.3f}" for i, v in enumerate(values))
+    path.write_text(f"Coordinates\nversion=1\ninDegrees={'yes' if degrees else 'no'}\n"
+                    f"endheader\ntime\thip_flexion_r\tpelvis_ty\n{rows}\n")
+
+
+def test_in_degrees_flag_that_contradicts_the_values_warns(tmp_path):
+    p = tmp_path / "x.mot"
+    deg = 30 * np.sin(np.linspace(0, 2 * np.pi, 60))
+    _mot(p, degrees=False, values=deg)
+    with pytest.warns(UnitsWarning, match="inDegrees=no.*30"):
+        read_mot(p)
+    _mot(p, degrees=True, values=np.radians(deg))
+    with pytest.warns(UnitsWarning, match="inDegrees=yes"):
+        read_mot(p)
+    for degrees, v in ((True, deg), (False, np.radians(deg))):
+        _mot(p, degrees=degrees, values=v)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", UnitsWarning)
+            read_mot(p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnitsWarning)
+        assert bool(read_mot(human_walk_path())["__in_degrees__"])
+
+
+def test_entrain_refuses_another_robots_or_reordered_joints(hoap2):
+    m = _motion(hoap2)
+    names = list(m.joint_names)
+    order = [names.index(n) for n in [*names[:3], names[4], names[3], *names[5:]]]
+    reordered = Motion(m.t, tuple(names[i] for i in order), m.q[:, order])
+    with pytest.raises(InvalidInputError, match="same names in another order"):
+        gd.entrain(hoap2, reordered)
+    renamed = Motion(m.t, (*names[:-1], "tail"), m.q)
+    with pytest.raises(InvalidInputError, match=rf"missing \['{names[-1]}'\], unknown \['tail'\]"):
+        gd.entrain(hoap2, renamed)
+    with pytest.raises(InvalidInputError, match="motion is constant"):
+        gd.entrain(hoap2, Motion(m.t, m.joint_names, np.tile(hoap2.neutral, (m.T, 1))))
+
+
+@pytest.mark.parametrize("kw, says", [
+    ({"duration": float("nan")}, "duration"), ({"duration": math.inf}, "duration"),
+    ({"duration": 0.0}, "duration"), ({"rate": 0.0}, "rate"), ({"rate": float("nan")}, "rate"),
+    ({"dt": 0.0}, "dt"), ({"adapt_rate": float("nan")}, "adapt_rate"),
+    ({"ratio": -0.2}, "ratio"), ({"ratio": float("nan")}, "ratio"),
+    ({"harmonics": 2.5}, "harmonics must be an integer"),
+])
+def test_entrain_options_are_validated(hoap2, kw, says):
+    with pytest.raises(InvalidInputError, match=says) as e:
+        gd.entrain(hoap2, _motion(hoap2), **kw)
+    assert "tau_r is NaN" not in str(e.value)
+
+
+def test_targets_whose_scale_overflows_are_refused():
+    t = np.arange(0, 2.5, 1 / 60)
+    x = np.stack([np.sin(2 * np.pi * 0.8 * t), np.cos(2 * np.pi * 0.8 * t)], 1)
+    with pytest.raises(OscillatorError, match="rescale"):
+        gd.oscillator.self_adjust(t, 1e200 * x)
+
+
+def test_cli_out_must_be_a_writable_folder(tmp_path, capsys):
+    file = tmp_path / "taken"
+    file.write_text("mine")
+    assert main(["adapt", "--out", str(file)]) == 2
+    assert "is an existing file" in capsys.readouterr().err
+    assert file.read_text() == "mine"
+    assert main(["entrain", "--out", str(file / "sub")]) == 2
+    assert "cannot write to output folder" in capsys.readouterr().err
+
+
+def test_ports_outside_the_tcp_range(capsys):
+    for bad in ("0", "70000", "-1", "http"):
+        with pytest.raises(SystemExit) as e:
+            main(["view", "--port", bad])
+        assert e.value.code == 2
+        assert "--port" in capsys.readouterr().err
+    for bad in (0, 70000, -5, 2**70, "x", 1.5):
+        with pytest.raises(ViewerError, match="1-65535"):
+            MeshcatServer.start(port=bad)
+    with pytest.raises(ViewerError, match="1-65535"):
+        Viewer.start(port=65536)
+
+
+@pytest.mark.parametrize("bad", ["0.3", 0.3 + 0.1j, ["0.1", 0.2], None, {"a": 1}])
+def test_eq1_refuses_strings_and_complex_numbers(bad):
+    with pytest.raises(InvalidInputError, match="real numbers"):
+        gd.planar.eq1(bad, -0.2)
+    with pytest.raises(InvalidInputError):
+        gd.planar.eq1(0.2, -0.2, demonstrator=("0.4", 0.6))
+    # real input keeps working and matches the closed form of a same-sized leg (identity)
+    r = gd.planar.eq1(np.array([0.2, -0.1]), np.array([-0.3, -0.5]), (0.4, 0.6), (0.4, 0.6))
+    assert np.allclose(r.theta1, [0.2, -0.1]) and np.allclose(r.theta2, [-0.3, -0.5])
+
