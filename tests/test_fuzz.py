@@ -26,7 +26,7 @@ from gdimitate.cli import main
 from gdimitate.errors import GdimitateError
 from gdimitate.gait import read_mot, read_opensim
 from gdimitate.motion import Motion
-from gdimitate.opensim import read_coordinates
+from gdimitate.opensim import read_coordinates, read_grf
 from gdimitate.robot import Robot
 
 FAST = settings(max_examples=200, deadline=None, derandomize=True,
@@ -121,17 +121,30 @@ def _mot_lines() -> list[str]:
             "endheader", "\t".join(["time", *cols]), *rows]
 
 
+def _grf_lines() -> list[str]:
+    cols = [f"{p}ground_{k}{a}" for p in ("", "1_") for k in ("force_v", "force_p", "torque_")
+            for a in "xyz"]
+    rows = []
+    for i in range(20):
+        f = [30.0, 700 * abs(np.sin(i / 6)), 5.0, 0.1 * i, 0.0, 0.1, 0.0, 0.0, 2.0]
+        rows.append("\t".join(f"{v:.4f}" for v in [i / 60, *f, *f]))
+    return ["grf.mot", "version=1", "nRows=20", "nColumns=19", "inDegrees=yes", "endheader",
+            "\t".join(["time", *cols]), *rows]
+
+
 HOAP2 = Robot.from_library("hoap2")
 
 
 @FAST
-@given(st.one_of(mutated(_mot_lines()), st.binary(max_size=300).map(bytes)))
+@given(st.one_of(mutated(_mot_lines()), mutated(_grf_lines()),
+                 st.binary(max_size=300).map(bytes)))
 def test_fuzz_opensim_tables(content):
     with sandbox(**{"walk.mot": content}) as (paths, _):
         p = paths["walk.mot"]
         _ours(read_mot, p)
         _ours(read_opensim, p)
         _ours(read_coordinates, p, HOAP2)
+        _ours(read_grf, p, HOAP2)
 
 
 # ------------------------------------------------------------------------- .npz
@@ -310,6 +323,9 @@ def test_fuzz_seeds_are_valid(tmp_path):
     p = tmp_path / "walk.mot"
     p.write_text("\n".join(_mot_lines()))
     assert read_mot(p)["hip_flexion_r"].shape == (20,)
+    p.write_text("\n".join(_grf_lines()))
+    forces = read_grf(p, HOAP2)
+    assert forces.feet["left"].force.shape == (20, 3)
     b = tmp_path / "clip.bvh"
     b.write_text("\n".join(_bvh_lines()))
     robot, motion = read_bvh(b)
