@@ -92,6 +92,7 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs: Sequence[Path]
         scheme, rest = "", filename
     scheme = scheme.lower()
     if scheme in ("package", "model"):
+        rest = rest.lstrip("/")  # package:///NAME/... (Talos full v2) reads as package://NAME/
         name = rest.split("/", 1)[0]
         dirs = list(package_dirs)
         if name == ERD_PACKAGE:

@@ -120,7 +120,8 @@ def test_mesh_inside_loads_and_missing_mesh_is_named(tmp_path):
     robot_dir = tmp_path / "pkg" / "robot"
     robot_dir.mkdir(parents=True)
     _stl(robot_dir / "torso.stl")
-    for ref in ("torso.stl", "package://robot/torso.stl", f"file://{robot_dir / 'torso.stl'}"):
+    for ref in ("torso.stl", "package://robot/torso.stl", "package:///robot/torso.stl",
+                f"file://{robot_dir / 'torso.stl'}"):
         r = Robot.from_urdf(_urdf_with_mesh(robot_dir, ref), package_dir=tmp_path / "pkg")
         paths = [g.meshPath for g in r.visual_model.geometryObjects if g.meshPath.endswith("stl")]
         assert paths == [str((robot_dir / "torso.stl").resolve())]
