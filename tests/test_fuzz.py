@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 import gdimitate as gd
 from gdimitate.bvh import read_bvh
 from gdimitate.cli import main
-from gdimitate.errors import GdimitateError
+from gdimitate.errors import BVHError, GdimitateError
 from gdimitate.gait import read_mot, read_opensim
 from gdimitate.motion import Motion
 from gdimitate.opensim import read_coordinates, read_grf
@@ -198,25 +198,19 @@ def _bvh_lines() -> list[str]:
     return lines
 
 
-#: Junk for BVH files: without control characters, which break the BVH reader's URDF writer
-#: (see test_bvh_joint_name_with_a_control_character, a known failure).
-BVH_JUNK = [j for j in JUNK if j.isprintable()]
-
-
 @settings(FAST, max_examples=150)
-@given(st.one_of(mutated(_bvh_lines(), BVH_JUNK), st.binary(max_size=200).map(bytes)))
+@given(st.one_of(mutated(_bvh_lines(), JUNK), st.binary(max_size=200).map(bytes)))
 def test_fuzz_bvh(content):
     with sandbox(**{"clip.bvh": content}) as (paths, _):
         _ours(read_bvh, paths["clip.bvh"])
 
 
-@pytest.mark.xfail(strict=True, raises=ValueError,
-                   reason="found by fuzzing: a NUL in a BVH joint name escapes as lxml's "
-                          "ValueError from gdimitate.bvh.urdf instead of a BVHError")
 def test_bvh_joint_name_with_a_control_character(tmp_path):
+    """Found by fuzzing: a NUL in a BVH joint name escaped as lxml's ValueError; now BVHError."""
     p = tmp_path / "clip.bvh"
     p.write_text("\n".join(_bvh_lines()).replace("ROOT Hips", "ROOT \x00"))
-    _ours(read_bvh, p)
+    with pytest.raises(BVHError, match="control character"):
+        read_bvh(p)
 
 
 # ------------------------------------------------------------------------- URDF

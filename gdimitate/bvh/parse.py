@@ -152,6 +152,9 @@ def _read_block(tk: _Tokens, name: str, kind: str, line0: int, parent: int,
     """Read one ROOT/JOINT block after its name; append it and its descendants; returns the
     next free column."""
     owner = f"{kind} {name!r} (line {line0})"
+    if not name.isprintable():
+        raise tk.error(line0, f"{kind} name {name!r} holds a control character; joint names "
+                              "become URDF link and joint names and must be printable text")
     tk.take("{", f"after {kind} {name!r} ")
     offset = _read_offset(tk, owner)
     tok, line = tk.peek()
