@@ -292,9 +292,10 @@ def build_parser() -> argparse.ArgumentParser:
     method_help = ("adaptor: optimal (whole-body, contact-consistent, within the imitator's "
                    "limits), analytic (the paper's Eq. 1, sagittal), copy (joint angles; the "
                    "baseline) (default: %(default)s)")
-    d = sub.add_parser("demo", help="the main job: real human walk → HOAP-2-sized imitator")
+    d = sub.add_parser("demo", help="the main job: the real 3-D walk → G1 (whole-body adaptor, "
+                                    "MuJoCo physics check, oscillator replay)")
     d.add_argument("--out", default="gdimitate-demo", help="output folder (default: %(default)s)")
-    _add_robot_args(d, "--imitator", "hoap2", "imitator robot")
+    _add_robot_args(d, "--imitator", "g1", "imitator robot (e.g. hoap2, talos)")
     d.add_argument("--method", default="optimal", choices=methods, help=method_help)
     d.set_defaults(func=_cmd_demo)
     pp = sub.add_parser("paper", help="the paper's Figs. 4–13 (in spirit) + summary.json")

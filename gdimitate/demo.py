@@ -1,12 +1,13 @@
-"""``gdimitate demo``: the main job on the built-in default.
+"""``gdimitate demo``: the main job on the built-in default (scenario code, not core API).
 
-The shipped real human walk (OpenSim subject01) → planar human demonstrator → HOAP-2-sized
-imitator through the optimal adaptor (Eq. (1) and joint copying alongside) → a Matsuoka
-oscillator network entrained to the imitator's angles, then replaying free after the teaching
-input stops → plots, the imitator's and the
-replay's joint trajectories (CSV), tuned oscillator parameters and a summary (JSON),
-``demo.html`` (meshcat: demonstrator ghost, imitator, CPG replay; plays offline) and a short
-table on stdout.
+The shipped real 3-D walk (OpenSim subject01: its own model, IK angles and measured ground
+reaction forces) → one stride (heel strike to heel strike of the right foot) → a 3-D humanoid
+(G1 by default) through the whole-body optimal adaptor, keeping each stance foot's measured
+push direction → the independent audit (docs/design.md §12) → the physics check in MuJoCo
+(docs/design.md §11), with the 3-D joint-angle copy simulated alongside as the negative
+control → a Matsuoka network entrained to the adapted motion, replaying it free-running →
+``demo.html`` (demonstrator, plan and simulation), plots, the adapted motion (NPZ, CSV), the
+oscillator parameters and ``summary.json``, and a table on stdout.
 """
 
 from __future__ import annotations
@@ -18,15 +19,15 @@ from typing import Any
 
 import numpy as np
 
-from . import plots
-from .adapt import adapt
-from .cpg import entrain
-from .gait import human_walk
-from .metrics import force_direction, joint_limit_margins, sagittal_angles
-from .paper import step_length
+from .contact import ContactForces, FootForces
+from .motion import Motion
 from .robot import Robot
 
-__all__ = ["run_demo"]
+__all__ = ["run_demo", "one_stride"]
+
+#: Knots per second of the demo's optimal solve (the library default is 50 Hz; 30 Hz keeps
+#: the demo under two minutes on two cores).
+DEMO_RATE = 30.0
 
 
 def _table(rows: list[tuple[str, str]]) -> str:
@@ -34,19 +35,38 @@ def _table(rows: list[tuple[str, str]]) -> str:
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
 
 
-def _write_html(path: Path, demo_robot, demo, imit, adapted, cpg) -> str:
-    """Demonstrator (a translucent ghost scaled to the imitator), imitator and CPG replay."""
+def one_stride(motion: Motion, forces: ContactForces, side: str = "right"
+               ) -> tuple[Motion, ContactForces]:
+    """The first full stride of ``motion`` (from one heel strike of ``side`` to the next, found
+    in its contact schedule) and the forces on the same frames."""
+    from .errors import InvalidInputError
+
+    c = np.asarray(motion.contact[side], int)
+    strikes = np.flatnonzero(np.diff(c) == 1) + 1
+    if strikes.size < 2:
+        raise InvalidInputError(f"the demonstration has fewer than two {side} heel strikes; "
+                                "no full stride to adapt")
+    sl = slice(int(strikes[0]), int(strikes[1]) + 1)
+    m = motion.replace(t=motion.t[sl], q=motion.q[sl], v=None, a=None,
+                       contact={s: v[sl] for s, v in motion.contact.items()})
+    f = ContactForces(forces.t[sl], {s: FootForces(x.force[sl], x.cop[sl], x.torque[sl],
+                                                   x.contact[sl])
+                                     for s, x in forces.feet.items()},
+                      forces.source, forces.frame_note + f"; one {side} stride")
+    return m, f
+
+
+def _write_html(path: Path, demo_robot: Robot, demo: Motion, imit: Robot, sim, L: float) -> str:
+    """Demonstrator (a translucent ghost scaled to the imitator), plan and simulation."""
+    from .sim.animation import show_simulation
     from .viz import Viewer
 
-    L = imit.legs["left"].length
     v = Viewer.start(quiet=True)
     try:
-        v.show(imit, adapted.motion, name="imitator",
-               force_directions=sagittal_angles(force_direction(imit, adapted.motion)))
+        show_simulation(imit, sim, viewer=v, gap=1.5 * L)
         v.show(demo_robot, demo, name="demonstrator", scale=L / demo_robot.legs["left"].length,
-               color=(0.55, 0.75, 1.0), opacity=0.35, foot_paths=False,
-               force_directions=sagittal_angles(force_direction(demo_robot, demo)))
-        v.show(imit, cpg.replay, name="cpg_replay", offset=(0.0, 2.5 * L, 0.0))
+               offset=(0.0, -3.0 * L, 0.0), color=(0.85, 0.65, 0.45), opacity=0.4,
+               foot_paths=False)
         v.animate(fps=30)
         v.save_html(path)
     finally:
@@ -54,122 +74,128 @@ def _write_html(path: Path, demo_robot, demo, imit, adapted, cpg) -> str:
     return str(path)
 
 
-def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "hoap2",
-             method: str = "optimal", log=print) -> dict[str, Any]:
+def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
+             method: str = "optimal", log=print, rate: float = DEMO_RATE) -> dict[str, Any]:
     """Run the main job and write its files into ``out``; return the summary dict.
 
-    ``method``: the adaptor whose motion is written, entrained and shown (default: the
-    optimal adaptor, which respects the imitator's limits); Eq. (1) and joint copying are
-    always computed too and compared in the printed table and ``summary.json``."""
-    t0 = time.perf_counter()
-    out = Path(out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / ".write-test").write_text("")
-        (out / ".write-test").unlink()
-    except OSError as e:
-        from .errors import InvalidInputError
+    ``imitator``: a library name or a :class:`Robot` (``"hoap2"`` for the planar HOAP-2-sized
+    model); ``method``: the adaptor whose result is simulated, entrained and shown (default
+    the whole-body optimal adaptor); ``rate`` [knots/s] of the optimal solve."""
+    from . import gait, sim
+    from .adapt import adapt
+    from .baselines import joint_copy
+    from .cpg import entrain
+    from .plots import plot_force_directions
+    from .safety import prepare_output_dir
+    from .sim import plots as sim_plots
 
-        raise InvalidInputError(f"cannot write to output folder {out}: {e}") from None
-    log("[1/6] loading the shipped real walk (OpenSim subject01, 60 Hz) …")
-    demo_robot, demo = human_walk()
+    t0 = time.perf_counter()
+    out = prepare_output_dir(out)
+    log("[1/7] loading the shipped 3-D walk (OpenSim subject01: model, IK angles, measured "
+        "forces) …")
+    demo_robot, walk, walk_forces = gait.human_walk_3d()
+    demo, forces = one_stride(walk, walk_forces)
     imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
-    log(f"[2/6] adapting {demo_robot.name} (leg {demo_robot.legs['left'].length:.3f} m) → "
-        f"{imit.name} (leg {imit.legs['left'].length:.3f} m), method={method} …")
-    results = {"copy": adapt(demo, demo_robot, imit, "copy"),
-               "analytic": adapt(demo, demo_robot, imit, "analytic")}
-    if method not in results:
-        results[method] = adapt(demo, demo_robot, imit, method)
-    adapted = results[method]
-    rep = adapted.report
-    log("[3/6] writing trajectories and plots …")
-    adapted.motion.to_csv(out / "imitator_joints.csv")
-    adapted.motion.to_npz(out / "imitator_motion.npz", robot=imit)
-    labels = {"optimal": "optimal adaptor", "analytic": "Eq. (1)", "copy": "joint copy"}
-    tracks = [("human demonstrator", demo_robot, demo)] + [
-        (f"{imit.name}, {labels[m]}", imit, results[m].motion)
-        for m in ("optimal", "analytic", "copy") if m in results]
-    title = f"real walk → {imit.name}"
-    plots.plot_heights(tracks, title, out / "heights.png")
-    plots.plot_angles(tracks, title, out / "angles.png")
-    plots.plot_paths(tracks, title, out / "paths.png")
-    plots.plot_com(tracks, title, out / "com.png")
-    margins = joint_limit_margins(imit, adapted.motion)
-    summary: dict[str, Any] = {
-        "demonstration": "OpenSim subject01 treadmill walk (shipped)",
-        "demonstrator": demo_robot.name,
-        "imitator": imit.name,
-        "method": method,
-        "frames": demo.T,
-        "duration_s": float(demo.t[-1]),
-        "adaptor": {**rep.to_dict(), **({"torque_ratio_max": {
-            j.name: j.torque_ratio for j in adapted.audit.joints}, "feasible_physically":
-            bool(adapted.audit.feasible)} if adapted.audit is not None else {})},
-        "audit": adapted.audit.to_dict() if adapted.audit is not None else None,
-        **{f"{m}_baseline": results[m].report.to_dict() for m in results if m != method},
-        "joint_limit_margin_min_rad": {j: float(m.min()) for j, m in margins.items()},
-        "step_length_over_leg_length": {
-            "demonstrator": step_length(demo_robot, demo) / demo_robot.legs["left"].length,
-            **{m: step_length(imit, results[m].motion) / imit.legs["left"].length
-               for m in results},
-        },
-    }
-    log("[4/6] entraining the Matsuoka network and replaying it free-running …")
-    cpg = entrain(imit, adapted.motion)
+    L = imit.legs["left"].length
+    log(f"[2/7] adapting one stride ({demo.t[0]:.2f}–{demo.t[-1]:.2f} s) → {imit.name} "
+        f"(leg {L:.3f} m), method={method}, keeping the measured push directions …")
+    opts = dict(force="measured", forces=forces, rate=rate, verbose=False) \
+        if method == "optimal" else {}
+    adapted = adapt(demo, demo_robot, imit, method, **opts)
+    log("[3/7] physics check: MuJoCo + whole-body QP tracking controller …")
+    plan_sim = sim.simulate(imit, adapted, demo_forces=forces)
+    copy_sim = None
+    if imit.base == "free":
+        log("       … and the 3-D joint-angle copy as the negative control …")
+        copy_sim = sim.simulate(imit, joint_copy(demo, demo_robot, imit), demo_forces=forces)
+    log("[4/7] entraining a Matsuoka network to the adapted motion, replaying it …")
+    cpg = entrain(imit, adapted.motion, duration=3 * float(demo.t[-1] - demo.t[0]))
+    log("[5/7] writing motions and plots …")
+    adapted.save(out / "imitator_motion.npz")
+    adapted.save(out / "imitator_motion.csv", format="csv")
     (out / "oscillator_params.json").write_text(cpg.result.to_json())
     cpg.replay.to_csv(out / "cpg_replay_joints.csv")
-    rep_cpg = cpg.report
-    summary["cpg"] = {
-        "learned_frequency_hz": float(cpg.result.frequency),
-        "joints": list(cpg.names),
-        "nrmse_entrained_max": max(v["nrmse_entrained"] for v in rep_cpg.values()),
-        "freq_error_after_max": max(v["freq_error_after"] for v in rep_cpg.values()),
-        "per_joint": rep_cpg,
+    from .metrics import force_direction
+
+    dirs = {"demonstrator (measured)": force_direction(demo_robot, demo, "measured",
+                                                      forces=forces)}
+    if adapted.wrenches is not None:
+        dirs[f"{imit.name} plan"] = _plan_directions(imit, adapted)
+    plot_force_directions(demo.t, dirs, demo.contact, f"push on the ground → {imit.name}",
+                          out / "force_directions.png",
+                          times={f"{imit.name} plan": adapted.motion.t})
+    sim_plots.plot_summary(plan_sim, out / "simulation.png")
+    log("[6/7] writing demo.html (meshcat: demonstrator, plan, simulation) …")
+    html = _write_html(out / "demo.html", demo_robot, demo, imit, plan_sim, L)
+    aud = adapted.audit
+    summary: dict[str, Any] = {
+        "demonstration": "OpenSim subject01 walk (shipped), one right stride",
+        "demonstrator": demo_robot.name, "imitator": imit.name, "method": method,
+        "frames": demo.T, "duration_s": float(demo.t[-1] - demo.t[0]),
+        "knots": adapted.motion.T,
+        "audit": aud.to_dict() if aud is not None else None,
+        "feasible": bool(adapted.feasible),
+        "simulation": plan_sim.metrics.to_dict(),
+        "joint_copy_simulation": copy_sim.metrics.to_dict() if copy_sim else None,
+        "cpg": {"learned_frequency_hz": float(cpg.result.frequency),
+                "signals": list(cpg.names),
+                "nrmse_entrained_max": max(v["nrmse_entrained"] for v in cpg.report.values()),
+                "freq_error_after_max": max(v["freq_error_after"] for v in cpg.report.values())},
+        "html": html,
     }
-    log("[5/6] writing demo.html (meshcat) …")
-    summary["html"] = _write_html(out / "demo.html", demo_robot, demo, imit, adapted, cpg)
     summary["elapsed_s"] = time.perf_counter() - t0
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
-    log("[6/6] done.\n")
-    cols = [m for m in ("optimal", "analytic", "copy") if m in results]
-    reps = {m: results[m].report for m in cols}
-    def row(label, fn):
-        return (label, "  ".join(f"{fn(m):>16}" for m in cols))
-
-    def torque(m):  # the audit's recomputation (optimal method: it has wrenches)
-        aud = results[m].audit
-        ratios = [j.torque_ratio for j in aud.joints if np.isfinite(j.torque_ratio)] if aud \
-            else []
-        return f"{max(ratios):.2f}" if ratios else "—"
-
-    def physical(m):
-        aud = results[m].audit
-        return "—" if aud is None else ("yes" if aud.feasible else
-                                        "no: " + ", ".join(aud.binding[:2]))
-
-    hk = [j for j in rep_cpg if j.split("_")[-1] in ("hip", "knee")]
-    rows = [
-        ("demonstration", f"{demo.T} frames, {demo.t[-1]:.2f} s, human leg "
-                          f"{demo_robot.legs['left'].length:.3f} m"),
-        ("imitator", f"{imit.name}, leg {imit.legs['left'].length:.3f} m"),
-        row("", lambda m: labels[m]),
-        row("infeasible frames (L+R)", lambda m: f"{sum(reps[m].infeasible_frames.values())}"
-                                                 f" of {2 * demo.T}"),
-        row("push-direction error [deg]",
-            lambda m: f"{np.degrees(reps[m].force_direction_error_max):.1e}"),
-        row("hip-height ratio error", lambda m: f"{reps[m].hip_height_ratio_error_max:.3f}"),
-        row("joint-limit excess [deg]",
-            lambda m: f"{np.degrees(reps[m].joint_limit_violation_max):.2f}"),
-        row("max |torque| / limit", torque),
-        row("physically feasible", physical),
-        row("ground penetration [mm]", lambda m: f"{reps[m].ground_penetration_max * 1e3:.1f}"),
-        ("CPG learned frequency", f"{cpg.result.frequency:.4f} Hz"),
-        ("CPG tracking nRMSE max", f"{max(rep_cpg[j]['nrmse_entrained'] for j in hk) * 100:.1f} %"
-                                   " hip/knee, "
-                                   f"{summary['cpg']['nrmse_entrained_max'] * 100:.1f} % all"),
-        ("CPG freq. error after stop", f"{summary['cpg']['freq_error_after_max'] * 100:.2f} %"),
-        ("output", f"{out}/ (demo.html, summary.json, *.csv, *.png)"),
-        ("elapsed", f"{summary['elapsed_s']:.1f} s"),
-    ]
-    log(_table(rows))
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json))
+    log("[7/7] done.\n")
+    log(_table(_rows(summary, adapted, plan_sim, copy_sim, cpg, out)))
     return summary
+
+
+def _plan_directions(robot: Robot, adapted):
+    """The plan's push directions (its contact forces, reversed, in the world frame)."""
+    from .metrics import ForceDirection, frame_rotations
+
+    out = {}
+    for s, c in adapted.contacts.items():
+        R = frame_rotations(robot, adapted.motion.q, c.frame)
+        f = np.einsum("tij,tj->ti", R, adapted.wrenches[s][:, :3])
+        out[s] = ForceDirection.from_vectors(-f, adapted.motion.contact[s], "plan")
+    return out
+
+
+def _json(x: object) -> object:
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return str(x)
+
+
+def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str]]:
+    aud = adapted.audit
+
+    def simline(s) -> str:
+        m = s.metrics
+        fd = m.force_vs_demo or {}
+        rm = "/".join(f"{fd[k].rmse_sagittal_deg:.1f}" for k in ("left", "right") if k in fd)
+        fell = f"FELL at {m.fall_time:.2f} s" if m.fell else "walked the stride"
+        return f"{fell}; slip {100 * m.slip_max:.1f} cm; push RMSE L/R {rm} deg"
+
+    rows = [("demonstration", f"{summary['frames']} frames, {summary['duration_s']:.2f} s "
+                              "(one stride of the 3-D walk)"),
+            ("imitator", f"{summary['imitator']} ({adapted.motion.T} knots, {summary['method']})")]
+    if aud is not None:
+        worst_tau = max((j.torque_ratio for j in aud.joints if np.isfinite(j.torque_ratio)),
+                        default=float("nan"))
+        rows += [("audit (Pinocchio)", "feasible" if aud.feasible else
+                  "INFEASIBLE: " + ", ".join(aud.binding[:3])),
+                 ("  worst |torque|/limit", f"{worst_tau:.2f}"),
+                 ("  min normal force [N]", ", ".join(
+                     f"{s} {f.normal.value:.0f}" for s, f in aud.feet.items()))]
+    rows.append(("simulation, plan", simline(plan_sim)))
+    if copy_sim is not None:
+        rows.append(("simulation, joint copy", simline(copy_sim)))
+    rows += [("CPG frequency", f"{cpg.result.frequency:.3f} Hz, tracking nRMSE max "
+                               f"{100 * summary['cpg']['nrmse_entrained_max']:.1f} %"),
+             ("output", f"{out}/ (demo.html, summary.json, imitator_motion.npz/.csv, *.png)"),
+             ("elapsed", f"{summary['elapsed_s']:.1f} s")]
+    return rows

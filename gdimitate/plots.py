@@ -126,18 +126,21 @@ def plot_eq1_argument(t: np.ndarray, arguments: dict[str, np.ndarray], title: st
 
 def plot_force_directions(t: np.ndarray, directions: Mapping[str, Mapping[str, ForceDirection]],
                           contact: Mapping[str, np.ndarray] | None = None, title: str = "",
-                          path: Path | None = None):
+                          path: Path | None = None,
+                          times: Mapping[str, np.ndarray] | None = None):
     """Sagittal and frontal force-direction angles [deg] of each foot over time ``t`` ``(T,)``
     [s]: ``directions`` maps a label (e.g. "measured", "dynamics", "imitator") to
-    :func:`gdimitate.metrics.force_direction`'s result on that time grid. ``contact``
-    (``{side: (T,) bool}``) shades single support."""
+    :func:`gdimitate.metrics.force_direction`'s result on that time grid (``times``: a label's
+    own time grid where it differs, e.g. an adaptor's knots). ``contact`` (``{side: (T,)
+    bool}`` on ``t``) shades single support."""
     fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex=True)
     for j, side in enumerate(("left", "right")):
         for i, (what, label) in enumerate((("sagittal", "sagittal [deg] (+ forward)"),
                                            ("frontal", "frontal [deg] (+ left)"))):
             a = ax[i, j]
             for k, (name, fd) in enumerate(directions.items()):
-                a.plot(t, np.degrees(getattr(fd[side], what)), STYLES[k % len(STYLES)],
+                tk = (times or {}).get(name, t)
+                a.plot(tk, np.degrees(getattr(fd[side], what)), STYLES[k % len(STYLES)],
                        label=name)
             if contact is not None:
                 other = "right" if side == "left" else "left"
