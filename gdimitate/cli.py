@@ -281,6 +281,45 @@ def _cmd_export(a: argparse.Namespace) -> None:
           "frames)")
 
 
+def _cmd_simulate(a: argparse.Namespace) -> None:
+    from .export import read_wrenches
+    from .sim import plots as sim_plots
+    from .sim import simulate
+    from .sim.animation import show_simulation
+    from .sim.reference import Plan
+
+    demo = _demonstration(a.motion, a)
+    wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
+    if wrenches is None or demo.motion.v is None:
+        raise GdimitateError(f"{a.motion} holds no contact wrenches or velocities: simulate a "
+                             "plan written by `gdimitate adapt` (the optimal method) or "
+                             "AdaptedMotion.save(..., format='npz')")
+    forces = _demonstration(a.reference, a).forces if a.reference else None
+    robot = demo.robot
+    out = prepare_output_dir(a.out)
+    print(f"simulating {robot.name}'s plan ({demo.motion.T} knots, "
+          f"{demo.motion.t[-1] - demo.motion.t[0]:.2f} s) in MuJoCo at 1 kHz …", flush=True)
+    res = simulate(robot, Plan(demo.motion, wrenches, dict(robot.require_contacts())),
+                   demo_forces=forces)
+    summary = res.metrics.to_dict()
+    with atomic_write(out / "sim.json") as tmp:
+        tmp.write_text(json.dumps(summary, indent=2, default=str))
+    sim_plots.plot_summary(res, out / "simulation.png")
+    if a.html:
+        from .viz import Viewer
+
+        v = Viewer.start(quiet=True)
+        try:
+            show_simulation(robot, res, html=out / "simulation.html", viewer=v)
+        finally:
+            v.close()
+    m = res.metrics
+    print(f"FELL at {m.fall_time:.2f} s ({m.fall_reason})" if m.fell else
+          "walked the whole plan", f"; stance slip max {100 * m.slip_max:.2f} cm; "
+          f"torque saturation {100 * m.torque_saturation:.1f} %; wrote {out}/sim.json, "
+          "simulation.png" + (", simulation.html" if a.html else ""))
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
     p = argparse.ArgumentParser(
@@ -357,6 +396,22 @@ def build_parser() -> argparse.ArgumentParser:
                        ("--demonstrator", "robot of a .npz that records none")):
         ex.add_argument(flag, default=None, help=what)
     ex.set_defaults(func=_cmd_export, treadmill=False)
+    si = sub.add_parser("simulate", help="execute an adapted plan in MuJoCo under the whole-body "
+                        "tracking controller and measure it (falls, slip, push directions, CoP)")
+    si.add_argument("motion", help="a plan: a gdimitate .npz with v, a and wrenches (written by "
+                    "`gdimitate adapt` with the optimal method or AdaptedMotion.save)")
+    si.add_argument("--out", default="gdimitate-sim", help="output folder (default: %(default)s)")
+    si.add_argument("--reference", default=None,
+                    help="the demonstration with measured forces to compare push directions "
+                         "with (e.g. an .osim with --coordinates and --grf)")
+    si.add_argument("--html", action="store_true",
+                    help="also write simulation.html (plan and simulation side by side)")
+    for flag, what in (("--grf", "measured forces of --reference"),
+                       ("--coordinates", "joint angles of an .osim --reference"),
+                       ("--osim", "OpenSim model of a full-body .mot/.sto --reference"),
+                       ("--demonstrator", "robot of a .npz that records none")):
+        si.add_argument(flag, default=None, help=what)
+    si.set_defaults(func=_cmd_simulate, treadmill=False)
     ba = sub.add_parser("batch", help="adapt every demonstration file in a folder, in parallel "
                         "(process pool or a Dask cluster), resumable, with a summary table")
     ba.add_argument("input_dir", help="folder of demonstration files (.mot, .sto, .bvh, .npz)")
