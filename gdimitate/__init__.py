@@ -1,14 +1,15 @@
 """gdimitate — goal-directed imitation of rhythmic motion between robots of different bodies.
 
-The pipeline (DESIGN §2)::
+The pipeline (docs/design.md §2)::
 
-    robot_m, demo = gdimitate.gait.human_walk()            # real walk → planar demonstrator
-    imitator = gdimitate.Robot.from_library("hoap2")
-    adapted = gdimitate.adapt(demo, robot_m, imitator)      # Eq. (1): keep the push direction
-    best = gdimitate.adapt(demo, robot_m, imitator, method="optimal")  # + limits, torques
-    adapted.report.force_direction_error_max                # [rad]
-    cpg = gdimitate.entrain(imitator, adapted.motion)       # Matsuoka network, free replay
+    human, walk, forces = gdimitate.gait.human_walk_3d()     # OpenSim subject01, measured GRF
+    robot = gdimitate.Robot.from_library("g1")
+    adapted = gdimitate.adapt(walk, human, robot, force="measured", forces=forces)  # optimal
+    adapted.audit.feasible                                   # recomputed with Pinocchio
+    result = gdimitate.sim.simulate(robot, adapted, demo_forces=forces)   # MuJoCo
+    cpg = gdimitate.entrain(robot, adapted.motion)           # Matsuoka network, free replay
 
+The paper's planar case: ``gdimitate.adapt(demo, robot_m, imitator, "analytic")`` (Eq. 1).
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 

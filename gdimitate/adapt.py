@@ -209,7 +209,7 @@ def _check_pair(motion: Motion, demonstrator: Robot, imitator: Robot) -> None:
             raise InvalidInputError(f"motion.contact has no {s!r} schedule")
 
 
-def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "analytic",
+def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "optimal",
           force: str = "segment", forces=None, rate: float | None = None,
           **options) -> AdaptedMotion:
     """Regenerate ``demo`` (a motion of ``demonstrator``) for ``imitator``.

@@ -61,7 +61,7 @@ def test_copy_baseline_changes_hip_ratio(case):
 
 def test_imitator_stance_foot_does_not_slip():
     demo, imit, motion = paper_case("I")
-    a = adapt(motion, demo, imit)
+    a = adapt(motion, demo, imit, "analytic")
     from gdimitate.metrics import sole_paths
 
     soles = sole_paths(imit, a.motion)

@@ -102,7 +102,8 @@ def test_entrain_command(tmp_path, capsys):
     import gdimitate as gd
 
     human, walk = gd.gait.human_walk()
-    taught = gd.adapt(walk, human, gd.Robot.from_library("hoap2")).motion.column("left_knee")
+    hoap2 = gd.Robot.from_library("hoap2")
+    taught = gd.adapt(walk, human, hoap2, "analytic").motion.column("left_knee")
     replay = m.column("left_knee")
     margin = 0.1 * np.ptp(taught)
     assert taught.min() - margin <= replay.min() and replay.max() <= taught.max() + margin

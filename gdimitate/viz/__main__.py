@@ -29,7 +29,7 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     demo = Robot.from_library(demonstrator)
     imit = Robot.from_library(imitator)
     walk = walking_motion(demo)
-    adapted = adapt(walk, demo, imit)
+    adapted = adapt(walk, demo, imit, "analytic")
     v = compare(demo, walk, imit, adapted, layout="side", gap=1.2,
                 demo_force=sagittal_angles(force_direction(demo, walk)),
                 imitator_force=sagittal_angles(force_direction(imit, adapted.motion)))
