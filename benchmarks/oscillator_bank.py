@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/oscillator_bank.py [--steps 1000] [--repeat 3]``
 
-For bank sizes 1, 100, 1 000, 10 000, 100 000 (uncoupled copies of DESIGN §7's example
+For bank sizes 1, 100, 1 000, 10 000, 100 000 (uncoupled copies of docs/design.md §7's example
 oscillator, output ``y`` recorded at every step) it prints the best of ``--repeat`` runs of
 the compiled (numba) path and of the NumPy reference path, next to a baseline measured in the
 same run: a Python loop calling ``scipy.integrate.solve_ivp`` (RK45, rtol 1e-6, atol 1e-9,

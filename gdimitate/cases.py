@@ -1,4 +1,4 @@
-"""The paper's three cases (DESIGN §4): the exact inputs behind its figures."""
+"""The paper's three cases (docs/design.md §4): the exact inputs behind its figures."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from .walking import HUMAN_GAIT, GaitSpec, walking_motion
 
 __all__ = ["PAPER_CASES", "paper_case"]
 
-#: case name → (demonstrator model, imitator model); lengths in DESIGN §4's table.
+#: case name → (demonstrator model, imitator model); lengths in docs/design.md §4's table.
 PAPER_CASES = {
     "I": ("case1_demonstrator", "hoap2"),
     "II": ("case2_demonstrator", "hoap2"),

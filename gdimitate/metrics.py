@@ -96,14 +96,14 @@ def hip_height_ratio(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
 
 def angle_down(v: np.ndarray) -> np.ndarray:
     """Angle [rad] of vectors ``(..., 3)`` from the downward vertical, positive forward (+x):
-    the sign convention of every force direction (DESIGN §4–5)."""
+    the sign convention of every force direction (docs/design.md §4–5)."""
     v = np.asarray(v, dtype=float)
     return np.arctan2(v[..., 0], -v[..., 2])
 
 
 @dataclass(frozen=True)
 class ForceDirection:
-    """One foot's push on the ground over a motion (DESIGN §5 of docs/design.md).
+    """One foot's push on the ground over a motion (docs/design.md §5 of docs/design.md).
 
     ``vector`` ``(T, 3)``: unit push ON THE GROUND in the world frame (the ground's reaction on
     the foot is its reverse); ``sagittal`` ``(T,)`` [rad]: its angle from the downward vertical
@@ -161,7 +161,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
     """Direction of each stance foot's push on the ground, ``{"left": ForceDirection,
     "right": ForceDirection}`` (NaN where ``motion.contact`` says the foot is in swing).
 
-    Models (DESIGN §5 of docs/design.md):
+    Models (docs/design.md §5 of docs/design.md):
 
     - ``measured`` — the reverse of the measured ground reaction force on each foot
       (``forces``: :class:`~gdimitate.contact.ContactForces`, resampled onto the motion's

@@ -1,4 +1,5 @@
-"""Planar two-link legs: forward/inverse kinematics and the paper's Eq. (1) adaptor (DESIGN §4).
+"""Planar two-link legs: forward/inverse kinematics and the paper's Eq. (1) adaptor (docs/design.md
+§4).
 
 Angles from the downward vertical, positive when the distal end is in front (+x); θ1 is the
 absolute thigh angle, θ2 the knee angle relative to the thigh (negative in flexion)::

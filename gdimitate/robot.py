@@ -2,7 +2,8 @@
 
 Each leg is described by its hip-pitch, knee and ankle-pitch joints, its sole frame, the
 sagittal segment lengths *measured from the model* at the neutral pose, and the sign/offset that
-map a joint angle onto DESIGN §4's planar angles (from the downward vertical, positive when the
+map a joint angle onto docs/design.md §4's planar angles (from the downward vertical, positive when
+the
 distal end is in front)::
 
     planar angle = sign · q + offset

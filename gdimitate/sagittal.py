@@ -1,4 +1,4 @@
-"""Between a robot's configuration q and DESIGN §4's planar (sagittal) leg angles.
+"""Between a robot's configuration q and docs/design.md §4's planar (sagittal) leg angles.
 
 Per leg the planar angles are ``(θ1, θ2, θ3)``: θ1 the absolute thigh angle from the downward
 vertical (torso pitch included), θ2 the knee angle relative to the thigh (negative in flexion),

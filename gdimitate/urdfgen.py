@@ -4,7 +4,8 @@ A planar biped is a torso on a planar floating base — prismatic ``base_x`` (ax
 ``base_z`` (axis +z) and revolute ``base_pitch`` — and two legs, each with revolute ``*_hip``,
 ``*_knee``, ``*_ankle`` joints and a foot ending in a ``*_sole`` frame directly below the
 ankle. Every revolute joint turns about **−y**, so a positive angle moves the distal end
-forward (+x): the joint angle *is* DESIGN §4's planar angle (hip: thigh relative to the torso;
+forward (+x): the joint angle *is* docs/design.md §4's planar angle (hip: thigh relative to the
+torso;
 knee: negative in flexion; ankle: positive in dorsiflexion), and ``base_pitch`` has the sign of
 OpenSim's ``pelvis_tilt``. The base origin is the midpoint between the hips.
 
@@ -57,7 +58,7 @@ class PlanarBipedSpec:
 
     @property
     def leg_length(self) -> float:
-        """Thigh + shank [m] (DESIGN §4's L)."""
+        """Thigh + shank [m] (docs/design.md §4's L)."""
         return self.thigh + self.shank
 
 
@@ -68,7 +69,7 @@ def _spec(name: str, thigh: float, shank: float, mass: float, note: str, **kw) -
     return PlanarBipedSpec(name=name, thigh=thigh, shank=shank, mass=mass, note=note, **defaults)
 
 
-#: The models committed in ``urdf/`` (name → spec). The paper's lengths (DESIGN §4).
+#: The models committed in ``urdf/`` (name → spec). The paper's lengths (docs/design.md §4).
 PLANAR_MODELS: dict[str, PlanarBipedSpec] = {
     s.name: s
     for s in [

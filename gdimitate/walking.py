@@ -4,7 +4,8 @@ The hip moves forward at constant speed and constant height. Each step (half a s
 double support (both soles flat on the ground) for a fraction ``1 − single_support`` of its
 duration, then the rear foot swings to one step length ahead of the stance foot along a cycloid
 (zero velocity at lift-off and touch-down) raised by ``step_height``. Human walking spends 85 %
-of each step in single support; small robots of the paper's era about 35 % (DESIGN §4). Joint
+of each step in single support; small robots of the paper's era about 35 % (docs/design.md §4).
+Joint
 angles come from two-link inverse kinematics with the feet kept flat and the torso upright, and
 the result is checked against Pinocchio forward kinematics on the robot's own model.
 """

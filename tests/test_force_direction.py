@@ -1,4 +1,5 @@
-"""Force-direction models (DESIGN §5 of docs/design.md) against closed forms, Pinocchio and the
+"""Force-direction models (docs/design.md §5 of docs/design.md) against closed forms, Pinocchio and
+the
 measured ground reaction forces of the shipped walks."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Closed forms against simulation, the frequency/phase measures against known signals, and
-the Arnold tongue against DESIGN §7's locking ranges."""
+the Arnold tongue against docs/design.md §7's locking ranges."""
 
 from __future__ import annotations
 
@@ -107,7 +107,7 @@ def test_arnold_tongue_matches_design_and_grows_with_gain():
     assert np.isnan(rng[0]).all()  # k = 0: nothing locks
     lo1, hi1 = rng[1]
     lo3, hi3 = rng[2]
-    # DESIGN §7: k = 0.1 locks ~1.00-1.26 Hz, k = 0.3 ~0.42-1.66 Hz (grid step 0.05 Hz)
+    # docs/design.md §7: k = 0.1 locks ~1.00-1.26 Hz, k = 0.3 ~0.42-1.66 Hz (grid step 0.05 Hz)
     assert lo1 == pytest.approx(1.0, abs=0.06) and hi1 == pytest.approx(1.26, abs=0.06)
     assert lo3 == pytest.approx(0.42, abs=0.06) and hi3 == pytest.approx(1.66, abs=0.06)
     assert lo3 < lo1 <= at.free_frequency <= hi1 < hi3

@@ -24,7 +24,8 @@ P0 = MatsuokaParams(tau_r=0.1, tau_a=0.2, b=2.5, w=2.5, s=1.0)
 
 
 def reference(p: dict, W: np.ndarray, g, x0: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Independent implementation of DESIGN §7 for n coupled oscillators; returns y (T, n)."""
+    """Independent implementation of docs/design.md §7 for n coupled oscillators; returns y (T,
+    n)."""
     n = W.shape[0]
 
     def f(tt, z):

@@ -1,4 +1,4 @@
-"""Eq. (1) against an independent geometric statement of it (DESIGN §4)."""
+"""Eq. (1) against an independent geometric statement of it (docs/design.md §4)."""
 
 import math
 
@@ -64,7 +64,7 @@ def test_eq1_vectorised_any_shape(shape):
 
 def test_case_ii_is_infeasible_where_thigh_share_is_larger():
     # demonstrator thigh share 0.6 > imitator 0.5: a straight-ish leg with bent knee can't be
-    # matched (DESIGN §4): arg > 1
+    # matched (docs/design.md §4): arg > 1
     r = eq1(0.0, -0.6, (0.06, 0.04), (0.1, 0.1))
     assert not r.feasible and r.argument > 1.0
     assert r.theta1 == 0.0 and abs(r.theta2 - (-0.6)) < 1e-15

@@ -33,7 +33,7 @@ def test_planar_model_lengths_mass_and_fk_against_pinocchio(name, robot):
     for leg in r.legs.values():
         assert (leg.thigh, leg.shank, leg.foot) == pytest.approx(
             (spec.thigh, spec.shank, spec.foot), abs=1e-12)
-    # DESIGN §4 closed-form FK vs Pinocchio FK at random planar angles
+    # docs/design.md §4 closed-form FK vs Pinocchio FK at random planar angles
     rng = np.random.default_rng(0)
     T = 20
     torso = rng.uniform(-0.3, 0.3, T)

@@ -1,4 +1,5 @@
-"""Matsuoka neural-oscillator banks (DESIGN §7): simulation, closed forms, entrainment analysis,
+"""Matsuoka neural-oscillator banks (docs/design.md §7): simulation, closed forms, entrainment
+analysis,
 Arnold tongues and the self-adjusting adaptor that tunes a network to replay joint motion."""
 
 from .adaptive import AdaptiveRun, adapt_frequency

@@ -1,4 +1,4 @@
-"""A bank of Matsuoka oscillators of shape ``(*batch, n)`` and its integration (DESIGN §7).
+"""A bank of Matsuoka oscillators of shape ``(*batch, n)`` and its integration (docs/design.md §7).
 
 Per oscillator i (extensor e, flexor f), with y = max(x, 0) and W the ``(n, n)`` coupling::
 
@@ -8,14 +8,15 @@ Per oscillator i (extensor e, flexor f), with y = max(x, 0) and W the ``(n, n)``
     T_a·v̇_f + v_f = y_f
     output y = y_e − y_f
 
-The coupling term ``Σ_j W_ij·y_j`` of DESIGN §7 is read neuron-wise: the extensor of i is
+The coupling term ``Σ_j W_ij·y_j`` of docs/design.md §7 is read neuron-wise: the extensor of i is
 inhibited by the extensors of the other oscillators and the flexor by the flexors, so an
 inhibitory ``W_ij > 0`` pulls oscillators i and j towards anti-phase. The ``n`` oscillators of
 one batch element are coupled; batch elements are independent copies.
 
 Integration is classical fixed-step RK4 on the given time grid (steps may vary); the input
 ``g`` is linearly interpolated to the half step. Accuracy (measured by the tests against
-``scipy.integrate.solve_ivp`` with DOP853 at rtol = atol = 1e-12, DESIGN's example parameters
+``scipy.integrate.solve_ivp`` with DOP853 at rtol = atol = 1e-12, docs/design.md's example
+parameters
 T_r 0.1 s, T_a 0.2 s, b = w = 2.5): max |Δy| = 3.4e-5 over 20 s at dt = 1 ms (1.6e-4 at
 2 ms). The kinks of max(x, 0) break RK4's fourth order; the error is mostly a slowly growing
 phase drift. Keep dt ≤ tau_r/100 for |Δy| ≲ 1e-4 over tens of periods.

@@ -1,4 +1,5 @@
-"""Closed-form frequency and amplitude of a free Matsuoka oscillator (Matsuoka 2011, DESIGN §7).
+"""Closed-form frequency and amplitude of a free Matsuoka oscillator (Matsuoka 2011, docs/design.md
+§7).
 
 K. Matsuoka, "Analysis of a neural oscillator", Biol. Cybern. 104 (2011) 297–304:
 
@@ -8,7 +9,7 @@ K. Matsuoka, "Analysis of a neural oscillator", Biol. Cybern. 104 (2011) 297–3
 Both are approximations. The frequency is the linearised one at the oscillation onset, so it
 is best for ``w`` near the lower end of ``(1 + T_r/T_a, 1 + b)``. Measured here with the RK4
 bank (tests hold these): for ``T_r/T_a`` in 0.3–0.5 and ``b`` in 1–3, the error is below 2 %
-while ``w`` lies in the lower quarter of its interval (e.g. 0.4 % for DESIGN's example
+while ``w`` lies in the lower quarter of its interval (e.g. 0.4 % for docs/design.md's example
 T_r 0.1, T_a 0.2, b = w = 2.5; 2.5 % for T_r/T_a = 0.3 with b = w = 2.5), and grows to tens of
 percent as ``w → 1 + b``; below T_r/T_a = 0.3 it degrades (−7 % at 0.2, −22 % at 0.1 for
 b = w = 2.5). ``A`` is the half peak-to-peak amplitude of ``x_e`` (and ``x_f``), good to

@@ -1,4 +1,4 @@
-"""Matsuoka oscillator parameters and their validation (DESIGN §7).
+"""Matsuoka oscillator parameters and their validation (docs/design.md §7).
 
 One oscillator has an extensor and a flexor neuron with membrane time constant ``tau_r`` [s],
 adaptation time constant ``tau_a`` [s], self-inhibition (adaptation) gain ``b``, mutual
@@ -72,7 +72,7 @@ class MatsuokaParams:
         s: tonic input (sets the amplitude; every state scales with it), > 0.
         k: gain of the external input ``g`` (0 = free running), ≥ 0.
 
-    The defaults are DESIGN §7's example (free frequency ≈ 1.12 Hz).
+    The defaults are docs/design.md §7's example (free frequency ≈ 1.12 Hz).
     """
 
     tau_r: Any = 0.1

@@ -5,7 +5,7 @@ second of motion time) and returns, per frame, the rigid placement of every visu
 object, the centre of mass, the soles and the force directions. :func:`record_frames` writes
 those frames into a ``meshcat.animation.Animation`` (position + quaternion tracks; never a
 scaled matrix, see :mod:`gdimitate.viz.scene`), and :func:`place_frame` shows one frame as
-static transforms (the first frame is displayed before an animation is set, DESIGN §10).
+static transforms (the first frame is displayed before an animation is set, docs/design.md §10).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Chromium's plain ``--headless`` mode renders WebGL with its software rasteriser
 (SwiftShader); ``--use-gl=swiftshader`` and ``--disable-software-rasterizer`` break it
-(DESIGN §10). A static page needs no driver: ``--screenshot`` with ``--virtual-time-budget``
+(docs/design.md §10). A static page needs no driver: ``--screenshot`` with ``--virtual-time-budget``
 lets the page's scripts run (and the first animation frames play) before the capture. Every
 call has a timeout and the whole process group is killed when it expires.
 

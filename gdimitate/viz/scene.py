@@ -5,7 +5,8 @@ Every geometry object of a Pinocchio ``GeometryModel`` becomes two meshcat nodes
 animation records) and its child ``<root>/<name>/s<k>`` holds the shape with a constant local
 transform that carries ``meshScale`` (and the y→z turn of three.js cylinders). Folding a
 mirrored scale (Talos's right leg, ``meshScale = (1, -1, 1)``) into the animated transform is
-what scrambles Pinocchio's own recorder (DESIGN §10); the constant child transform is decomposed
+what scrambles Pinocchio's own recorder (docs/design.md §10); the constant child transform is
+decomposed
 correctly by three.js.
 
 Robots without visual geometry can be drawn as a skeleton: :func:`skeleton_geometry` builds

@@ -367,7 +367,7 @@ class Viewer:
                                    track.com if isinstance(track.com, np.ndarray) else None)
             track.frames = frames
             root = self.vis[track.name]
-            # First frame as static transforms before the animation is set (DESIGN §10).
+            # First frame as static transforms before the animation is set (docs/design.md §10).
             self._place(track, frames, 0)
             for g, n in enumerate(track.nodes):
                 record_frames(anim, root["robot"][n], frames.t, frames.placements[:, g])
