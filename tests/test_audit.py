@@ -313,8 +313,52 @@ def test_stance_slip(talos):
     v[:, 0] = 0.2
     motion, W = plan(talos, q, v=v)
     rep = audit(talos, motion, W)
-    assert set(rep.binding) == {"slip:left", "slip:right"}
+    # the gliding feet also move at every stance knot (0.2 m/s, the base's velocity)
+    assert set(rep.binding) == {"slip:left", "slip:right", "stance_velocity:left",
+                                "stance_velocity:right"}
     assert rep.feet["left"].slip == (pytest.approx(0.008, abs=1e-12), T - 1)
+    assert rep.feet["left"].stance_velocity.value == pytest.approx(0.2, abs=1e-12)
+
+
+def test_stance_foot_moving(talos):
+    """A stance knot whose velocity moves a foot while its pose is still on the floor (the last
+    knot: its forward differences are those of a motion coming to rest there, so velocity
+    consistency holds): flagged by stance_velocity alone. References: a base translating at
+    0.1 m/s with an identity orientation moves every sole frame at 0.1 m/s; the left knee at
+    0.5 rad/s turns the left sole at 0.5 rad/s and moves its origin at |ω × (p_sole − p_knee)|."""
+    T = 3
+    knee = "leg_left_4_joint"
+    for case in ("base", "knee"):
+        v = np.zeros((T, talos.model.nv))
+        if case == "base":
+            v[T - 1, 0] = 0.1
+        else:
+            v[T - 1, talos.idx_v(knee)] = 0.5
+        motion, W = plan(talos, standing(talos, T), v=v)
+        rep = audit(talos, motion, W)
+        feet = ("left", "right") if case == "base" else ("left",)
+        assert set(rep.binding) == {f"stance_velocity:{s}" for s in feet}, case
+        sv = rep.feet["left"].stance_velocity
+        assert sv.knot == T - 1
+        assert sv.value == pytest.approx(0.1 if case == "base" else 0.5, abs=1e-12)
+        if case == "knee":
+            assert rep.feet["right"].stance_velocity.value == pytest.approx(0.0, abs=1e-15)
+            assert rep.check_knots("stance_velocity:left").tolist() == [True, True, False]
+    # the knee case by central finite differences of the sole frame's pose along q ⊕ ε v
+    model, eps = talos.model, 1e-6
+    data = model.createData()
+    fid = talos.frame_id(talos.contacts["left"].frame)
+    poses = []
+    for e in (-eps, eps):
+        pin.framesForwardKinematics(model, data, pin.integrate(model, talos.neutral, e * v[-1]))
+        poses.append(data.oMf[fid].copy())
+    lin = np.linalg.norm(poses[1].translation - poses[0].translation) / (2 * eps)
+    ang = np.linalg.norm(pin.log3(poses[0].rotation.T @ poses[1].rotation)) / (2 * eps)
+    assert ang == pytest.approx(0.5, rel=1e-6) and 0.05 < lin < ang
+    assert sv.value == pytest.approx(max(lin, ang), rel=1e-6)
+    # a tolerance above the speed passes it
+    assert audit(talos, motion, W,
+                 tolerances=AuditTolerances(stance_velocity=0.51)).feasible
 
 
 def test_force_direction_error(talos):

@@ -9,7 +9,8 @@ pass/fail against the bound with tolerance, and a dimensionless violation that o
 binding list). The violation scales: body weight ``m·g`` for forces and base residuals, the
 sole's smaller half-size for lengths on a foot (centre of pressure, penetration, slip),
 ``μ(X+Y)·m·g`` for yaw moments, μ for friction ratios, the limit itself for torque and velocity
-ratios, the joint's range for position limits, 1 rad for angles.
+ratios, the joint's range for position limits, 1 rad for angles, 1 m/s (1 rad/s) for a stance
+foot's velocity.
 """
 
 from __future__ import annotations
@@ -161,6 +162,23 @@ def _kinematics_dynamics(robot, motion, contacts, W):
     return tau, pos, rot
 
 
+def _sole_speeds(robot, motion, contacts) -> dict[str, np.ndarray]:
+    """Per foot ``(T,)``: ``max(‖v‖ [m/s], ‖ω‖ [rad/s])`` of the sole frame's spatial velocity
+    ``J_c(q_k) v_k`` (Pinocchio's ``forwardKinematics(q, v)``, then ``getFrameVelocity`` in
+    ``LOCAL_WORLD_ALIGNED``: the frame origin's velocity and the angular velocity, world
+    axes)."""
+    model = robot.model
+    data = model.createData()
+    fids = {s: robot.frame_id(c.frame) for s, c in contacts.items()}
+    out = {s: np.empty(motion.T) for s in contacts}
+    for k in range(motion.T):
+        pin.forwardKinematics(model, data, motion.q[k], motion.v[k])
+        for s, fid in fids.items():
+            V = pin.getFrameVelocity(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+            out[s][k] = max(np.linalg.norm(V.linear), np.linalg.norm(V.angular))
+    return out
+
+
 def _forward_differences(model, motion) -> np.ndarray:
     """``(T−1, nv)``: ``pin.difference(q_k, q_{k+1}) / h_k``."""
     h = np.diff(motion.t)
@@ -201,6 +219,7 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
     weight = robot.mass * GRAVITY
     tau, pos, rot = _kinematics_dynamics(robot, motion, contacts, W)
     fd = _forward_differences(model, motion)
+    speed = _sole_speeds(robot, motion, contacts)
     checks: list[Check] = []
     masks: list[np.ndarray] = []
 
@@ -269,7 +288,7 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
     feet, pen_all = {}, []
     for side, c in contacts.items():
         foot, foot_checks = _foot(side, c, motion.contact[side], W[side], pos[side], rot[side],
-                                  targets.get(side), cone_half_angle, tol, weight)
+                                  speed[side], targets.get(side), cone_half_angle, tol, weight)
         for cm in foot_checks:
             add(cm)
         feet[side] = foot
@@ -293,7 +312,7 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
         cone_half_angle=float(cone_half_angle))
 
 
-def _foot(side, c: SoleContact, stance, w, pos, rot, target, half_angle, tol, weight):
+def _foot(side, c: SoleContact, stance, w, pos, rot, speed, target, half_angle, tol, weight):
     """One foot's checks and its :class:`FootAudit`."""
     T = stance.size
     half = min(c.half_length, c.half_width)
@@ -325,6 +344,9 @@ def _foot(side, c: SoleContact, stance, w, pos, rot, target, half_angle, tol, we
         turn[a:b] = [np.linalg.norm(pin.log3(rot[a].T @ rot[k])) for k in range(a, b)]
     out.append(_make(f"slip:{side}", drift, tol.slip, "max", "m", half))
     out.append(_make(f"slip_rotation:{side}", turn, tol.slip_rotation, "max", "rad", 1.0))
+    # a stance foot is still: its sole frame's velocity J_c(q_k) v_k at every stance knot
+    out.append(_make(f"stance_velocity:{side}", np.where(stance, speed, nan),
+                     tol.stance_velocity, "max", "m/s", 1.0))
     # floor: every corner, every knot
     corners = pos[:, None, :] + np.einsum("tij,cj->tci", rot, c.corners())
     depth = -corners[:, :, 2]
@@ -365,5 +387,6 @@ def _foot(side, c: SoleContact, stance, w, pos, rot, target, half_angle, tol, we
         slip_rotation=Worst(get["slip_rotation"].value, get["slip_rotation"].knot),
         swing_wrench=Worst(get["swing_wrench"].value, get["swing_wrench"].knot),
         contact_gap=Worst(get["contact_gap"].value, get["contact_gap"].knot),
+        stance_velocity=Worst(get["stance_velocity"].value, get["stance_velocity"].knot),
         penetration=pen, force_direction=fda)
     return foot, out

@@ -35,7 +35,8 @@ def audit(robot, motion: Motion, wrenches: Mapping[str, np.ndarray],
     ``torque:<joint>``, ``velocity:<joint>`` (|v| and forward differences of ``q``),
     ``position:<joint>``; ``velocity_consistency``; per foot ``normal:<side>``,
     ``friction:<side>`` (Coulomb's circle), ``cop:<side>``, ``yaw:<side>``, ``slip:<side>``,
-    ``slip_rotation:<side>``, ``contact_gap:<side>`` (stance: the whole sole on the floor),
+    ``slip_rotation:<side>``, ``stance_velocity:<side>`` (the sole frame's velocity ``J_c v`` at
+    every stance knot), ``contact_gap:<side>`` (stance: the whole sole on the floor),
     ``swing_wrench:<side>``, ``force_direction:<side>`` (with a target); ``penetration`` (every
     sole corner, every knot).
 

@@ -46,6 +46,9 @@ class AuditTolerances:
     - ``contact_gap`` [m]: a stance foot's highest sole corner above the floor (a flat contact
       — the wrench cone's premise — needs the whole sole on the floor);
     - ``slip`` [m], ``slip_rotation`` [rad]: a stance foot's drift from where its stance began;
+    - ``stance_velocity`` [m/s, rad/s]: a stance foot's sole-frame velocity ``J_c(q_k) v_k``
+      (the larger of its linear and angular norms) at a stance knot — a foot on the floor is
+      still;
     - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
     - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench.
     """
@@ -63,6 +66,7 @@ class AuditTolerances:
     contact_gap: float = 1e-3
     slip: float = 1e-3
     slip_rotation: float = 1e-3
+    stance_velocity: float = 1e-3
     force_direction: float = 1e-3
     swing_wrench: float = 1e-6
 
@@ -167,7 +171,8 @@ class FootAudit:
     """One foot: ``stance_knots``; the worst ``normal`` force [N] (smallest f_z in stance),
     ``friction`` ratio |f_t|/f_z [-] against ``mu``, ``cop`` margin [m] (inside positive),
     ``yaw`` margin [N·m] (see :func:`gdimitate.contact.cone_margin`), ``slip`` [m] and
-    ``slip_rotation`` [rad] (drift of the sole frame since the stance began), ``swing_wrench``
+    ``slip_rotation`` [rad] (drift of the sole frame since the stance began), ``stance_velocity``
+    (largest sole-frame speed ``max(‖v‖ [m/s], ‖ω‖ [rad/s])`` at a stance knot), ``swing_wrench``
     (largest |component| while in swing), ``contact_gap`` [m] (highest sole corner above the
     floor in stance), ``penetration`` (this foot's deepest corner, all knots),
     ``force_direction`` (None without a target)."""
@@ -185,6 +190,7 @@ class FootAudit:
     contact_gap: Worst
     penetration: Penetration
     force_direction: ForceDirectionAudit | None
+    stance_velocity: Worst = Worst(float("nan"), -1)
 
 
 def _json(x: object) -> object:
