@@ -278,7 +278,8 @@ def test_demo_terminated_leaves_no_output(tmp_path, spawn):
     out = tmp_path / "demo-out"
     proc = spawn(["-m", "gdimitate.cli", "demo", "--method", "analytic", "--out", str(out)],
                  tmp_path / "tmp")
-    text = _wait_for_line(proc, "[4/6]")  # its trajectories and plots are written
+    text = _wait_for_line(proc, "[1/")  # loading the walk; the output folder is made
+    assert out.is_dir()
     proc.send_signal(signal.SIGTERM)
     rest, _ = proc.communicate(timeout=60)
     assert proc.returncode == 143, text + rest
