@@ -83,7 +83,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
     the whole-body optimal adaptor); ``rate`` [knots/s] of the optimal solve."""
     from . import gait, sim
     from .adapt import adapt
-    from .baselines import joint_copy
+    from .baselines import joint_copy, kinematic_plan
     from .cpg import entrain
     from .plots import plot_force_directions
     from .safety import prepare_output_dir
@@ -103,7 +103,10 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
         if method == "optimal" else {}
     adapted = adapt(demo, demo_robot, imit, method, **opts)
     log("[3/7] physics check: MuJoCo + whole-body QP tracking controller …")
-    plan_sim = sim.simulate(imit, adapted, demo_forces=forces)
+    # a kinematic method's motion has no wrenches: simulate it with those it asks of the floor
+    plan = adapted if adapted.wrenches is not None else kinematic_plan(
+        imit, adapted.motion, method, 0.0)
+    plan_sim = sim.simulate(imit, plan, demo_forces=forces)
     copy_sim = None
     if imit.base == "free":
         log("       … and the 3-D joint-angle copy as the negative control …")

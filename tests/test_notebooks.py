@@ -18,7 +18,10 @@ MAX_EXECUTED_BYTES = 3_000_000
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
-def test_notebook_runs_shows_figures_and_stays_small(tmp_path, path):
+def test_notebook_runs_shows_figures_and_stays_small(tmp_path, path, monkeypatch):
+    # the kernel must use Jupyter's inline backend, as a user's would: a non-interactive
+    # MPLBACKEND inherited from the test process (e.g. Agg) would swallow every figure
+    monkeypatch.delenv("MPLBACKEND", raising=False)
     work = tmp_path / path.name  # run in a scratch copy: files a notebook writes land there
     shutil.copy(path, work)
     nb = nbformat.read(work, as_version=4)
