@@ -29,7 +29,9 @@ class Targets:
     world rotations;
     ``segments`` ``(T, n_seg, 3, 3)`` world rotations; ``joints`` ``(T, n_act)`` joint targets
     [rad] and ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
-    push on the ground (NaN where there is none); ``demo``: the resampled demonstration."""
+    push on the ground (NaN where there is none; projected onto the x–z plane for planar
+    imitators, which can only keep its sagittal direction); ``demo``: the resampled
+    demonstration."""
 
     t: np.ndarray
     stance: dict[str, np.ndarray]
@@ -176,5 +178,9 @@ def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bm
     fd_demo = demo.replace(contact=stance) if rule == "all" else demo
     fd = force_direction(demonstrator, fd_demo, force, forces=forces)
     push = {s: np.where(stance[s][:, None], fd[s].vector, np.nan) for s in SIDES}
+    if imitator.base == "planar":  # a planar robot can keep only the sagittal direction
+        for s in SIDES:
+            p = push[s] * np.array([1.0, 0.0, 1.0])
+            push[s] = p / np.linalg.norm(p, axis=1, keepdims=True)
     return Targets(demo.t, stance, swing, height, placement, shank, thigh, foot, segments,
                    joints, mapped, push, demo)
