@@ -47,8 +47,10 @@ class AuditTolerances:
       — the wrench cone's premise — needs the whole sole on the floor);
     - ``slip`` [m], ``slip_rotation`` [rad]: a stance foot's drift from where its stance began;
     - ``stance_velocity`` [m/s, rad/s]: a stance foot's sole-frame velocity ``J_c(q_k) v_k``
-      (the larger of its linear and angular norms) at a stance knot — a foot on the floor is
-      still;
+      at a stance knot (its linear and angular norms, each less half its change
+      ``(J_c(q_k) − J_c(q_k ⊖ h_k v_k)) v_k`` along the step ``v_k`` spans: a foot whose pose
+      is held across a one-step scheme's step ends it at about that half) — a foot on the floor
+      is still;
     - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
     - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench.
     """

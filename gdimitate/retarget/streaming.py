@@ -29,6 +29,7 @@ from ..robot import SIDES, Robot
 from ..sagittal import robot_motion
 from . import problem as pb
 from .bodymap import BodyMap, body_map
+from .constraints import contact as contact_rows
 from .constraints import limits
 from .knot import Flags, base_dofs
 from .params import Contact, Limits, Weights
@@ -155,6 +156,8 @@ class StreamingAdaptor:
         if self._x is not None:  # the previous frame's configuration and velocity are final
             for blk in ("q", "v"):
                 num.lbx[var[blk], 0] = num.ubx[var[blk], 0] = self._x[var[blk]]
+            rows = contact_rows.start_velocity_rows(num.spec)  # and so is its foot velocity
+            num.lbg[rows], num.ubg[rows] = -np.inf, np.inf
         t0 = time.perf_counter()
         z, st = run_solver(c, num, num.x0, False, verbose, "frame")
         Z = z.reshape(2, -1).T

@@ -1,9 +1,30 @@
-"""Flat-foot contact: a stance foot lies flat on the floor and keeps its pose.
+"""Flat-foot contact: a stance foot lies flat on the floor, keeps its pose and lands still.
 
 At a stance knot the sole frame's origin is at z = 0 and its normal is vertical (rows
 ``p_z``, ``R[2, 0]``, ``R[2, 1]``; planar models ``p_z``, ``R[2, 0]``). Between two
 consecutive stance knots of the same foot it neither slides nor turns (hold rows
-``Δp_x``, ``Δp_y`` and ``sin Δψ`` of the sole's x axis; planar ``Δp_x``). Never relaxed.
+``Δp_x``, ``Δp_y`` and ``sin Δψ`` of the sole's x axis; planar ``Δp_x``). At the first knot of
+a stance — a touch-down (the foot swung at the knot before) or a stance at knot 0 — the sole
+frame's spatial velocity ``J_c(q_k) v_k`` vanishes (Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame
+Jacobian: the origin's velocity [m/s], then the angular velocity [rad/s], world axes; 6 rows,
+planar models the x, z and pitch rows). Never relaxed.
+
+Why the velocity rows are imposed there and not at every stance knot. With semi-implicit
+Euler (:mod:`.integration`, ``q_k = q_{k−1} ⊕ h v_k``) ``v_k`` is the velocity of the whole
+step (k − 1, k). Where the foot is down at both ends the hold rows already make the foot's
+displacement over that step zero, i.e. its mean velocity along the step; ``J_c(q) v_k`` still
+changes along the step, by ``(J_c(q_k) − J_c(q_{k−1})) v_k`` = O(h·|v|²·ℓ), so it ends the
+step at about half of that (what :func:`gdimitate.audit.audit`'s ``stance_velocity`` check
+allows for there). Asking for ``J_c(q_k) v_k = 0`` at those knots as well would over-determine
+the step: the velocities of the base and the stance leg (6 + 6 in 3-D, 3 + 3 planar) would
+have to meet as many pose and velocity rows, which near a still robot only v = 0 does — the
+body could not move over its stance foot (with them, Case I of the paper is left with 2e-4 of
+unmet integration rows).
+At the first knot of a stance nothing holds the step that brought the foot down: without the
+rows the plan lands its foot moving (0.5 m/s on G1, 1 m/s on HOAP-2 for the shipped 3-D walk)
+and at knot 0 it starts moving; with them the foot arrives at rest. A foot that an
+``"anchor"`` rule takes over while it is already down (Eq. (1)'s rule) does not touch down
+there and gets no velocity rows.
 """
 
 from __future__ import annotations
@@ -18,8 +39,20 @@ NAME = "contact"
 RELAX = False
 
 
+#: Rows of the sole frame's spatial velocity ``[v; ω]`` kept by planar models (x, z, pitch).
+PLANAR_VELOCITY_ROWS = (0, 2, 4)
+
+
 def rows_per_side(planar: bool) -> int:
-    return 2 if planar else 3
+    """Pose rows, then velocity rows, of one foot."""
+    return 2 + len(PLANAR_VELOCITY_ROWS) if planar else 3 + 6
+
+
+def sole_velocity(k: Knot, side: str) -> ca.SX:
+    """``(6,)`` ``J_c(q) v`` of the foot's sole frame (``[m/s; rad/s]``, world axes; Pinocchio's
+    ``LOCAL_WORLD_ALIGNED``), planar models its x, z, pitch rows ``(3,)``."""
+    V = ca.mtimes(k.sym.frame_jacobian(k.contacts[side].frame)(k.q), k.v)
+    return V[list(PLANAR_VELOCITY_ROWS)] if k.planar else V
 
 
 def expr(k: Knot) -> ca.SX:
@@ -27,14 +60,27 @@ def expr(k: Knot) -> ca.SX:
     for s in SIDES:
         p, R = k.sole_p[s], k.sole_R[s]
         out += [p[2], R[2, 0]] + ([] if k.planar else [R[2, 1]])
+        out.append(sole_velocity(k, s))
     return ca.vertcat(*out)
+
+
+def velocity_knots(stance: np.ndarray, swing: np.ndarray) -> np.ndarray:
+    """``(T,)`` bool: the stance knots whose velocity rows are imposed — the first knot after a
+    swing knot (the touch-down) and a stance at knot 0, where no hold row links ``v_k`` to a
+    still foot (see the module docstring). A foot that an ``"anchor"`` rule takes over while it
+    is already down (``swing`` False before) is not touching down there."""
+    st, sw = np.asarray(stance, bool), np.asarray(swing, bool)
+    return st & np.r_[True, sw[:-1]]
 
 
 def bounds(spec) -> tuple[np.ndarray, np.ndarray]:
     n = rows_per_side(spec.planar)
+    npose = 2 if spec.planar else 3
     lo = np.full((spec.T, 2 * n), -np.inf)
     for i, s in enumerate(SIDES):
-        lo[spec.stance[s], i * n:(i + 1) * n] = 0.0
+        o = i * n
+        lo[spec.stance[s], o:o + npose] = 0.0
+        lo[velocity_knots(spec.stance[s], spec.swing[s]), o + npose:o + n] = 0.0
     hi = np.where(np.isfinite(lo), 0.0, np.inf)
     return lo, hi
 
@@ -68,3 +114,14 @@ def hold_bounds(spec) -> tuple[np.ndarray, np.ndarray]:
         h = spec.stance[s][1:] & spec.stance[s][:-1]
         lo[h, i * n:(i + 1) * n] = 0.0
     return lo, np.where(np.isfinite(lo), 0.0, np.inf)
+
+
+def start_velocity_rows(spec) -> np.ndarray:
+    """Indices, into the row vector of :func:`gdimitate.retarget.problem.row_bounds`, of knot
+    0's velocity rows (both feet). A caller that fixes knot 0's ``v`` to a previous solve's
+    (the streaming mode's window) frees them: that velocity was the previous step's, held by
+    that step's rows."""
+    n = rows_per_side(spec.planar)
+    npose = 2 if spec.planar else 3
+    o = spec.n_base + spec.n_act  # the dynamics rows come first (constraints.PER_KNOT)
+    return np.array([o + i * n + j for i in range(len(SIDES)) for j in range(npose, n)], int)
