@@ -6,7 +6,6 @@ import csv
 import io
 import json
 import sys
-import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
@@ -39,36 +38,26 @@ def write_summary(rows: Sequence[BatchRow], out_dir: str | Path,
 
 
 class Progress:
-    """A one-line progress bar on ``stream`` (stderr): files finished of ``total``, failures,
-    files per second and the time left. On a terminal the line is redrawn; elsewhere (a log
-    file, CI) one line is printed per finished file. ``enabled=False``: silent."""
+    """The batch's progress bar on ``stream`` (stderr), drawn by ``tqdm``: files finished of
+    ``total``, failures and skips, files per second and the time left; on a terminal the line
+    is redrawn, elsewhere (a log file, CI) tqdm prints it at intervals. ``enabled=False``:
+    silent."""
 
-    def __init__(self, total: int, *, stream: TextIO | None = None, enabled: bool = True,
-                 width: int = 24):
-        self.total, self.width, self.enabled = total, width, enabled
-        self.stream = stream or sys.stderr
+    def __init__(self, total: int, *, stream: TextIO | None = None, enabled: bool = True):
+        from tqdm import tqdm
+
+        self.total = total
         self.done = self.failed = self.skipped = 0
-        self.start = time.perf_counter()
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.bar = tqdm(total=total, unit="file", file=stream or sys.stderr,
+                        disable=not enabled, dynamic_ncols=True, mininterval=0.5)
 
     def update(self, row: BatchRow) -> None:
         """Count one finished row and redraw."""
         self.done += 1
         self.failed += row.status == "failed"
         self.skipped += row.status == "skipped"
-        if not self.enabled:
-            return
-        el = time.perf_counter() - self.start
-        worked = self.done - self.skipped
-        rate = worked / el if el > 0 and worked else 0.0
-        left = (self.total - self.done) / rate if rate else float("nan")
-        fill = round(self.width * self.done / max(self.total, 1))
-        line = (f"[{'#' * fill}{'.' * (self.width - fill)}] {self.done}/{self.total} files"
-                f"  {self.failed} failed  {self.skipped} skipped  {rate:.2f} files/s"
-                + (f"  ~{left:.0f} s left" if left == left else "")
-                + f"  {row.status}: {row.file}")
-        if self.tty:
-            self.stream.write("\r\x1b[2K" + line + ("\n" if self.done == self.total else ""))
-        else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
+        self.bar.set_postfix_str(f"{self.failed} failed, {self.skipped} skipped, "
+                                 f"{row.status}: {Path(str(row.file)).name}", refresh=False)
+        self.bar.update(1)
+        if self.done == self.total:
+            self.bar.close()
