@@ -165,7 +165,7 @@ def _cmd_view(a: argparse.Namespace) -> None:
     import time
 
     from .examples import example
-    from .metrics import force_direction, sagittal_angles
+    from .metrics import force_direction
     from .viz import Viewer, compare
 
     live = a.html is None
@@ -175,8 +175,8 @@ def _cmd_view(a: argparse.Namespace) -> None:
             demo = _demonstration(a.motion, a)
             robot, motion = demo.robot, demo.motion
             v = Viewer.start(a.port, a.open and live, quiet=not live)
-            v.show(robot, motion, force_directions=sagittal_angles(
-                force_direction(robot, motion)) if motion.contact else None)
+            v.show(robot, motion, force_directions=force_direction(robot, motion)
+                   if motion.contact else None)
             v.animate()
             if a.html:
                 v.save_html(a.html)
@@ -187,10 +187,8 @@ def _cmd_view(a: argparse.Namespace) -> None:
             v = Viewer.start(a.port, a.open and live, quiet=not live)
             compare(ex.demonstrator, ex.demonstration, ex.imitator, ex.adapted,
                     layout=a.layout, html=a.html, viewer=v,
-                    demo_force=sagittal_angles(
-                        force_direction(ex.demonstrator, ex.demonstration)),
-                    imitator_force=sagittal_angles(
-                        force_direction(ex.imitator, ex.adapted.motion)))
+                    demo_force=force_direction(ex.demonstrator, ex.demonstration),
+                    imitator_force=force_direction(ex.imitator, ex.adapted.motion))
         if a.html:
             print(f"wrote {a.html} (self-contained; open it in a browser, no network needed)")
         if live:

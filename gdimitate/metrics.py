@@ -19,8 +19,7 @@ from .sagittal import frame_paths, joint_paths
 
 __all__ = ["FORCE_MODELS", "angle_down", "hip_path", "hip_height", "ankle_paths", "sole_paths",
            "foot_heights", "foot_distance", "com_path", "force_direction", "joint_limit_margins",
-           "hip_height_ratio", "ForceDirection", "angle_between", "frame_rotations",
-           "sagittal_angles"]
+           "hip_height_ratio", "ForceDirection", "angle_between", "frame_rotations"]
 
 #: Force-direction models of :func:`force_direction`.
 FORCE_MODELS = ("measured", "dynamics", "com", "segment")
@@ -218,11 +217,6 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
             R = frame_rotations(robot, m.q, contacts[s].frame)
             push[s] = -np.einsum("tij,tj->ti", R, est.wrenches[s][:, :3])
     return {s: ForceDirection.from_vectors(push[s], stance[s], model) for s in SIDES}
-
-
-def sagittal_angles(directions: dict[str, ForceDirection]) -> dict[str, np.ndarray]:
-    """``{side: (T,)}`` sagittal angles [rad] of :func:`force_direction`'s result."""
-    return {s: d.sagittal for s, d in directions.items()}
 
 
 def frame_rotations(robot: Robot, q: np.ndarray, frame: str) -> np.ndarray:

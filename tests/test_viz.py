@@ -19,7 +19,7 @@ import pytest
 import umsgpack
 
 from gdimitate.errors import InvalidInputError, ViewerError
-from gdimitate.metrics import force_direction, sagittal_angles
+from gdimitate.metrics import force_direction
 from gdimitate.robot import Robot
 from gdimitate.viz import (
     BrowserNotFoundError,
@@ -32,7 +32,7 @@ from gdimitate.viz import (
     network_references,
     screenshot_html,
 )
-from gdimitate.viz.animate import arrow_pose, frame_indices
+from gdimitate.viz.animate import arrow_pose, frame_indices, push_vectors
 from gdimitate.viz.scene import shapes
 from gdimitate.walking import GaitSpec, walking_motion
 
@@ -45,7 +45,7 @@ SHOT = dict(size=(640, 480), virtual_time_ms=1500, timeout_s=90.0)
 def talos():
     robot = Robot.from_library("talos")
     motion = walking_motion(robot, GAIT)
-    return robot, motion, sagittal_angles(force_direction(robot, motion))
+    return robot, motion, force_direction(robot, motion)
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +53,7 @@ def planar():
     """One of our mesh-less planar URDFs (box/cylinder visuals, base_x/z/pitch), 1 m legs."""
     robot = Robot.from_library("case1_demonstrator")
     motion = walking_motion(robot, GAIT)
-    return robot, motion, sagittal_angles(force_direction(robot, motion))
+    return robot, motion, force_direction(robot, motion)
 
 
 @pytest.fixture(scope="module")
@@ -205,13 +205,16 @@ def test_frame_indices_and_arrow_pose():
     assert np.allclose(t[idx], np.linspace(0, 1, 11))
     assert np.array_equal(frame_indices(t, 1000.0), np.arange(101))  # never more than T
     sole = np.array([1.0, 0.1, 0.0])
-    for angle in (-0.4, 0.0, 0.3):
-        T = arrow_pose(sole, angle, 0.5, side=0.2)
+    for push in ([0.3, 0.1, -1.0], [0.0, 0.0, -1.0], [-0.4, -0.2, -0.9]):
+        d = np.array(push) / np.linalg.norm(push)
+        T = arrow_pose(sole, np.array(push), 0.5, side=0.2)
         tip = T[:3, 3] + 0.5 * T[:3, 2]
         assert np.allclose(tip, sole + [0, 0.2, 0])
-        # push direction: angle from the downward vertical, positive forward (+x)
-        assert np.isclose(np.arctan2(T[0, 2], -T[2, 2]), angle)
+        assert np.allclose(T[:3, 2], d)  # the arrow points along the push, in 3-D
         assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3))
+    # sagittal angles (the planar case) become vectors in the x–z plane
+    v = push_vectors(np.array([0.3, np.nan]))
+    assert np.allclose(v[0], [np.sin(0.3), 0.0, -np.cos(0.3)]) and np.all(np.isnan(v[1]))
 
 
 # ---------------------------------------------------------------------------- bad input

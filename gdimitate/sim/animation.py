@@ -1,7 +1,7 @@
 """Plan and simulation side by side in meshcat, through :class:`gdimitate.viz.Viewer`.
 
 The plan (sampled on the simulation grid) is drawn at y = −gap/2, the simulated robot at
-y = +gap/2, each with its feet's push direction (sagittal angle, hidden when the foot is
+y = +gap/2, each with its feet's push direction (3-D, hidden when the foot is
 unloaded) and its centre of mass; one animation plays both (the viewer's own recorder).
 """
 
@@ -12,7 +12,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..metrics import angle_down
 from ..robot import SIDES, Robot
 from .simulate import SimResult
 
@@ -20,11 +19,13 @@ __all__ = ["show_simulation"]
 
 
 def _directions(forces: dict[str, np.ndarray], min_force: float) -> dict[str, np.ndarray]:
+    """Push directions ``{side: (N, 3)}`` (the reverse of the force on the foot), NaN where
+    the foot carries less than ``min_force`` [N]."""
     out = {}
     for s in SIDES:
-        a = angle_down(-forces[s])
-        a[forces[s][:, 2] < min_force] = np.nan
-        out[s] = a
+        p = -np.asarray(forces[s], dtype=float)
+        p[forces[s][:, 2] < min_force] = np.nan
+        out[s] = p
     return out
 
 

@@ -21,7 +21,7 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     gait) next to ``imitator`` performing the analytically adapted walk, with force-direction
     arrows, centres of mass and foot paths."""
     from ..adapt import adapt
-    from ..metrics import force_direction, sagittal_angles
+    from ..metrics import force_direction
     from ..robot import Robot
     from ..walking import walking_motion
     from .compare import compare
@@ -31,8 +31,8 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     walk = walking_motion(demo)
     adapted = adapt(walk, demo, imit, "analytic")
     v = compare(demo, walk, imit, adapted, layout="side", gap=1.2,
-                demo_force=sagittal_angles(force_direction(demo, walk)),
-                imitator_force=sagittal_angles(force_direction(imit, adapted.motion)))
+                demo_force=force_direction(demo, walk),
+                imitator_force=force_direction(imit, adapted.motion))
     try:
         com = v.tracks["imitator"].frames.com
         target = np.array([com[:, 0].mean(), 0.0, 0.75])

@@ -27,6 +27,7 @@ __all__ = [
     "check_motion",
     "frame_indices",
     "place_frame",
+    "push_vectors",
     "record_frames",
     "sample_frames",
 ]
@@ -118,8 +119,8 @@ def sample_frames(model: pin.Model, visual_model: pin.GeometryModel, t: np.ndarr
 
     Args:
         soles: leg name → sole frame name (e.g. ``{"left": "left_sole"}``).
-        force_directions: leg name → ``(T,)`` angle [rad] from the downward vertical, positive
-            forward, NaN in swing (e.g. from ``gdimitate.metrics.force_direction``).
+        force_directions: leg name → push directions, anything :func:`push_vectors` takes
+            (e.g. ``gdimitate.metrics.force_direction``'s result per foot), NaN in swing.
         com: ``(T, 3)`` centre of mass [m] to show instead of Pinocchio's.
     """
     soles = dict(soles or {})
@@ -131,11 +132,11 @@ def sample_frames(model: pin.Model, visual_model: pin.GeometryModel, t: np.ndarr
         frame_ids[leg] = model.getFrameId(frame)
     T = len(t)
     forces = {}
-    for leg, angle in (force_directions or {}).items():
-        a = np.asarray(angle, dtype=float)
-        if a.shape != (T,):
+    for leg, directions in (force_directions or {}).items():
+        a = push_vectors(directions)
+        if a.shape != (T, 3):
             raise MotionMismatchError(
-                f"force direction of leg {leg!r} has shape {a.shape}; expected ({T},)")
+                f"force direction of leg {leg!r} has {a.shape[0]} samples; expected {T}")
         forces[leg] = a
     if com is not None:
         com = np.asarray(com, dtype=float)
@@ -170,11 +171,26 @@ def sample_frames(model: pin.Model, visual_model: pin.GeometryModel, t: np.ndarr
     )
 
 
-def arrow_pose(sole: np.ndarray, angle: float, length: float, side: float) -> np.ndarray:
+def push_vectors(directions: object) -> np.ndarray:
+    """One foot's push directions as unit vectors ``(T, 3)`` (NaN rows where there is none)
+    from a :class:`gdimitate.metrics.ForceDirection`, vectors ``(T, 3)`` or sagittal angles
+    ``(T,)`` [rad] from the downward vertical, positive forward (the planar case)."""
+    v = getattr(directions, "vector", directions)
+    a = np.asarray(v, dtype=float)
+    if a.ndim == 1:
+        return np.stack([np.sin(a), np.where(np.isnan(a), np.nan, 0.0), -np.cos(a)], axis=1)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise MotionMismatchError(f"a force direction must be (T,) angles or (T, 3) vectors; "
+                                  f"got shape {a.shape}")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / np.linalg.norm(a, axis=1, keepdims=True)
+
+
+def arrow_pose(sole: np.ndarray, push: np.ndarray, length: float, side: float) -> np.ndarray:
     """``(4, 4)`` pose of an arrow (local +z, tail at origin) whose tip touches ``sole`` (3,),
-    moved ``side`` [m] along world y, pointing along the foot's push: ``angle`` [rad] from the
-    downward vertical, positive forward (+x)."""
-    d = np.array([np.sin(angle), 0.0, -np.cos(angle)])
+    moved ``side`` [m] along world y, pointing along the foot's push ``push`` (3,) (a
+    direction in the world frame, e.g. down into the floor)."""
+    d = np.asarray(push, dtype=float) / np.linalg.norm(push)
     R = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), d).toRotationMatrix()
     T = np.eye(4)
     T[:3, :3] = R

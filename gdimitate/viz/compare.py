@@ -36,7 +36,8 @@ def compare(demonstrator: object, demo_motion: object, imitator: object,
         gap: distance [m] between the two in the ``"side"`` layout.
         ghost_scale: uniform scale of the ghost; default imitator leg length / demonstrator
             leg length (hip to sole, neutral pose), 1 if unknown.
-        demo_force, imitator_force: leg name → ``(T,)`` force direction [rad] of each (see
+        demo_force, imitator_force: leg name → push directions of each (``ForceDirection``,
+            ``(T, 3)`` vectors or ``(T,)`` sagittal angles; see
             :meth:`Viewer.show`).
         fps: animation frames per second.
         html: if given, also write the self-contained page there.

@@ -35,6 +35,7 @@ from .animate import (
     arrow_pose,
     check_motion,
     place_frame,
+    push_vectors,
     record_frames,
     sample_frames,
 )
@@ -64,7 +65,7 @@ class Track:
         visual_model: the geometry drawn (the robot's, or a skeleton).
         t, q: ``(T,)`` [s] and ``(T, nq)``, validated.
         soles: leg name → sole frame name.
-        force_directions: leg name → ``(T,)`` [rad] (may be empty).
+        force_directions: leg name → ``(T, 3)`` unit push vectors (may be empty).
         com: ``(T, 3)`` [m] given by the caller, ``None`` for Pinocchio's, ``False`` for none.
         offset: ``(3,)`` [m] translation of the whole track; scale: its uniform scale.
         nodes: meshcat node names of the visual objects.
@@ -237,10 +238,10 @@ class Viewer:
             scale: uniform scale of the whole track, motion included (a scaled ghost).
             color: RGB in [0, 1] for every part, or ``None`` for the URDF's colours.
             opacity: in [0, 1]; < 1 draws a translucent ghost.
-            force_directions: leg name → ``(T,)`` angle of the foot's push from the downward
-                vertical [rad], positive forward, NaN in swing (e.g. from
-                ``gdimitate.metrics.force_direction``); drawn as arrows whose tip touches the
-                sole, hidden when NaN.
+            force_directions: leg name → the foot's push on the ground: a
+                ``gdimitate.metrics.ForceDirection`` (e.g. from ``force_direction``), ``(T, 3)``
+                vectors or ``(T,)`` sagittal angles [rad] from the downward vertical, NaN in
+                swing; drawn in 3-D as arrows whose tip touches the sole, hidden when NaN.
             com: ``True`` marks Pinocchio's centre of mass; a ``(T, 3)`` array [m] marks that
                 path instead; ``False``/``None`` draws no marker.
             foot_paths: draw each sole's path over the whole motion as a line.
@@ -282,15 +283,15 @@ class Viewer:
         elif com is None or com is False:
             com_arg = False
         soles = _soles(robot)
-        force = {str(k): np.asarray(v, dtype=float) for k, v in (force_directions or {}).items()}
+        force = {str(k): push_vectors(v) for k, v in (force_directions or {}).items()}
         unknown = [leg for leg in force if leg not in soles]
         if unknown:
             raise ViewerError(f"force directions given for legs {unknown} but robot {rname!r} "
                               f"has sole frames only for legs {sorted(soles)}")
         for leg, a in force.items():
-            if a.shape != t.shape:
-                raise MotionMismatchError(f"force direction of leg {leg!r} has shape "
-                                          f"{a.shape}; expected {t.shape}")
+            if a.shape != (t.size, 3):
+                raise MotionMismatchError(f"force direction of leg {leg!r} has {a.shape[0]} "
+                                          f"samples; expected {t.size} (one per motion frame)")
         if isinstance(com_arg, np.ndarray):
             com_arg = np.asarray(com_arg, dtype=float)
             if com_arg.shape != (len(t), 3):
@@ -326,12 +327,12 @@ class Viewer:
             draw_arrow(root["force"][leg], st.arrow_length * L, st.arrow_radius * L,
                        st.arrow_color(leg), opacity)
 
-    def _arrow_pose(self, track: Track, leg: str, sole: np.ndarray, angle: float
+    def _arrow_pose(self, track: Track, leg: str, sole: np.ndarray, push: np.ndarray
                     ) -> np.ndarray:
         s = self.style.arrow_side_offset * track.size
         side = s if leg == "left" else -s if leg == "right" else 0.0
-        a = angle if np.isfinite(angle) else 0.0
-        return arrow_pose(sole, a, self.style.arrow_length * track.size, side)
+        d = push if np.all(np.isfinite(push)) else np.array([0.0, 0.0, -1.0])
+        return arrow_pose(sole, d, self.style.arrow_length * track.size, side)
 
     def _place(self, track: Track, frames: Frames, k: int) -> None:
         root = self.vis[track.name]
@@ -340,11 +341,10 @@ class Viewer:
             T = np.eye(4)
             T[:3, 3] = frames.com[k]
             root["com"].set_transform(T)
-        for leg, angle in frames.force.items():
-            a = float(angle[k])
+        for leg, push in frames.force.items():
             node = root["force"][leg]
-            node.set_transform(self._arrow_pose(track, leg, frames.soles[leg][k], a))
-            node.set_property("visible", bool(np.isfinite(a)))
+            node.set_transform(self._arrow_pose(track, leg, frames.soles[leg][k], push[k]))
+            node.set_property("visible", bool(np.all(np.isfinite(push[k]))))
 
     # -- animation -----------------------------------------------------------------------
     def animate(self, fps: float = 30.0, *, play: bool = True, loop: bool = True,
@@ -375,10 +375,10 @@ class Viewer:
                 poses = np.tile(np.eye(4), (len(frames.t), 1, 1))
                 poses[:, :3, 3] = frames.com
                 record_frames(anim, root["com"], frames.t, poses)
-            for leg, angle in frames.force.items():
-                finite = np.isfinite(angle)
-                poses = np.stack([self._arrow_pose(track, leg, s, a)
-                                  for s, a in zip(frames.soles[leg], angle, strict=True)])
+            for leg, push in frames.force.items():
+                finite = np.all(np.isfinite(push), axis=1)
+                poses = np.stack([self._arrow_pose(track, leg, s, d)
+                                  for s, d in zip(frames.soles[leg], push, strict=True)])
                 record_frames(anim, root["force"][leg], frames.t, poses, visible=finite)
             for leg, path in frames.sole_paths.items() if track.foot_paths else ():
                 draw_polyline(root["paths"][leg], path, self.style.path_color(leg))
