@@ -29,12 +29,7 @@ _CHILD = textwrap.dedent("""
     from gdimitate.contact import ContactForces, FootForces
     name, N = sys.argv[1], int(sys.argv[2])
     h, m, f = gd.gait.human_walk_3d()
-    c = m.contact["left"]
-    s0, s1 = (np.flatnonzero(c[1:] & ~c[:-1]) + 1)[:2]
-    sl = slice(s0, s1 + 1)
-    demo = m.replace(t=m.t[sl], q=m.q[sl], contact={k: v[sl] for k, v in m.contact.items()})
-    fs = ContactForces(f.t[sl], {k: FootForces(f[k].force[sl], f[k].cop[sl], f[k].torque[sl],
-                                               f[k].contact[sl]) for k in ("left", "right")})
+    demo, fs = gd.gait.one_stride(m, f, "left")
     rate = (N - 1) / (demo.t[-1] - demo.t[0]) * (1 + 1e-9)
     robot = gd.Robot.from_library(name)
     out = {}

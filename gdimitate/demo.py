@@ -19,11 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from .contact import ContactForces, FootForces
 from .motion import Motion
 from .robot import Robot
 
-__all__ = ["run_demo", "one_stride"]
+__all__ = ["run_demo"]
 
 #: Knots per second of the demo's optimal solve (the library default is 50 Hz; 30 Hz keeps
 #: the demo under two minutes on two cores).
@@ -33,27 +32,6 @@ DEMO_RATE = 30.0
 def _table(rows: list[tuple[str, str]]) -> str:
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
-
-
-def one_stride(motion: Motion, forces: ContactForces, side: str = "right"
-               ) -> tuple[Motion, ContactForces]:
-    """The first full stride of ``motion`` (from one heel strike of ``side`` to the next, found
-    in its contact schedule) and the forces on the same frames."""
-    from .errors import InvalidInputError
-
-    c = np.asarray(motion.contact[side], int)
-    strikes = np.flatnonzero(np.diff(c) == 1) + 1
-    if strikes.size < 2:
-        raise InvalidInputError(f"the demonstration has fewer than two {side} heel strikes; "
-                                "no full stride to adapt")
-    sl = slice(int(strikes[0]), int(strikes[1]) + 1)
-    m = motion.replace(t=motion.t[sl], q=motion.q[sl], v=None, a=None,
-                       contact={s: v[sl] for s, v in motion.contact.items()})
-    f = ContactForces(forces.t[sl], {s: FootForces(x.force[sl], x.cop[sl], x.torque[sl],
-                                                   x.contact[sl])
-                                     for s, x in forces.feet.items()},
-                      forces.source, forces.frame_note + f"; one {side} stride")
-    return m, f
 
 
 def _write_html(path: Path, demo_robot: Robot, demo: Motion, imit: Robot, sim, L: float) -> str:
@@ -94,7 +72,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
     log("[1/7] loading the shipped 3-D walk (OpenSim subject01: model, IK angles, measured "
         "forces) …")
     demo_robot, walk, walk_forces = gait.human_walk_3d()
-    demo, forces = one_stride(walk, walk_forces)
+    demo, forces = gait.one_stride(walk, walk_forces)
     imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
     L = imit.legs["left"].length
     log(f"[2/7] adapting one stride ({demo.t[0]:.2f}–{demo.t[-1]:.2f} s) → {imit.name} "

@@ -9,10 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .contact import ContactForces, FootForces
 from .errors import FileFormatError, InvalidInputError, ResourceLimitError, UnitsWarning
+from .motion import Motion
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
-           "human_walk_3d_folder"]
+           "human_walk_3d_folder", "one_stride"]
 
 
 def human_walk_path() -> Path:
@@ -257,3 +259,22 @@ def human_walk_3d(overground: bool = True):
     if overground:
         motion, forces = treadmill_to_overground(robot, motion, forces)
     return robot, motion, forces
+
+
+def one_stride(motion: Motion, forces: ContactForces, side: str = "right"
+               ) -> tuple[Motion, ContactForces]:
+    """The first full stride of ``motion`` (from one heel strike of ``side`` to the next, found
+    in its contact schedule) and the forces on the same frames."""
+    c = np.asarray(motion.contact[side], int)
+    strikes = np.flatnonzero(np.diff(c) == 1) + 1
+    if strikes.size < 2:
+        raise InvalidInputError(f"the demonstration has fewer than two {side} heel strikes; "
+                                "no full stride to adapt")
+    sl = slice(int(strikes[0]), int(strikes[1]) + 1)
+    m = motion.replace(t=motion.t[sl], q=motion.q[sl], v=None, a=None,
+                       contact={s: v[sl] for s, v in motion.contact.items()})
+    f = ContactForces(forces.t[sl], {s: FootForces(x.force[sl], x.cop[sl], x.torque[sl],
+                                                   x.contact[sl])
+                                     for s, x in forces.feet.items()},
+                      forces.source, forces.frame_note + f"; one {side} stride")
+    return m, f

@@ -13,7 +13,6 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.contact import ContactForces, FootForces
 from gdimitate.metrics import force_direction
 from gdimitate.retarget import resample
 from gdimitate.robot import SIDES
@@ -24,12 +23,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def walk():
     h, m, f = gd.gait.human_walk_3d()
-    c = m.contact["left"]
-    s0, s1 = (np.flatnonzero(c[1:] & ~c[:-1]) + 1)[:2]
-    sl = slice(s0, s1 + 1)
-    demo = m.replace(t=m.t[sl], q=m.q[sl], contact={k: v[sl] for k, v in m.contact.items()})
-    fs = ContactForces(f.t[sl], {k: FootForces(f[k].force[sl], f[k].cop[sl], f[k].torque[sl],
-                                               f[k].contact[sl]) for k in SIDES})
+    demo, fs = gd.gait.one_stride(m, f, "left")
     return h, demo, fs
 
 

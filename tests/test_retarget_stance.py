@@ -19,7 +19,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.audit import AuditTolerances
-from gdimitate.demo import one_stride
+from gdimitate.gait import one_stride
 from gdimitate.retarget import UnmappedJointsWarning
 from gdimitate.robot import SIDES, Robot
 
