@@ -241,10 +241,10 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor):
             start_new_session=True)
     try:
         deadline = time.monotonic() + 90
-        while "1/8 files" not in err.read_text() and time.monotonic() < deadline:
+        while "1/8 [" not in err.read_text() and time.monotonic() < deadline:
             assert proc.poll() is None, err.read_text()
             time.sleep(0.1)
-        assert "1/8 files" in err.read_text(), "no file finished in 90 s"
+        assert "1/8 [" in err.read_text(), "no file finished in 90 s"
         kids = psutil.Process(proc.pid).children(recursive=True)
         # the workers: all but multiprocessing's resource tracker and the pool's fork server
         # (whose children, the pool's workers, carry its command line too)
