@@ -13,12 +13,26 @@ The paper's planar case: ``gdimitate.adapt(demo, robot_m, imitator, "analytic")`
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import bvh, gait, metrics, opensim, oscillator, planar, retarget, sim
+from . import (
+    audit,
+    bvh,
+    contact,
+    gait,
+    metrics,
+    opensim,
+    oscillator,
+    planar,
+    retarget,
+    sim,
+    wrenches,
+)
 from .adapt import AdaptationReport, AdaptedMotion, adapt
 from .cases import paper_case
+from .contact import ContactForces, FootForces, SoleContact
 from .cpg import CPGReplay, entrain
 from .demonstration import Demonstration, load_demonstration
 from .errors import (
+    ContactError,
     GdimitateError,
     InvalidInputError,
     LegDetectionError,
@@ -34,6 +48,7 @@ from .errors import (
 )
 from .export import export_motion
 from .library import list_robots
+from .metrics import ForceDirection
 from .motion import Motion
 from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
 from .retarget import Limits, StreamingAdaptor, Weights
@@ -45,33 +60,40 @@ __version__ = "0.1.0"
 __all__ = [
     "AdaptationReport",
     "AdaptedMotion",
+    "ContactError",
+    "ContactForces",
     "CPGReplay",
     "Demonstration",
+    "FootForces",
+    "ForceDirection",
     "GaitSpec",
     "GdimitateError",
     "HUMAN_GAIT",
     "InvalidInputError",
     "Leg",
+    "LegDetectionError",
+    "LegMatchError",
     "Limits",
     "MatsuokaBank",
     "MatsuokaParams",
-    "LegDetectionError",
-    "LegMatchError",
     "Motion",
     "OscillatorError",
-    "ROBOT_GAIT",
     "Robot",
+    "ROBOT_GAIT",
+    "SoleContact",
     "SolverError",
     "StreamingAdaptor",
     "TimeGridError",
-    "URDFError",
     "UnknownNameError",
     "UnknownRobotError",
     "UnsupportedJointError",
+    "URDFError",
     "ViewerError",
     "Weights",
     "adapt",
+    "audit",
     "bvh",
+    "contact",
     "entrain",
     "export_motion",
     "gait",
@@ -86,4 +108,5 @@ __all__ = [
     "self_adjust",
     "sim",
     "walking_motion",
+    "wrenches",
 ]
