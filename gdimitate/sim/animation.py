@@ -55,8 +55,7 @@ def show_simulation(robot: Robot, result: SimResult, *, gap: float = 1.0, fps: f
                force_directions=_directions(result.contact_forces, min_force))
         v.animate(fps=fps)
         if camera is not None:
-            com = v.tracks["simulation"].frames.com + v.tracks["simulation"].offset
-            v.set_camera(camera, np.array([com[:, 0].mean(), 0.0, com[:, 2].mean()]))
+            v.look_at_track("simulation", camera)
         if html is not None:
             v.save_html(html)
     except BaseException:

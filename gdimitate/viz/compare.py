@@ -72,9 +72,7 @@ def compare(demonstrator: object, demo_motion: object, imitator: object,
                    force_directions=demo_force, foot_paths=False)
         v.animate(fps=fps)
         if camera is not None:
-            com = v.tracks["imitator"].frames.com + v.tracks["imitator"].offset
-            target = np.array([com[:, 0].mean(), 0.0, com[:, 2].mean()])
-            v.set_camera(camera, target)
+            v.look_at_track("imitator", camera)
         if html is not None:
             v.save_html(html)
     except BaseException:

@@ -410,6 +410,13 @@ class Viewer:
         span = float(max(hi[0] - lo[0], hi[1] - lo[1], 2.0 * hi[2], 0.5))
         self._place_camera(target + np.array([0.3, -1.0, 0.2]) * (span + 0.4), target)
 
+    def look_at_track(self, name: str, position: Sequence[float]) -> None:
+        """Place the camera at ``position`` (3,) [m], looking at the mean centre of mass (x, z;
+        y = 0) of the animated track ``name`` (call after :meth:`animate`)."""
+        track = self.tracks[name]
+        com = track.frames.com + track.offset
+        self.set_camera(position, np.array([com[:, 0].mean(), 0.0, com[:, 2].mean()]))
+
     def set_camera(self, position: Sequence[float], target: Sequence[float] = (0.0, 0.0, 0.8)
                    ) -> None:
         """Place the camera at ``position`` (3,) [m, world], looking at ``target`` (3,) [m].
