@@ -39,7 +39,7 @@ from gdimitate.walking import GaitSpec, walking_motion
 GAIT = GaitSpec(cycles=1, rate=50.0)
 # the wall-clock limit is generous: a render takes ~8 s on an idle 2-core machine, but one
 # timed out at 90 s in a full-suite run at the end of a loaded session
-SHOT = dict(size=(640, 480), virtual_time_ms=1500, timeout_s=300.0)
+SHOT = dict(size=(640, 480), virtual_time_ms=1500, timeout_s=120.0)
 
 
 # ---------------------------------------------------------------------------- fixtures
