@@ -6,7 +6,8 @@ iteration callback (:class:`Progress`, IPOPT's intermediate callback through Cas
 ``iteration_callback``) sees the flag and asks IPOPT to stop; :func:`guard` then raises
 ``KeyboardInterrupt`` after the solver has returned, so nothing is half-written. The callback
 also prints the iteration number, the objective and the largest constraint violation every
-``every`` iterations when progress is on.
+``every`` iterations when progress is on, and feeds each iterate to the stopping rule
+(:class:`~.stopping.Plateau`) when one is given.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ class _State:
     every = 10
     t0 = 0.0
     label = ""
+    stopper = None
 
 
 STATE = _State()
@@ -68,23 +70,28 @@ class Progress(ca.Callback):
 
     def eval(self, arg):
         self._it += 1
+        out = ca.nlpsol_out()
+        g = np.asarray(arg[out.index("g")]).ravel()
+        f = float(arg[out.index("f")])
+        stop = STATE.stopper is not None and STATE.stopper.update(
+            f, np.asarray(arg[out.index("x")]), g)
         if STATE.verbose and (self._it == 1 or self._it % STATE.every == 0):
-            g = np.asarray(arg[ca.nlpsol_out().index("g")]).ravel()
             viol = 0.0
             if STATE.lbg is not None and g.size:
                 viol = float(np.max(np.maximum(STATE.lbg - g, 0) + np.maximum(g - STATE.ubg, 0)))
-            f = float(arg[ca.nlpsol_out().index("f")])
             print(f"  {STATE.label} iter {self._it:4d}  cost {f:.4e}  constraint violation "
                   f"{viol:.2e}  ({time.perf_counter() - STATE.t0:.1f} s)", file=sys.stderr,
                   flush=True)
-        return [1 if STATE.interrupted else 0]
+        return [1 if STATE.interrupted or stop else 0]
 
 
 @contextmanager
-def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = ""):
-    """Run a solve with the SIGINT flag handler installed (main thread only) and progress
-    settings; raises ``KeyboardInterrupt`` after the solve when Ctrl-C arrived."""
+def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = "", stopper=None):
+    """Run a solve with the SIGINT flag handler installed (main thread only), progress
+    settings and an optional stopping rule; raises ``KeyboardInterrupt`` after the solve when
+    Ctrl-C arrived."""
     STATE.interrupted = False
+    STATE.stopper = stopper
     STATE.verbose, STATE.lbg, STATE.ubg, STATE.label = verbose, lbg, ubg, label
     STATE.t0 = time.perf_counter()
     main = threading.current_thread() is threading.main_thread()

@@ -26,7 +26,7 @@ from .interrupt import Progress
 from .knot import Flags, Knot, base_dofs
 
 __all__ = ["Spec", "Compiled", "compiled", "clear_cache", "BUILD_COUNT", "CACHE_SIZE",
-           "fingerprint"]
+           "fingerprint", "row_bounds", "row_scale"]
 
 CACHE_SIZE = 8
 _CACHE: OrderedDict[tuple, Compiled] = OrderedDict()
@@ -235,6 +235,15 @@ def _build(robot: Robot, flags: Flags, segment_frames: tuple[str, ...], q_index:
     BUILD_COUNT += 1
     return Compiled(solver, k, g_fun, tau_fun, T, nx, ngk, ng, progress, segment_frames,
                     knot_fun)
+
+
+def row_scale(c: Compiled, ng: int) -> np.ndarray:
+    """``(ng,)`` divisors putting each row in scaled units: m·g for the base rows of the
+    dynamics (in N and N·m, made exact after the solve by :mod:`.polish`), 1 elsewhere."""
+    scale = np.ones(ng)
+    nb = len(c.knot.base_idx)
+    scale[: c.T * c.ng_knot].reshape(c.T, c.ng_knot)[:, :nb] = c.knot.mg
+    return scale
 
 
 def row_bounds(c: Compiled, spec: Spec) -> tuple[np.ndarray, np.ndarray]:

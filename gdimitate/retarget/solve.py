@@ -22,11 +22,14 @@ from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
 from .knot import Flags, base_dofs
 from .params import DEFAULT_RATE, Contact, Limits, Weights
+from .polish import make_consistent
+from .stopping import PLATEAU, Plateau
 from .targets import Targets, demonstration_targets, direction_frame, resample
 
 __all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "Numbers", "setup"]
 
 MODES = ("trajectory", "per_frame")
+
 OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
            "tol", "ipopt", "verbose", "contacts")
 """Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
@@ -66,7 +69,8 @@ class SolverInfo:
 @dataclass
 class Numbers:
     """One demonstration's parameter matrix ``P`` ``(n_p, T)``, variable bounds and start
-    ``(n_x, T)``, row bounds, the resolved limits and the :class:`~.problem.Spec`."""
+    ``(n_x, T)``, row bounds, the per-row divisor that puts every row in scaled units
+    (:func:`~.problem.row_scale`), the resolved limits and the :class:`~.problem.Spec`."""
 
     P: np.ndarray
     lbx: np.ndarray
@@ -76,6 +80,7 @@ class Numbers:
     ubg: np.ndarray
     spec: pb.Spec
     lim: limits.Resolved
+    row_scale: np.ndarray
 
 
 def _contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:
@@ -168,7 +173,7 @@ def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: 
                    clearance=copts.clearance, leg_length=imitator.legs["left"].length,
                    n_base=len(k.base_idx), n_act=len(k.act_idx))
     lbg, ubg = pb.row_bounds(c, spec)
-    return Numbers(P, lbx, ubx, x0, lbg, ubg, spec, lim)
+    return Numbers(P, lbx, ubx, x0, lbg, ubg, spec, lim, pb.row_scale(c, len(lbg)))
 
 
 def _warm_start(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot,
@@ -232,7 +237,7 @@ def _group_names(c: pb.Compiled, lim: limits.Resolved, planar: bool, cone_mode: 
 def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unmet, ...]:
     """Constraint groups violated by more than ``tol`` (scaled units) at ``z``."""
     g = np.asarray(c.g_fun(z, num.P.T.ravel())).ravel()
-    viol = np.maximum(num.lbg - g, 0) + np.maximum(g - num.ubg, 0)
+    viol = (np.maximum(num.lbg - g, 0) + np.maximum(g - num.ubg, 0)) / num.row_scale
     T, n = num.spec.T, c.ng_knot
     names = _group_names(c, num.lim, num.spec.planar, num.spec.cone)
     worst: dict[str, tuple[float, int]] = {}
@@ -260,13 +265,20 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
         for name in ("s_plus", "s_minus"):
             ubx[c.knot.var[name]] = np.inf
     c.progress.reset()
-    with guard(verbose, num.lbg, num.ubg, label):
+    stopper = Plateau(num.lbg, num.ubg, num.row_scale)
+    with guard(verbose, num.lbg, num.ubg, label, stopper):
         try:
             sol = c.solver(x0=x0.T.ravel(), p=num.P.T.ravel(), lbx=lbx.T.ravel(),
                            ubx=ubx.T.ravel(), lbg=num.lbg, ubg=num.ubg)
         except RuntimeError as e:
             raise SolverError(f"IPOPT could not run the optimal adaptor's NLP: {e}") from None
-    return np.asarray(sol["x"]).ravel(), dict(c.solver.stats())
+    st = dict(c.solver.stats())
+    z = np.asarray(sol["x"]).ravel()
+    if not st.get("success") and stopper.best_x is not None and \
+            st.get("return_status") == "User_Requested_Stop":
+        z = stopper.best_x
+        st.update(success=True, return_status=PLATEAU)
+    return z, st
 
 
 def _check_options(opts: dict) -> None:
@@ -399,10 +411,11 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     T = tg.T
     Z = z.reshape(T, -1).T
     var = c.knot.var
-    q, v, a = Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T
+    q, v, a, W = make_consistent(imitator, tg.t, Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T,
+                                 wrenches_of(c, Z), tg.stance,
+                                 {s: cs[s].frame for s in SIDES}, c.knot.base_idx)
     base = robot_motion(imitator, tg.t, q, tg.stance)
     motion = base.replace(v=v, a=a)
-    W = wrenches_of(c, Z)
     push_r = None
     if force in ("measured", "dynamics"):
         from ..metrics import frame_rotations

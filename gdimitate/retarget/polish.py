@@ -1,0 +1,87 @@
+"""Exact consistency of a solution before it is reported (docs/design.md §6, §12).
+
+IPOPT stops once its iterate is feasible to its constraint tolerance and the cost has stopped
+moving (:data:`~.problem.IPOPT_DEFAULTS`), so the equality rows hold to ~1e-6 in their scaled
+units rather than to round-off. Before the motion is reported, the equalities are made exact
+on the output's own numbers — nothing is clipped and no inequality is touched:
+
+- a free-flyer's quaternion is normalised at every knot;
+- ``v`` is rebuilt from ``q`` by the integration rule (``v_k = (q_{k−1} ⊖ q_k) / h_k`` for
+  k ≥ 1, Pinocchio's ``difference``) and ``a`` from ``v`` (``a_{k−1} = (v_k − v_{k−1}) /
+  h_k``), so that forward differences of ``q`` *are* ``v``;
+- the stance wrenches get the least-norm correction that zeroes the unactuated (base) rows of
+  ``rnea(q, v, a) − Σ J_cᵀ w_c`` (Pinocchio, not the NLP's expressions).
+
+Each correction is of the size of IPOPT's final constraint violation; the audit
+(:func:`gdimitate.audit.audit`) then judges every inequality on the corrected numbers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..robot import SIDES, Robot
+
+__all__ = ["make_consistent"]
+
+
+def _rebuild_derivatives(model: pin.Model, t: np.ndarray, q: np.ndarray, v: np.ndarray,
+                         a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    v, a = v.copy(), a.copy()
+    h = np.diff(t)
+    for k in range(1, len(t)):
+        v[k] = pin.difference(model, q[k - 1], q[k]) / h[k - 1]
+    for k in range(1, len(t)):
+        a[k - 1] = (v[k] - v[k - 1]) / h[k - 1]
+    return v, a
+
+
+def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+                      W: dict[str, np.ndarray], stance: dict[str, np.ndarray],
+                      frames: dict[str, str], base_idx: np.ndarray) -> dict[str, np.ndarray]:
+    m, d = robot.model, robot.data
+    comp = [0, 2, 4] if robot.base == "planar" else list(range(6))
+    W = {s: w.copy() for s, w in W.items()}
+    fids = {s: m.getFrameId(frames[s]) for s in SIDES}
+    for k in range(len(q)):
+        sides = [s for s in SIDES if stance[s][k]]
+        if not sides:
+            continue
+        tau = pin.rnea(m, d, q[k], v[k], a[k]).copy()
+        pin.computeJointJacobians(m, d, q[k])
+        pin.updateFramePlacements(m, d)
+        cols = []
+        for s in sides:
+            J = pin.getFrameJacobian(m, d, fids[s], pin.LOCAL)[comp]
+            tau -= J.T @ W[s][k, comp]
+            cols.append(J.T[base_idx])
+        A = np.hstack(cols)
+        dw = np.linalg.lstsq(A, tau[base_idx], rcond=None)[0]
+        for i, s in enumerate(sides):
+            W[s][k, comp] += dw[i * len(comp):(i + 1) * len(comp)]
+    return W
+
+
+def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+                    W: dict[str, np.ndarray], stance: dict[str, np.ndarray],
+                    frames: dict[str, str], base_idx: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """The solution with its equality rows exact (see the module docstring).
+
+    Args:
+        robot: the imitator.
+        t: knot times ``(T,)`` [s]; q ``(T, nq)``, v ``(T, nv)``, a ``(T, nv)``.
+        W: sole-frame wrenches ``{side: (T, 6)}`` [N, N·m]; stance ``{side: (T,) bool}``.
+        frames: each side's contact frame name; base_idx: the unactuated rows of ``v``.
+
+    Returns:
+        ``(q, v, a, W)``, new arrays.
+    """
+    q = np.array(q, dtype=float)
+    if robot.base == "free":
+        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    v, a = _rebuild_derivatives(robot.model, np.asarray(t, float), q, np.asarray(v, float),
+                                np.asarray(a, float))
+    W = _correct_wrenches(robot, q, v, a, W, stance, frames, np.asarray(base_idx))
+    return q, v, a, W
