@@ -26,12 +26,17 @@ from .polish import make_consistent
 from .stopping import PLATEAU, Plateau
 from .targets import Targets, demonstration_targets, direction_frame, resample
 
-__all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "Numbers", "setup"]
+__all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "STOPS", "Numbers",
+           "setup"]
 
 MODES = ("trajectory", "per_frame")
+STOPS = ("settled", "converged")
+"""``stop=``: ``"settled"`` (default) — the best feasible iterate once the cost has settled
+(:mod:`.stopping`); ``"converged"`` — IPOPT's own convergence test (``tol`` 1e-8; often
+several times slower, the same motion to within the audit's tolerances)."""
 
 OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
-           "tol", "ipopt", "verbose", "contacts")
+           "tol", "ipopt", "verbose", "contacts", "stop")
 """Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
 
 
@@ -258,14 +263,15 @@ def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unme
 
 
 def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verbose: bool,
-               label: str) -> tuple[np.ndarray, dict]:
-    """One IPOPT solve from ``x0`` ``(n_x, T)``; returns ``(z, stats)``."""
+               label: str, stop: str = "settled") -> tuple[np.ndarray, dict]:
+    """One IPOPT solve from ``x0`` ``(n_x, T)``; returns ``(z, stats)``. ``stop``: one of
+    :data:`STOPS`."""
     lbx, ubx = num.lbx.copy(), num.ubx.copy()
     if elastic:
         for name in ("s_plus", "s_minus"):
             ubx[c.knot.var[name]] = np.inf
     c.progress.reset()
-    stopper = Plateau(num.lbg, num.ubg, num.row_scale)
+    stopper = Plateau(num.lbg, num.ubg, num.row_scale) if stop == "settled" else None
     with guard(verbose, num.lbg, num.ubg, label, stopper):
         try:
             sol = c.solver(x0=x0.T.ravel(), p=num.P.T.ravel(), lbx=lbx.T.ravel(),
@@ -274,7 +280,7 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
             raise SolverError(f"IPOPT could not run the optimal adaptor's NLP: {e}") from None
     st = dict(c.solver.stats())
     z = np.asarray(sol["x"]).ravel()
-    if not st.get("success") and stopper.best_x is not None and \
+    if not st.get("success") and stopper is not None and stopper.best_x is not None and \
             st.get("return_status") == "User_Requested_Stop":
         z = stopper.best_x
         st.update(success=True, return_status=PLATEAU)
@@ -304,7 +310,8 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
       overriding the measured sole rectangles), ``body_map`` (a
       :class:`~.bodymap.BodyMap`, dict or JSON path; default: the preset);
     - ``tol``: feasibility tolerance of the optimiser's own row check (scaled units, default
-      1e-6); ``ipopt``: extra IPOPT options; ``verbose`` (default True): progress lines
+      1e-6); ``stop``: when a solve ends (:data:`STOPS`); ``ipopt``: extra IPOPT options;
+      ``verbose`` (default True): progress lines
       (iteration, cost, constraint violation) on stderr.
 
     Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
@@ -335,6 +342,9 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
         raise InvalidInputError("force='measured' needs forces= (the demonstrator's measured "
                                 "ContactForces)")
     verbose = bool(options.get("verbose", True))
+    stop = options.get("stop", "settled")
+    if stop not in STOPS:
+        raise UnknownNameError("stop rule", stop, STOPS)
     cs = _contacts(imitator, copts, options.get("contacts"))
     bmap = body_map(demonstrator, imitator, options.get("body_map"))
     if mode == "per_frame":
@@ -358,14 +368,15 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     build_s = 0.0 if cached else time.perf_counter() - t0
     num = setup(c, tg, imitator, demonstrator, w, lim_opts, copts, cs)
     t1 = time.perf_counter()
-    z, st = run_solver(c, num, num.x0, False, verbose, f"{imitator.name} ({tg.T} knots)")
+    z, st = run_solver(c, num, num.x0, False, verbose, f"{imitator.name} ({tg.T} knots)",
+                       stop)
     bad = unmet(c, num, z, tol)
     elastic = False
     iters = int(st.get("iter_count", 0))
     if bad or not st.get("success"):
         elastic = True
         x_start = z.reshape(tg.T, -1).T
-        z2, st2 = run_solver(c, num, x_start, True, verbose, "least-infeasible")
+        z2, st2 = run_solver(c, num, x_start, True, verbose, "least-infeasible", stop)
         iters += int(st2.get("iter_count", 0))
         bad2 = unmet(c, num, _zero_slacks(c, z2, tg.T), tol)
         z, st, bad = _zero_slacks(c, z2, tg.T), st2, bad2

@@ -159,10 +159,11 @@ class StreamingAdaptor:
             rows = contact_rows.start_velocity_rows(num.spec)  # and so is its foot velocity
             num.lbg[rows], num.ubg[rows] = -np.inf, np.inf
         t0 = time.perf_counter()
-        z, st = run_solver(c, num, num.x0, False, verbose, "frame")
+        z, st = run_solver(c, num, num.x0, False, verbose, "frame", "converged")
         Z = z.reshape(2, -1).T
         if not st.get("success"):
-            z2, st2 = run_solver(c, num, Z, True, verbose, "frame, least-infeasible")
+            z2, st2 = run_solver(c, num, Z, True, verbose, "frame, least-infeasible",
+                                  "converged")
             Z = z2.reshape(2, -1).T.copy()
             for name in ("s_plus", "s_minus"):
                 Z[var[name]] = 0.0

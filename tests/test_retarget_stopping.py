@@ -1,0 +1,54 @@
+"""The adaptor's stopping rule (gdimitate.retarget.stopping.Plateau) on synthetic iterate
+traces with known answers, and ``stop="settled"`` against IPOPT's own convergence test on a
+real problem, both judged by the independent audit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import gdimitate as gd
+from gdimitate.retarget.stopping import PLATEAU, Plateau
+
+
+def _rule(**kw) -> Plateau:
+    # two rows: g0 in [0, 0] scaled by 1000 (a base row in N), g1 <= 1
+    return Plateau(np.array([0.0, -np.inf]), np.array([0.0, 1.0]), np.array([1000.0, 1.0]),
+                   **kw)
+
+
+def test_keeps_the_best_feasible_iterate_and_stops_when_it_settles():
+    p = _rule(viol_tol=1e-8, rel_tol=1e-3, window=3)
+    # (cost, g0 [N], g1): infeasible, feasible, better but infeasible, feasible and best, ...
+    trace = [(5.0, 1.0, 0.0), (2.0, 5e-6, 0.5), (1.5, 0.0, 1.1), (1.9, 9e-6, 1.0),
+             (1.8995, 0.0, 0.0), (1.8992, 0.0, 0.0), (1.8991, 0.0, 0.0)]
+    stops = [p.update(f, np.array([f]), np.array([g0, g1])) for f, g0, g1 in trace]
+    # 5e-6 N / 1000 = 5e-9 ≤ 1e-8: feasible; 1.1 > 1: not. Improvement over the last 3
+    # iterations at the 7th: 1.9 → 1.8991, 4.7e-4 ≤ 1e-3 → stop there and not before.
+    assert stops == [False] * 6 + [True]
+    assert p.best_f == pytest.approx(1.8991) and p.best_x[0] == pytest.approx(1.8991)
+    assert p.violation(np.array([2e-5, 0.0])) == pytest.approx(2e-8)
+
+
+def test_never_stops_without_a_feasible_iterate():
+    p = _rule(window=2)
+    assert not any(p.update(1.0, np.zeros(1), np.array([1.0, 0.0])) for _ in range(20))
+    assert p.best_x is None
+
+
+@pytest.mark.slow
+def test_settled_and_converged_give_motions_the_audit_accepts():
+    h, m, f = gd.gait.human_walk_3d()
+    demo, fs = gd.gait.one_stride(m, f, "left")
+    robot = gd.Robot.from_library("g1")
+    out = {stop: gd.adapt(demo, h, robot, "optimal", force="measured", forces=fs, rate=20,
+                          verbose=False, stop=stop) for stop in ("settled", "converged")}
+    for r in out.values():
+        assert r.audit.feasible, r.audit.binding
+        assert r.audit.base_residual.value <= 1e-6
+    s, c = out["settled"], out["converged"]
+    assert s.solver.iterations <= c.solver.iterations
+    assert s.solver.status in (PLATEAU, c.solver.status)
+    # the same motion to within a fraction of the joints' range of motion
+    dq = np.abs(s.motion.q[:, 7:] - c.motion.q[:, 7:]).max()
+    assert dq <= 0.05, dq
