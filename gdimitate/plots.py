@@ -13,13 +13,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from . import metrics
+from .contact import SoleContact, centre_of_pressure
 from .metrics import ForceDirection
 from .motion import Motion
 from .robot import Robot
 from .sagittal import leg_angles
 
 __all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
-           "plot_force_directions"]
+           "plot_force_directions", "plot_sole_cop"]
 
 Track = tuple[str, Robot, Motion]  # (label, robot, motion)
 STYLES = ["-", "--", ":", "-."]
@@ -152,6 +153,35 @@ def plot_force_directions(t: np.ndarray, directions: Mapping[str, Mapping[str, F
             a.grid(alpha=0.3)
         ax[1, j].set_xlabel("t [s]")
     ax[0, 0].legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    return _save(fig, path)
+
+
+def plot_sole_cop(wrenches: Mapping[str, np.ndarray], contacts: Mapping[str, SoleContact],
+                  stance: Mapping[str, np.ndarray], title: str = "", path: Path | None = None):
+    """Each foot's centre of pressure [cm] inside its sole rectangle, seen from above in the
+    sole frame (x forward, y left): ``wrenches`` ``{side: (T, 6)}`` [N, N·m] in the sole frame
+    (an :class:`~gdimitate.adapt.AdaptedMotion`'s), ``contacts`` the sole rectangles,
+    ``stance`` ``{side: (T,) bool}`` (only stance knots with a positive normal force are
+    drawn). The drawn points are :func:`gdimitate.contact.centre_of_pressure`'s."""
+    fig, ax = plt.subplots(1, 2, figsize=(8, 4.5))
+    for a, side in zip(ax, ("left", "right"), strict=True):
+        c = contacts[side]
+        X, Y = 100 * c.half_length, 100 * c.half_width
+        a.plot([-Y, Y, Y, -Y, -Y], [-X, -X, X, X, -X], "k-", lw=1.5, label="sole")
+        cop = 100 * centre_of_pressure(np.asarray(wrenches[side])[np.asarray(stance[side], bool)])
+        ok = np.all(np.isfinite(cop), axis=1)
+        # drawn with x (forward) up the page and y (left) to the left, as seen from above
+        a.plot(-cop[ok, 1], cop[ok, 0], "C0.-", ms=3, lw=0.6, label="centre of pressure")
+        a.set_aspect("equal")
+        a.set_xlim(-1.4 * Y, 1.4 * Y)
+        a.set_ylim(-1.2 * X, 1.2 * X)
+        a.set_title(f"{side} sole")
+        a.set_xlabel("← left  y [cm]  right →")
+        a.set_ylabel("x [cm] (forward)")
+        a.grid(alpha=0.3)
+    ax[0].legend(fontsize=8, loc="lower left")
     if title:
         fig.suptitle(title)
     return _save(fig, path)
