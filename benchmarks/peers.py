@@ -93,7 +93,13 @@ def evaluate(robot, plan, frames_per_s: float, forces, method: str, note: str = 
     fd = [f for f in rep.force_direction_error.values() if f is not None and f.knots]
     plan_push = float(np.sqrt(sum(f.knots * f.error_rms ** 2 for f in fd)
                               / max(sum(f.knots for f in fd), 1)))
-    res = gd.sim.simulate(robot, plan, demo_forces=forces)
+    try:
+        res = gd.sim.simulate(robot, plan, demo_forces=forces)
+    except gd.GdimitateError as e:  # e.g. a URDF MuJoCo cannot take: report it as a row
+        nan = float("nan")
+        return Row(robot.name, method, frames_per_s, 100.0 * out / max(stance, 1),
+                   max(ratios, default=nan), float(np.degrees(plan_push)), nan, nan, nan, nan,
+                   bool(rep.feasible), f"{note}; not simulated: {e}".lstrip("; ")[:160])
     m = res.metrics
     vs = m.force_vs_demo or {}
     return Row(robot.name, method, frames_per_s, 100.0 * out / max(stance, 1),
@@ -190,7 +196,8 @@ def table(rows: list[Row]) -> str:
             "|---|---|---|---|---|---|---|---|---|---|---|")
     lines = [head]
     for r in rows:
-        fell = "no" if r.fell_after is None else f"{r.fell_after:.2f}"
+        fell = "no" if r.fell_after is None else (
+            f"{r.fell_after:.2f}" if np.isfinite(r.fell_after) else "not simulated")
         if not np.isfinite(r.frames_per_s):
             fell = "—"
         lines.append(
@@ -209,6 +216,9 @@ def negative_control(rows: list[Row]) -> str:
     out = []
     for r in rows:
         if r.method != "copy (3-D)":
+            continue
+        if r.fell_after is not None and not np.isfinite(r.fell_after):
+            out.append(f"- {r.robot}: not simulated ({r.note})")
             continue
         fails = r.fell_after is not None or r.slip_cm > 5.0
         out.append(f"- {r.robot}: the 3-D joint copy "
