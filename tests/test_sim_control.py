@@ -26,7 +26,7 @@ PUSH = 20.0  # [N], the issue's push
 
 @pytest.fixture(scope="module")
 def robots():
-    return {n: gd.Robot.from_library(n) for n in ("talos", "g1", "hoap2")}
+    return {n: gd.Robot.from_library(n) for n in ("talos", "g1", "hoap2", "romeo")}
 
 
 def _tipping_force(robot) -> float:
@@ -80,7 +80,7 @@ def test_controller_output_satisfies_pinocchio_dynamics_and_cones(robots, name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["talos", "g1", "hoap2"])
+@pytest.mark.parametrize("name", ["talos", "g1", "hoap2", "romeo"])
 def test_standing_robot_stays_up_and_holds_a_push(robots, name):
     robot = robots[name]
     F = _push_for(robots, name)

@@ -21,7 +21,7 @@ from gdimitate.sim import ModelOptions, build_model
 from gdimitate.sim.reference import Plan, check_plan
 from gdimitate.sim.scenarios import standing_plan
 
-ROBOTS = ["hoap2", "talos", "g1", "icub"]
+ROBOTS = ["hoap2", "talos", "g1", "icub", "romeo"]
 
 
 @pytest.fixture(scope="module")
@@ -67,15 +67,19 @@ def test_inverse_dynamics_and_mass_matrix_match_pinocchio(robots, name):
         Mpin = pin.crba(m, d, q)
         Mpin = np.triu(Mpin) + np.triu(Mpin, 1).T
         assert np.linalg.norm(T.T @ Mmj @ T - Mpin) <= 1e-8 * np.linalg.norm(Mpin)
-    # the same masses, no hidden passive terms
+    # the same masses, no hidden passive terms; left out: exactly the joints that move no
+    # mass (Pinocchio's subtree masses; Romeo's 24 hand joints, no other robot's)
     assert mj.body_mass.sum() == pytest.approx(robot.mass, rel=1e-12)
+    pin.computeSubtreeMasses(m, d)
+    assert set(sim.frozen) == {j for j in range(1, m.njoints) if d.mass[j] == 0}
+    assert len(sim.frozen) == (24 if name == "romeo" else 0)
     assert np.all(mj.dof_damping == 0) and np.all(mj.dof_frictionloss == 0)
     T = sim.velocity_map(robot.neutral)
     assert np.allclose(T.T @ np.diag(mj.dof_armature) @ T, np.diag(m.armature))
     assert np.all(mj.jnt_stiffness == 0)
 
 
-@pytest.mark.parametrize("name", ["hoap2", "talos", "icub"])
+@pytest.mark.parametrize("name", ["hoap2", "talos", "icub", "romeo"])
 def test_kinematics_and_sole_boxes_match_pinocchio(robots, name):
     robot = _robot(robots, name)
     sim = build_model(robot)
@@ -88,7 +92,8 @@ def test_kinematics_and_sole_boxes_match_pinocchio(robots, name):
         pin.framesForwardKinematics(m, d, q)
         for j in range(1, m.njoints):
             b = mujoco.mj_name2id(sim.mj, mujoco.mjtObj.mjOBJ_BODY, m.names[j])
-            if b < 0:  # merged massless link (the planar base's x and z)
+            if b < 0:  # merged massless link (the planar base's x and z) or frozen subtree
+                assert j in sim.frozen or m.inertias[j].mass == 0
                 continue
             assert np.allclose(data.xpos[b], d.oMi[j].translation, atol=1e-12)
             assert np.allclose(data.xmat[b].reshape(3, 3), d.oMi[j].rotation, atol=1e-12)

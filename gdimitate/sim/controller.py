@@ -135,7 +135,8 @@ class TrackingController:
         self.data = robot.model.createData()
         self.nv = robot.model.nv
         self.act = sim.idx_v_act
-        self.unact = np.setdiff1d(np.arange(self.nv), self.act)
+        # base rows; a frozen joint (massless subtree, not simulated) has all-zero rows
+        self.unact = np.setdiff1d(np.arange(self.nv), np.r_[self.act, sim.idx_v_frozen])
         self.base_id = base_joint(robot)
         self.contacts = sim.contacts
         self.fid = {s: self.model.getFrameId(sim.contacts[s].frame) for s in SIDES}

@@ -11,6 +11,12 @@ construction:
 - a massless body carrying one joint whose only child is another joint (our planar base's
   ``base_x`` → ``base_z`` → ``base_pitch``) is merged into that child: MuJoCo composes the
   joints of one body in order, which is Pinocchio's chain;
+- a joint whose whole subtree carries no mass (example-robot-data's Romeo: 24 finger, thumb
+  and hand joints) moves nothing and cannot be integrated (MuJoCo needs positive inertia on
+  a moving body): it is left out of the MuJoCo model with its subtree
+  (:attr:`SimModel.frozen`). Pinocchio's dynamics of every other joint do not depend on it
+  (its rows and columns of the mass matrix are zero), the sole frames are never on it, and
+  :meth:`SimModel.q_from_qpos` reports it at Pinocchio's neutral configuration;
 - each body's mass, centre of mass and rotational inertia are Pinocchio's (``model.inertias``,
   in the joint frame); Pinocchio's ``armature`` is copied (zero for URDFs); URDF damping and
   friction are *not* copied (Pinocchio's ``rnea`` ignores them too), so neither side has
@@ -136,14 +142,25 @@ class _Builder:
             self.children[m.parents[i]].append(i)
         self.body_of: dict[int, mujoco.MjsBody] = {0: spec.worldbody}
         self.merged: set[int] = set()
+        self.frozen: set[int] = set()
 
     def _massless(self, j: int) -> bool:
         Y = self.model.inertias[j]
         return Y.mass <= 0 and np.allclose(Y.inertia, 0)
 
+    def _subtree(self, j: int) -> list[int]:
+        out = [j]
+        for k in self.children[j]:
+            out += self._subtree(k)
+        return out
+
     def add(self, j: int, parent: mujoco.MjsBody, chain: list[tuple[int, pin.SE3]]) -> None:
         m = self.model
         jm = m.joints[j]
+        sub = self._subtree(j)
+        if _kind(jm) != "FreeFlyer" and not chain and all(self._massless(k) for k in sub):
+            self.frozen.update(sub)  # moves nothing: left out (module docstring)
+            return
         F = (chain[-1][1] if chain else pin.SE3.Identity()) * m.jointPlacements[j]
         kids = self.children[j]
         if (self._massless(j) and len(kids) == 1 and _kind(jm) != "FreeFlyer"
@@ -255,7 +272,7 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
     for s in SIDES:
         c = contacts[s]
         fr = m.frames[robot.frame_id(c.frame)]
-        if fr.parentJoint in b.merged or fr.parentJoint == 0:
+        if fr.parentJoint in b.merged | b.frozen or fr.parentJoint == 0:
             raise SimModelError(f"{robot.name}: the {s} sole frame {c.frame!r} is not on a "
                                 "moving body with mass")
         h = options.box_height / 2
@@ -269,7 +286,7 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
         body.add_site(name=f"{s}_sole", pos=P.translation, quat=_quat_wxyz(P.rotation))
     actuated = []
     for j in range(1, m.njoints):
-        if _is_base(m, j) or m.joints[j].nv != 1:
+        if _is_base(m, j) or m.joints[j].nv != 1 or j in b.frozen:
             continue
         e = _effort(m, j)
         if e <= 0:
@@ -290,7 +307,8 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
     except ValueError as e:
         raise SimModelError(f"{robot.name}: MuJoCo rejected the model built from its "
                             f"Pinocchio model: {e}") from None
-    sim = SimModel(robot, spec, mjm, {s: contacts[s] for s in SIDES}, actuated, options)
+    sim = SimModel(robot, spec, mjm, {s: contacts[s] for s in SIDES}, actuated, options,
+                   frozen=sorted(b.frozen))
     sim.inertia_changes = dict(b.inertia_changes)
     return sim
 
@@ -302,13 +320,21 @@ class SimModel:
     that have a motor, in actuator order); ``idx_v_act`` ``(nu,)`` their indices in v;
     ``effort`` ``(nu,)`` [N·m or N] their limits (inf where unlimited); ``options``;
     ``inertia_changes`` (body name → largest principal moment added [kg·m²], see
-    :attr:`ModelOptions.min_inertia`)."""
+    :attr:`ModelOptions.min_inertia`); ``frozen`` (Pinocchio joint ids of massless subtrees
+    left out of the MuJoCo model, see the module docstring) and ``idx_v_frozen`` their
+    indices in v."""
 
     def __init__(self, robot: Robot, spec: mujoco.MjSpec, mj: mujoco.MjModel,
-                 contacts: dict[str, SoleContact], actuated: list[int], options: ModelOptions):
+                 contacts: dict[str, SoleContact], actuated: list[int], options: ModelOptions,
+                 frozen: list[int] = ()):
         self.robot, self.spec, self.mj, self.contacts = robot, spec, mj, contacts
         self.options = options
         m = robot.model
+        self.frozen = tuple(frozen)
+        self.idx_v_frozen = np.array([i for j in self.frozen for i in
+                                      range(m.joints[j].idx_v, m.joints[j].idx_v
+                                            + m.joints[j].nv)], dtype=int)
+        self._neutral = pin.neutral(m)
         self.actuated = tuple(actuated)
         self.idx_v_act = np.array([m.joints[j].idx_v for j in actuated], dtype=int)
         self.effort = np.array([_effort(m, j) for j in actuated])
@@ -318,7 +344,7 @@ class SimModel:
         rows = []
         for j in range(1, m.njoints):
             jm = m.joints[j]
-            if _kind(jm) == "FreeFlyer":
+            if _kind(jm) == "FreeFlyer" or j in self.frozen:
                 continue
             jid = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, m.names[j])
             rows.append((jm.idx_q, jm.idx_v, mj.jnt_qposadr[jid], mj.jnt_dofadr[jid],
@@ -365,9 +391,9 @@ class SimModel:
         return out
 
     def q_from_qpos(self, qpos: np.ndarray) -> np.ndarray:
-        """Pinocchio ``q`` ``(nq,)`` of a MuJoCo ``qpos``."""
+        """Pinocchio ``q`` ``(nq,)`` of a MuJoCo ``qpos`` (frozen joints: neutral)."""
         qpos = np.asarray(qpos, dtype=float)
-        q = np.zeros(self.robot.model.nq)
+        q = self._neutral.copy()
         if self.free:
             quat = qpos[self._fp + 3:self._fp + 7] / np.linalg.norm(qpos[self._fp + 3:self._fp + 7])
             if self.free_placement.isIdentity():
