@@ -87,6 +87,43 @@ def test_stance_feet_are_still(adapted):
     assert ad.feasible, rep.binding
 
 
+def _sole_acceleration(model, data, fid, q, v, a) -> np.ndarray:
+    """``(2,)`` ‖linear‖ [m/s²], ‖angular‖ [rad/s²] of the sole frame's classical acceleration."""
+    pin.forwardKinematics(model, data, q, v, a)
+    acc = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+    return np.array([np.linalg.norm(acc.linear), np.linalg.norm(acc.angular)])
+
+
+def test_a_loaded_foot_does_not_accelerate_off_the_floor(adapted):
+    """At the last knot of a stance the foot still carries its wrench, and ``a_k`` is the
+    acceleration of the step that follows: Pinocchio's classical acceleration of the sole
+    frame there is no larger than at the stance's other knots (measured: ≤ 0.2 m/s², 0.4
+    rad/s² on G1; before the lift-off rows 35–63 m/s² and 230–238 rad/s² of heel lift under
+    390 N), and the foot is still flat on the floor, unloaded, at the lift-off knot that
+    follows."""
+    name, robot, ad, _ = adapted
+    m, model = ad.motion, robot.model
+    data = model.createData()
+    lifts = 0
+    for s in SIDES:
+        st = m.contact[s]
+        fid = robot.frame_id(robot.contacts[s].frame)
+        knots = np.flatnonzero(st[:-1])  # the last knot's a ends no step
+        last = [k for k in knots if not st[k + 1]]
+        inside = [k for k in knots if st[k + 1] and k > 0 and st[k - 1]]
+        acc = {k: _sole_acceleration(model, data, fid, m.q[k], m.v[k], m.a[k]) for k in knots}
+        bound = np.max([acc[k] for k in inside], axis=0)
+        for k in last:
+            lifts += 1
+            assert ad.wrenches[s][k, 2] > 0 and np.all(acc[k] <= bound), (s, k, acc[k], bound)
+            assert np.all(acc[k] <= [1.0, 1.0]), (s, k, acc[k])
+            pin.framesForwardKinematics(model, data, m.q[k + 1])
+            corners = robot.contacts[s].corners() @ data.oMf[fid].rotation.T
+            assert np.abs(corners[:, 2] + data.oMf[fid].translation[2]).max() <= 1e-6
+            assert np.all(ad.wrenches[s][k + 1] == 0)
+    assert lifts >= 2
+
+
 def test_simulated_plan_has_still_stance_feet(adapted):
     """MuJoCo: no fall, and the simulator's own reading of the plan's stance-foot speed equals
     Pinocchio's largest ‖v‖ of a sole frame at a stance knot; it is ≤ 0.01 m/s on HOAP-2 —

@@ -85,6 +85,7 @@ class Spec:
     T: int
     stance: dict
     swing: dict
+    liftoff: dict
     goal_active: dict
     planar: bool
     free: bool

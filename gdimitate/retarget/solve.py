@@ -171,7 +171,9 @@ def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: 
     # the start's horizontal base position is the motion's origin
     base_xy = [0, 1] if imitator.base == "free" else [imitator.idx_q("base_x")]
     lbx[qs + np.array(base_xy), 0] = ubx[qs + np.array(base_xy), 0] = q0[0, base_xy]
-    spec = pb.Spec(T=T, stance=tg.stance, swing=tg.swing,
+    lift = {s: (contact.liftoff_knots(tg.stance[s], tg.swing[s]) if copts.rule == "all"
+                else np.zeros(T, bool)) for s in SIDES}
+    spec = pb.Spec(T=T, stance=tg.stance, swing=tg.swing, liftoff=lift,
                    goal_active={s: tg.stance[s] & np.all(np.isfinite(tg.push[s]), axis=1)
                                 for s in SIDES},
                    planar=k.planar, free=imitator.base == "free", cone=c.knot.flags.cone,

@@ -25,6 +25,22 @@ rows the plan lands its foot moving (0.5 m/s on G1, 1 m/s on HOAP-2 for the ship
 and at knot 0 it starts moving; with them the foot arrives at rest. A foot that an
 ``"anchor"`` rule takes over while it is already down (Eq. (1)'s rule) does not touch down
 there and gets no velocity rows.
+
+Lift-off mirrors touch-down. ``a_k`` is the acceleration of the step (k, k + 1)
+(``v_{k+1} = v_k + h a_k``), so at the last stance knot k of a stance it is the acceleration
+that takes the foot off the floor — while the dynamics at knot k still give that foot its
+stance wrench. Without more rows the plan asks a loaded flat foot to accelerate away from the
+floor (118 rad/s² of heel-lift on G1 under 350 N for the shipped 3-D walk), which no contact
+can do: a tracking controller that holds its stance feet then meets a plan whose
+accelerations and wrenches contradict each other at every lift-off. So the foot stays down,
+unloaded, one knot longer: at the first swing knot after a stance (the *lift-off knot*) its
+pose rows hold (flat on the floor) and the hold rows link it to the last stance knot; its
+wrench is zero (it is not in stance) and it leaves the floor with that knot's acceleration.
+Then every stance knot's wrench acts on a foot that is, to the scheme's order, not
+accelerating: ``J_c (v_{k+1} − v_k)/h`` is O(h) there, as at every other stance knot.
+Under Eq. (1)'s ``"anchor"`` rule (a kinematic rule: the anchor foot lifts with the
+demonstrator's, at the knot where the anchor passes to the other foot) there are no lift-off
+knots (``Spec.liftoff``), so that the optimum is still Eq. (1) there (docs/design.md §6).
 """
 
 from __future__ import annotations
@@ -73,13 +89,21 @@ def velocity_knots(stance: np.ndarray, swing: np.ndarray) -> np.ndarray:
     return st & np.r_[True, sw[:-1]]
 
 
+def liftoff_knots(stance: np.ndarray, swing: np.ndarray) -> np.ndarray:
+    """``(T,)`` bool: the lift-off knots — a swing knot right after a stance knot, where the
+    foot is still held flat on the floor, unloaded (see the module docstring); what
+    ``Spec.liftoff`` holds under the ``"all"`` contact rule."""
+    st, sw = np.asarray(stance, bool), np.asarray(swing, bool)
+    return sw & np.r_[False, st[:-1]]
+
+
 def bounds(spec) -> tuple[np.ndarray, np.ndarray]:
     n = rows_per_side(spec.planar)
     npose = 2 if spec.planar else 3
     lo = np.full((spec.T, 2 * n), -np.inf)
     for i, s in enumerate(SIDES):
         o = i * n
-        lo[spec.stance[s], o:o + npose] = 0.0
+        lo[spec.stance[s] | spec.liftoff[s], o:o + npose] = 0.0
         lo[velocity_knots(spec.stance[s], spec.swing[s]), o + npose:o + n] = 0.0
     hi = np.where(np.isfinite(lo), 0.0, np.inf)
     return lo, hi
@@ -107,11 +131,12 @@ def hold_rows(H0: ca.MX, H1: ca.MX, planar: bool) -> ca.MX:
 
 
 def hold_bounds(spec) -> tuple[np.ndarray, np.ndarray]:
-    """``(T − 1, n)`` bounds of the hold rows (0 where the foot is down at k − 1 and k)."""
+    """``(T − 1, n)`` bounds of the hold rows (0 where the foot is in stance at k − 1 and in
+    stance or lifting off at k)."""
     n = 1 if spec.planar else 3
     lo = np.full((spec.T - 1, 2 * n), -np.inf)
     for i, s in enumerate(SIDES):
-        h = spec.stance[s][1:] & spec.stance[s][:-1]
+        h = (spec.stance[s] | spec.liftoff[s])[1:] & spec.stance[s][:-1]
         lo[h, i * n:(i + 1) * n] = 0.0
     return lo, np.where(np.isfinite(lo), 0.0, np.inf)
 

@@ -1,7 +1,8 @@
 """Swing clearance: every corner of a swing foot's sole rectangle at least ``clearance``
 above the floor z = 0 (swing: not in the demonstration's stance; under Eq. (1)'s ``"anchor"``
-rule a second stance foot is neither a contact nor held above the floor). Rows: corner
-heights / leg length (planar models: the front and back edge). Relaxable."""
+rule a second stance foot is neither a contact nor held above the floor), except at a
+lift-off knot, where :mod:`.contact` holds the foot flat on the floor for one more knot.
+Rows: corner heights / leg length (planar models: the front and back edge). Relaxable."""
 
 from __future__ import annotations
 
@@ -40,5 +41,6 @@ def bounds(spec) -> tuple[np.ndarray, np.ndarray]:
     n = rows_per_side(spec.planar)
     lo = np.full((spec.T, 2 * n), -np.inf)
     for i, s in enumerate(SIDES):
-        lo[spec.swing[s], i * n:(i + 1) * n] = spec.clearance / spec.leg_length
+        up = spec.swing[s] & ~spec.liftoff[s]
+        lo[up, i * n:(i + 1) * n] = spec.clearance / spec.leg_length
     return lo, np.full_like(lo, np.inf)
