@@ -7,7 +7,8 @@ stance schedule ``contact`` ``{"left": (T,) bool, "right": …}`` —, ``wrenche
 contact frame at its origin, zeros in swing) and ``contacts`` ``{"left": SoleContact,
 "right": …}``. :func:`check_plan` validates one; :class:`Reference` evaluates, at any time,
 the quantities a tracking controller needs: the configuration, velocity, acceleration and
-wrenches (interpolated between knots: ``pin.interpolate`` for q, linear for the rest), the
+wrenches (between knots as the adaptor's integration scheme has them: accelerations and
+wrenches of the step's first knot, velocities linear, ``pin.interpolate`` for q), the
 stance of each foot (the value of the last knot at or before the time), and the task-space
 references computed with Pinocchio from the plan's own (q, v, a) at the knots — centre of mass,
 base orientation and sole poses with their velocities and accelerations in the world frame.
@@ -182,13 +183,15 @@ class Reference:
         """Last knot time [s]."""
         return float(self.t[-1])
 
-    def _index(self, t: float) -> tuple[int, float]:
-        k = int(np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, self.t.size - 2))
-        h = self.t[k + 1] - self.t[k]
-        return k, float(np.clip((t - self.t[k]) / h, 0.0, 1.0))
-
     def samples(self, times: np.ndarray) -> list[Sample]:
-        """:meth:`at` for many times ``(N,)`` [s] at once (vectorised; the same values)."""
+        """The plan at many times ``(N,)`` [s] (held at the end points outside the plan).
+
+        Between knots k and k + 1 the samples follow the adaptor's integration scheme
+        (``v_{k+1} = v_k + h a_k``, docs/design.md §6): accelerations and wrenches are those
+        of knot k (``a_k`` is the acceleration of the whole step, ``w_k`` the wrench that goes
+        with it), velocities are linear between the knots (which is what a constant ``a_k``
+        gives), positions and orientations are interpolated on the configuration space
+        (``pin.interpolate``, slerp), and a foot's stance is knot k's."""
         times = np.asarray(times, dtype=float)
         k = np.clip(np.searchsorted(self.t, times, side="right") - 1, 0, self.t.size - 2)
         al = np.clip((times - self.t[k]) / (self.t[k + 1] - self.t[k]), 0.0, 1.0)
@@ -204,50 +207,29 @@ class Reference:
             return np.einsum("nij,njk->nik", R[k], _exp3(al[:, None] * rel[k]))
 
         q = np.array([pin.interpolate(m, mo.q[i], mo.q[i + 1], a) for i, a in zip(k, al)])
-        v, a, com, bw, bz, brot = (lerp(mo.v), lerp(mo.a), lerp(self.com), lerp(self.base_w),
-                                   lerp(self.base_z), slerp(self.base_rot))
-        w = {s: lerp(p.wrenches[s]) for s in SIDES}
+        v, com, bw, bz, brot = (lerp(mo.v), lerp(self.com), lerp(self.base_w),
+                                lerp(self.base_z), slerp(self.base_rot))
+        a = mo.a[kc]
+        com[:, 2], bw[:, 1] = self.com[kc, 2], self.base_w[kc, 1]
+        w = {s: p.wrenches[s][kc] for s in SIDES}
         st = {s: mo.contact[s][kc] for s in SIDES}
         fp = {s: lerp(self.foot_pos[s]) for s in SIDES}
         fr = {s: slerp(self.foot_rot[s]) for s in SIDES}
-        fva = {s: lerp(self.foot_va[s]) for s in SIDES}
+        fv = {s: lerp(self.foot_va[s][:, 0]) for s in SIDES}
+        fa = {s: self.foot_va[s][kc, 1] for s in SIDES}
         return [Sample(q=q[i], v=v[i], a=a[i], wrench={s: w[s][i] for s in SIDES},
                        stance={s: bool(st[s][i]) for s in SIDES},
                        com=com[i, 0], com_vel=com[i, 1], com_acc=com[i, 2],
                        base_rot=brot[i], base_height=float(bz[i]), base_omega=bw[i, 0],
                        base_alpha=bw[i, 1], foot_pos={s: fp[s][i] for s in SIDES},
                        foot_rot={s: fr[s][i] for s in SIDES},
-                       foot_vel={s: fva[s][i, 0] for s in SIDES},
-                       foot_acc={s: fva[s][i, 1] for s in SIDES})
+                       foot_vel={s: fv[s][i] for s in SIDES},
+                       foot_acc={s: fa[s][i] for s in SIDES})
                 for i in range(times.size)]
 
     def at(self, t: float) -> Sample:
-        """The plan at time ``t`` [s] (held at the end points outside the plan)."""
-        k, al = self._index(t)
-        mo, p = self.plan.motion, self.plan
-
-        def lerp(x: np.ndarray) -> np.ndarray:
-            return (1 - al) * x[k] + al * x[k + 1]
-
-        def slerp(R: np.ndarray) -> np.ndarray:
-            return R[k] @ pin.exp3(al * pin.log3(R[k].T @ R[k + 1]))
-
-        kc = k + 1 if (al >= 1.0 or t >= self.t[-1]) else k
-        q = pin.interpolate(self.robot.model, mo.q[k], mo.q[k + 1], al)
-        com = lerp(self.com)
-        bw = lerp(self.base_w)
-        return Sample(
-            q=q, v=lerp(mo.v), a=lerp(mo.a),
-            wrench={s: lerp(p.wrenches[s]) for s in SIDES},
-            stance={s: bool(mo.contact[s][kc]) for s in SIDES},
-            com=com[0], com_vel=com[1], com_acc=com[2],
-            base_rot=slerp(self.base_rot), base_height=float(lerp(self.base_z)),
-            base_omega=bw[0], base_alpha=bw[1],
-            foot_pos={s: lerp(self.foot_pos[s]) for s in SIDES},
-            foot_rot={s: slerp(self.foot_rot[s]) for s in SIDES},
-            foot_vel={s: lerp(self.foot_va[s])[0] for s in SIDES},
-            foot_acc={s: lerp(self.foot_va[s])[1] for s in SIDES},
-        )
+        """The plan at time ``t`` [s]: :meth:`samples` at one time."""
+        return self.samples(np.array([float(t)]))[0]
 
 
 def _exp3(w: np.ndarray) -> np.ndarray:
