@@ -90,7 +90,9 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
         log("       … and the 3-D joint-angle copy as the negative control …")
         copy_sim = sim.simulate(imit, joint_copy(demo, demo_robot, imit), demo_forces=forces)
     log("[4/7] entraining a Matsuoka network to the adapted motion, replaying it …")
-    cpg = entrain(imit, adapted.motion, duration=3 * float(demo.t[-1] - demo.t[0]))
+    # the clip is one stride (heel strike to heel strike): its span is the period to learn
+    stride = float(adapted.motion.t[-1] - adapted.motion.t[0])
+    cpg = entrain(imit, adapted.motion, duration=3 * stride, frequency=1.0 / stride)
     log("[5/7] writing motions and plots …")
     adapted.save(out / "imitator_motion.npz")
     adapted.save(out / "imitator_motion.csv", format="csv")

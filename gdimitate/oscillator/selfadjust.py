@@ -10,8 +10,12 @@ Given targets ``(T, n)`` on ``t`` (e.g. an adapted gait, radians), :func:`self_a
    whose 1:1 Arnold tongue (:func:`~gdimitate.oscillator.tongue.arnold_tongue`) spans
    ``±lock_margin`` around the free frequency;
 3. couples joints whose fundamentals are roughly in anti-phase (e.g. left/right legs) by
-   inhibition ``W_ij = coupling_gain·s_i/s_j`` (mutual inhibition can only favour anti-phase;
-   other relations are held because all oscillators share one intrinsic frequency);
+   inhibition ``W_ij = coupling_gain·s_i/(s_j·n_i)``, ``n_i`` the number of joint i's
+   anti-phase partners (mutual inhibition can only favour anti-phase; other relations are
+   held because all oscillators share one intrinsic frequency). Dividing by ``n_i`` bounds
+   the inhibition a joint receives by ``coupling_gain`` whatever the network's size: a pair
+   of legs is coupled as before, while a whole-body network (G1: 35 signals, up to 20
+   anti-phase partners each) would otherwise inhibit some of its oscillators to a standstill;
 4. measures the coupled network's free frequency while it is on the taught phase pattern,
    then drives it with the teacher while adapting its frequency
    (:func:`~gdimitate.oscillator.adaptive.adapt_frequency`), and lets it run free;
@@ -306,7 +310,8 @@ def self_adjust(
         ratio, b, w: ``tau_r/tau_a``, adaptation and mutual-inhibition gains of every joint.
         input_gain: ``k`` relative to ``s`` (default: chosen from the Arnold tongue to lock
             over ``±lock_margin``).
-        coupling_gain: inhibition between anti-phase joints (relative to ``s``).
+        coupling_gain: total inhibition a joint receives from its anti-phase partners
+            (relative to ``s``; shared equally among them).
         readout: ``"network"``, ``"own"`` or ``"output"`` (see :func:`state_features`).
         teach_cycles: adaptation cycles with input; free_cycles: cycles after it stops
             (frequency error is measured over cycles 2..free_cycles after the stop).
@@ -354,7 +359,8 @@ def self_adjust(
     unit = MatsuokaParams(tau_r=ratio * tau_a, tau_a=tau_a, b=b, w=w, s=s, k=k_rel * s)
     phase = teacher.fundamental_phase()
     anti = np.cos(phase[:, None] - phase[None, :]) < -0.5
-    W = np.where(anti, coupling_gain * s[:, None] / s[None, :], 0.0)
+    partners = np.maximum(anti.sum(axis=1), 1)[:, None]
+    W = np.where(anti, coupling_gain * s[:, None] / (s[None, :] * partners), 0.0)
     coupling = W if W.any() else None
 
     def g_of(tt: np.ndarray) -> np.ndarray:
