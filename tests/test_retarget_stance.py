@@ -115,7 +115,8 @@ def test_a_loaded_foot_does_not_accelerate_off_the_floor(adapted):
         bound = np.max([acc[k] for k in inside], axis=0)
         for k in last:
             lifts += 1
-            assert ad.wrenches[s][k, 2] > 0 and np.all(acc[k] <= bound), (s, k, acc[k], bound)
+            assert ad.wrenches[s][k, 2] > 0
+            assert np.all(acc[k] <= bound + 1e-9), (s, k, acc[k], bound)  # planar: ω ≡ 0
             assert np.all(acc[k] <= [1.0, 1.0]), (s, k, acc[k])
             pin.framesForwardKinematics(model, data, m.q[k + 1])
             corners = robot.contacts[s].corners() @ data.oMf[fid].rotation.T
