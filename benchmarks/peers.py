@@ -1,7 +1,8 @@
 """Baselines in the physics-check harness: the same demonstration retargeted several ways, each
 audited (``gdimitate.audit.audit``) and simulated (``gdimitate.sim.simulate``) alike.
 
-Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]``.
+Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]
+[--save-plans DIR]``.
 Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``).
 
 The demonstration is the shipped 3-D walk (OpenSim subject01, 211 frames at 60 Hz, measured
@@ -29,8 +30,9 @@ Kinematic methods get the wrenches their motion implicitly asks of the floor
   ``force_direction``);
 - fell: seconds after the start when the simulated robot fell ("no": it walked the plan);
 - slip: the simulation's largest stance-foot slip;
-- sim push RMSE: RMS error of the simulated push against the measured one in single support
-  (sagittal / frontal angle, until the fall; planar robots: sagittal only).
+- sim push RMSE: RMS error of the simulated push against the measured one in single support,
+  per foot, left / right (sagittal and frontal angle, until the fall; planar robots:
+  sagittal only).
 """
 
 from __future__ import annotations
@@ -62,18 +64,15 @@ class Row:
     plan_push_deg: float
     fell_after: float | None
     slip_cm: float
-    sim_sag_deg: float
-    sim_front_deg: float
+    sim_sag_deg: tuple[float, float]
+    sim_front_deg: tuple[float, float]
     feasible: bool
     note: str = ""
 
 
-def _pooled(agreements: dict, attr: str) -> float:
-    n = sum(a.n for a in agreements.values() if np.isfinite(getattr(a, attr)))
-    if n == 0:
-        return float("nan")
-    return float(np.sqrt(sum(a.n * getattr(a, attr) ** 2 for a in agreements.values()
-                             if np.isfinite(getattr(a, attr))) / n))
+def _per_foot(agreements: dict, attr: str) -> tuple[float, float]:
+    return tuple(float(getattr(agreements[s], attr)) if s in agreements else float("nan")
+                 for s in SIDES)
 
 
 def evaluate(robot, plan, frames_per_s: float, forces, method: str, note: str = "") -> Row:
@@ -98,15 +97,16 @@ def evaluate(robot, plan, frames_per_s: float, forces, method: str, note: str = 
     except gd.GdimitateError as e:  # e.g. a URDF MuJoCo cannot take: report it as a row
         nan = float("nan")
         return Row(robot.name, method, frames_per_s, 100.0 * out / max(stance, 1),
-                   max(ratios, default=nan), float(np.degrees(plan_push)), nan, nan, nan, nan,
+                   max(ratios, default=nan), float(np.degrees(plan_push)), nan, nan, (nan, nan),
+                   (nan, nan),
                    bool(rep.feasible), f"{note}; not simulated: {e}".lstrip("; ")[:160])
-    m = res.metrics
+    m, nan = res.metrics, float("nan")
     vs = m.force_vs_demo or {}
     return Row(robot.name, method, frames_per_s, 100.0 * out / max(stance, 1),
                max(ratios, default=float("nan")), float(np.degrees(plan_push)),
                None if m.fall_time is None else float(m.fall_time - mo.t[0]),
-               100.0 * m.slip_max, _pooled(vs, "rmse_sagittal_deg"),
-               float("nan") if robot.base == "planar" else _pooled(vs, "rmse_frontal_deg"),
+               100.0 * m.slip_max, _per_foot(vs, "rmse_sagittal_deg"),
+               (nan, nan) if robot.base == "planar" else _per_foot(vs, "rmse_frontal_deg"),
                bool(rep.feasible), note)
 
 
@@ -139,16 +139,20 @@ def _timed(f):
     return out, time.perf_counter() - t0
 
 
-def _optimal(demo, demonstrator, robot, forces, rows):
+def _optimal(demo, demonstrator, robot, forces, rows, save: Path | None = None):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             a, sec = _timed(lambda: gd.adapt(demo, demonstrator, robot, method="optimal",
                                              force="measured", forces=forces, verbose=False))
     except Exception as e:  # report, don't hide: the adaptor is the product under test
-        rows.append(Row(robot.name, "optimal", float("nan"), *[float("nan")] * 3, None,
-                        *[float("nan")] * 3, False, f"failed: {type(e).__name__}: {e}"[:120]))
+        nan = float("nan")
+        rows.append(Row(robot.name, "optimal", nan, nan, nan, nan, None, nan, (nan, nan),
+                        (nan, nan), False, f"failed: {type(e).__name__}: {e}"[:120]))
         return
+    if save is not None:  # for `gdimitate simulate` and a closer look
+        save.mkdir(parents=True, exist_ok=True)
+        a.save(save / f"{robot.name}_optimal.npz")
     row = evaluate(robot, a, demo.T / sec, forces, "optimal",
                    f"{a.motion.T} knots, {sec:.0f} s")
     if not row.feasible:
@@ -158,8 +162,9 @@ def _optimal(demo, demonstrator, robot, forces, rows):
     rows.append(row)
 
 
-def run(robots: list[str], optimal: bool = True) -> list[Row]:
-    """Every method on every robot in ``robots`` (library names)."""
+def run(robots: list[str], optimal: bool = True, save: Path | None = None) -> list[Row]:
+    """Every method on every robot in ``robots`` (library names); ``save``: a folder for the
+    optimal plans (``<robot>_optimal.npz``)."""
     demonstrator, demo, forces = gd.gait.human_walk_3d()
     rows: list[Row] = []
     for name in robots:
@@ -181,7 +186,7 @@ def run(robots: list[str], optimal: bool = True) -> list[Row]:
             rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "diff IK (Pink)",
                                  note))
         if optimal:
-            _optimal(demo, demonstrator, robot, forces, rows)
+            _optimal(demo, demonstrator, robot, forces, rows, save)
     return rows
 
 
@@ -189,11 +194,16 @@ def _f(x: float, fmt: str) -> str:
     return "—" if x is None or not np.isfinite(x) else format(x, fmt)
 
 
+def _pair(x: tuple[float, float]) -> str:
+    return f"{_f(x[0], '.1f')} / {_f(x[1], '.1f')}"
+
+
 def table(rows: list[Row]) -> str:
     """The rows as a markdown table."""
     head = ("| robot | method | frames/s | CoP out [% stance] | τ/τmax | plan push err [deg] "
-            "| fell [s] | slip [cm] | sim push RMSE sag/front [deg] | audit | notes |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|")
+            "| fell [s] | slip [cm] | sim push RMSE sagittal L / R [deg] "
+            "| frontal L / R [deg] | audit | notes |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|")
     lines = [head]
     for r in rows:
         fell = "no" if r.fell_after is None else (
@@ -205,7 +215,7 @@ def table(rows: list[Row]) -> str:
             f"{_f(r.frames_per_s, ',.0f' if r.frames_per_s >= 10 else '.2g')} | "
             f"{_f(r.cop_out_pct, '.0f')} | {_f(r.torque_ratio, '.1f')} | "
             f"{_f(r.plan_push_deg, '.1f')} | {fell} | {_f(r.slip_cm, '.1f')} | "
-            f"{_f(r.sim_sag_deg, '.1f')} / {_f(r.sim_front_deg, '.1f')} | "
+            f"{_pair(r.sim_sag_deg)} | {_pair(r.sim_front_deg)} | "
             f"{'feasible' if r.feasible else 'infeasible'} | {r.note} |")
     return "\n".join(lines)
 
@@ -235,9 +245,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--robots", nargs="+", default=["hoap2", "talos", "g1"])
     p.add_argument("--no-optimal", action="store_true", help="skip gdimitate's own adaptor")
     p.add_argument("--out", default=str(Path(__file__).with_name("peers.md")))
+    p.add_argument("--save-plans", type=Path, default=None, metavar="DIR",
+                   help="also write each optimal plan to DIR/<robot>_optimal.npz")
     a = p.parse_args(argv)
     t0 = time.perf_counter()
-    rows = run(a.robots, optimal=not a.no_optimal)
+    rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans)
     text = (table(rows) + "\n\nNegative control (physics check):\n" + negative_control(rows)
             + f"\n\nDemonstration: OpenSim subject01 walk (3-D, measured GRF), 211 frames, 3.5 s; "
             f"simulation: MuJoCo, 1 kHz QP tracking controller; run took "
