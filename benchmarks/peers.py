@@ -2,7 +2,8 @@
 audited (``gdimitate.audit.audit``) and simulated (``gdimitate.sim.simulate``) alike.
 
 Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]
-[--save-plans DIR]``.
+[--save-plans DIR | --plans DIR]`` (``--plans``: audit and simulate the optimal plans a
+``--save-plans`` run wrote, with the adaptation time it measured, instead of adapting anew).
 Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``).
 
 The demonstration is the shipped 3-D walk (OpenSim subject01, 211 frames at 60 Hz, measured
@@ -38,6 +39,7 @@ Kinematic methods get the wrenches their motion implicitly asks of the floor
 from __future__ import annotations
 
 import argparse
+import json
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -48,6 +50,9 @@ import numpy as np
 import gdimitate as gd
 from gdimitate.audit import audit
 from gdimitate.baselines import diff_ik, joint_copy, kinematic_plan
+from gdimitate.demonstration import load_demonstration
+from gdimitate.export import read_wrenches
+from gdimitate.sim.reference import Plan
 
 SIDES = ("left", "right")
 
@@ -150,11 +155,16 @@ def _optimal(demo, demonstrator, robot, forces, rows, save: Path | None = None):
         rows.append(Row(robot.name, "optimal", nan, nan, nan, nan, None, nan, (nan, nan),
                         (nan, nan), False, f"failed: {type(e).__name__}: {e}"[:120]))
         return
-    if save is not None:  # for `gdimitate simulate` and a closer look
+    if save is not None:  # for `gdimitate simulate`, --plans and a closer look
         save.mkdir(parents=True, exist_ok=True)
         a.save(save / f"{robot.name}_optimal.npz")
+        (save / f"{robot.name}_optimal.json").write_text(json.dumps({"seconds": sec}))
+    _optimal_row(robot, a, demo, forces, sec, rows)
+
+
+def _optimal_row(robot, a, demo, forces, sec: float, rows, note: str = "") -> None:
     row = evaluate(robot, a, demo.T / sec, forces, "optimal",
-                   f"{a.motion.T} knots, {sec:.0f} s")
+                   f"{a.motion.T} knots, {sec:.0f} s{note}")
     if not row.feasible:
         binding = audit(robot, a.motion, a.wrenches, a.contacts,
                         target=measured_push(forces, a.motion.t)).binding
@@ -162,9 +172,21 @@ def _optimal(demo, demonstrator, robot, forces, rows, save: Path | None = None):
     rows.append(row)
 
 
-def run(robots: list[str], optimal: bool = True, save: Path | None = None) -> list[Row]:
+def _saved_optimal(folder: Path, robot, demo, forces, rows) -> None:
+    """The optimal row from a plan that ``--save-plans`` wrote (and the time its adaptation
+    took then): audited and simulated anew, e.g. after a change of the controller."""
+    path = folder / f"{robot.name}_optimal.npz"
+    loaded = load_demonstration(path)
+    plan = Plan(loaded.motion, read_wrenches(path), dict(robot.require_contacts()))
+    sec = json.loads((folder / f"{robot.name}_optimal.json").read_text())["seconds"]
+    _optimal_row(robot, plan, demo, forces, sec, rows, f" (plan of {path.name}, re-simulated)")
+
+
+def run(robots: list[str], optimal: bool = True, save: Path | None = None,
+        plans: Path | None = None) -> list[Row]:
     """Every method on every robot in ``robots`` (library names); ``save``: a folder for the
-    optimal plans (``<robot>_optimal.npz``)."""
+    optimal plans (``<robot>_optimal.npz`` and the adaptation's seconds in ``.json``);
+    ``plans``: such a folder to take the optimal plans from instead of adapting anew."""
     demonstrator, demo, forces = gd.gait.human_walk_3d()
     rows: list[Row] = []
     for name in robots:
@@ -185,7 +207,9 @@ def run(robots: list[str], optimal: bool = True, save: Path | None = None) -> li
                     f"{int(plan.relaxed.sum())} frames feet held by cost")
             rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "diff IK (Pink)",
                                  note))
-        if optimal:
+        if optimal and plans is not None:
+            _saved_optimal(plans, robot, demo, forces, rows)
+        elif optimal:
             _optimal(demo, demonstrator, robot, forces, rows, save)
     return rows
 
@@ -247,9 +271,12 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--out", default=str(Path(__file__).with_name("peers.md")))
     p.add_argument("--save-plans", type=Path, default=None, metavar="DIR",
                    help="also write each optimal plan to DIR/<robot>_optimal.npz")
+    p.add_argument("--plans", type=Path, default=None, metavar="DIR",
+                   help="take the optimal plans from DIR (written by --save-plans) instead of "
+                        "adapting anew: audit and simulate them again")
     a = p.parse_args(argv)
     t0 = time.perf_counter()
-    rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans)
+    rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans, plans=a.plans)
     text = (table(rows) + "\n\nNegative control (physics check):\n" + negative_control(rows)
             + f"\n\nDemonstration: OpenSim subject01 walk (3-D, measured GRF), 211 frames, 3.5 s; "
             f"simulation: MuJoCo, 1 kHz QP tracking controller; run took "
