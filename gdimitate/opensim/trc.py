@@ -1,9 +1,11 @@
 """Motion-capture markers from ``.trc`` files (the Track Row Column format OpenSim reads).
 
 Layout: a ``PathFileType`` line; a line of header keys (``DataRate CameraRate NumFrames
-NumMarkers Units …``) and one of their values; the marker names (``Frame#  Time  name1 …``,
-each name over its three columns); the ``X1 Y1 Z1 …`` line; then one row per frame (frame
-number, time [s], x y z per marker; an empty field is a marker not seen in that frame).
+NumMarkers Units …``) and one of their values, paired by name (single tabs, runs of tabs,
+spaces around them and trailing tabs are all seen in the wild); the marker names
+(``Frame#  Time  name1 …``, each name over its three columns); the ``X1 Y1 Z1 …`` line;
+then one row per frame (frame number, time [s], x y z per marker; an empty field is a marker
+not seen in that frame).
 
 Units come from the header's ``Units`` (``mm``, ``cm``, ``m``); positions are returned in
 metres in our world frame (x forward, y left, z up). The lab's vertical axis is the axis
@@ -61,6 +63,11 @@ class Markers:
         object.__setattr__(self, "names", names)
         object.__setattr__(self, "xyz", xyz)
 
+    @property
+    def rate(self) -> float:
+        """Frame rate [Hz] (median of the time steps)."""
+        return float(1.0 / np.median(np.diff(self.t)))
+
     def __getitem__(self, name: str) -> np.ndarray:
         """Trajectory ``(T, 3)`` [m] of one marker."""
         try:
@@ -80,6 +87,21 @@ def _up_axis(xyz: np.ndarray, path: Path) -> str:
     return "XYZ"[k]
 
 
+def _header(keys_line: str, values_line: str, path: Path) -> dict[str, str]:
+    """The header's ``{key: value}`` by name. Writers separate the values with single tabs,
+    runs of tabs, tabs padded with spaces, or leave trailing tabs; keys and values hold no
+    spaces. Pair the whitespace-separated tokens when there are as many values as keys; else
+    pair the tab-separated fields by position (a field left empty is a key without value)."""
+    keys, vals = keys_line.split(), values_line.split()
+    if len(keys) == len(vals):
+        return dict(zip(keys, vals))
+    kf, vf = keys_line.split("\t"), values_line.split("\t")
+    if len(vf) <= len(kf) or not any(v.strip() for v in vf[len(kf):]):
+        return {k.strip(): v.strip() for k, v in zip(kf, vf) if k.strip() and v.strip()}
+    raise OpenSimDataError(f"{path}: line 2 names {len(keys)} header keys {keys} but line 3 "
+                           f"holds {len(vals)} values {vals}; write one value per key")
+
+
 def read_trc(path: str | Path, *, up: str | None = None) -> Markers:
     """Read a ``.trc`` marker file → :class:`Markers` (metres, our world frame).
 
@@ -97,8 +119,7 @@ def read_trc(path: str | Path, *, up: str | None = None) -> Markers:
     if len(lines) < 6 or not lines[0].startswith("PathFileType"):
         raise OpenSimDataError(f"{path}: not a TRC file (the first line must start with "
                                "'PathFileType' and five header lines precede the data)")
-    keys, vals = lines[1].split("\t"), lines[2].split("\t")
-    head = {k.strip(): v.strip() for k, v in zip(keys, vals) if k.strip()}
+    head = _header(lines[1], lines[2], path)
     for k in ("NumMarkers", "Units"):
         if k not in head:
             raise OpenSimDataError(f"{path}: header has no {k!r} (line 2 names the keys, line "
