@@ -244,3 +244,79 @@ def test_eq1_refuses_strings_and_complex_numbers(bad):
     r = gd.planar.eq1(np.array([0.2, -0.1]), np.array([-0.3, -0.5]), (0.4, 0.6), (0.4, 0.6))
     assert np.allclose(r.theta1, [0.2, -0.1]) and np.allclose(r.theta2, [-0.3, -0.5])
 
+
+
+# ============================================================ issue 22: real files must load
+def _grf_table(path, t, unloaded_cop: float, scale: float = 1.0, up: str = "Y"):
+    """A two-plate GRF file (``ground_force_*`` right, ``l_ground_force_*`` left) whose plates
+    carry a half-sine load in turn and hold ``unloaded_cop`` as centre of pressure (and a
+    ~0 N force) where unloaded — what force-plate exports write there (a division by ~0).
+    Loaded centres of pressure are in metres times ``scale``."""
+    names, cols = ["time"], [t]
+    truth = {}
+    for side, pre, t0, z in (("right", "", 0.0, 0.09), ("left", "l_", 0.5, -0.09)):
+        s = (t - t0) / 0.6
+        on = (s > 0) & (s < 1)
+        fy = np.where(on, 700 * np.sin(np.pi * np.clip(s, 0, 1)), 1e-3)
+        p = np.column_stack([0.2 + 0.25 * np.clip(s, 0, 1), np.zeros_like(t), np.full_like(t, z)])
+        truth[side] = (fy, p.copy())
+        p = p * scale
+        p[~on] = unloaded_cop * np.array([1.0, -0.7, 0.3])
+        v = np.column_stack([0 * t, fy, 0 * t])
+        if up == "Z":  # lab Z up, Y left: (X, Y, Z) = (X, −Z_ogl, Y_ogl)
+            R = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])
+            v, p = v @ R.T, p @ R.T
+        for stem, arr in ((f"{pre}ground_force_v", v), (f"{pre}ground_force_p", p)):
+            for k, ax in enumerate("xyz"):
+                names.append(stem + ax)
+                cols.append(arr[:, k])
+        for ax in "xyz":
+            names.append(f"{pre}ground_torque_{ax}")
+            cols.append(0 * t)
+    data = np.column_stack(cols)
+    lines = [path.name, "version=1", f"nRows={len(t)}", f"nColumns={data.shape[1]}",
+             "endheader", "\t".join(names)]
+    lines += ["\t".join(f"{v:.17g}" for v in row) for row in data]
+    path.write_text("\n".join(lines) + "\n")
+    return truth
+
+
+@pytest.mark.parametrize("up", ["Y", "Z"])
+@pytest.mark.parametrize("garbage", [495.9, -330.0, 1e6])
+def test_grf_unloaded_rows_with_arbitrary_cop_load_loaded_mm_refused(tmp_path, up, garbage):
+    """DESIGN pitfall: OpenSim's own grf_walk.mot holds centre-of-pressure values of 330 and
+    −496 "m" where the plate carries no load. Units are judged on loaded rows only: such a
+    file loads (its loaded centres of pressure exact), one whose loaded rows are in mm is
+    refused."""
+    from gdimitate.errors import UnitError
+    from gdimitate.opensim import read_grf
+
+    robot = Robot.from_library("hoap2")
+    t = np.linspace(0, 1.2, 241)
+    truth = _grf_table(tmp_path / "grf.mot", t, garbage, up=up)
+    cf = read_grf(tmp_path / "grf.mot", robot)
+    for side, (fy, p) in truth.items():
+        stance = fy > 20.0
+        np.testing.assert_array_equal(cf[side].contact, stance)
+        world = p @ np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]).T
+        np.testing.assert_allclose(cf[side].cop[stance], world[stance], atol=1e-9)
+        assert np.isnan(cf[side].cop[~stance]).all()
+    _grf_table(tmp_path / "mm.mot", t, garbage, scale=1000.0, up=up)
+    with pytest.raises(UnitError, match=r"metres .*divide by 1000"):
+        read_grf(tmp_path / "mm.mot", robot)
+
+
+def test_every_shipped_grf_file_loads():
+    from pathlib import Path
+
+    from gdimitate.gait import human_walk, human_walk_3d_folder
+    from gdimitate.opensim import read_grf
+
+    robot = Robot.from_library("hoap2")
+    files = sorted(Path(human_walk_path()).parent.glob("*grf*.mot")) + sorted(
+        human_walk_3d_folder().glob("*grf*.mot"))
+    assert len(files) == 2
+    for f in files:
+        cf = read_grf(f, robot)
+        assert all(cf[s].contact.any() for s in ("left", "right"))
+    human_walk()

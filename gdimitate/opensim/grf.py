@@ -26,8 +26,11 @@ in :attr:`~gdimitate.contact.ContactForces.frame_note`.
 
 Stance: a foot is in contact where its vertical force exceeds :data:`CONTACT_THRESHOLD` (20 N,
 a common force-plate threshold for heel strike and toe-off); the centre of pressure is NaN
-elsewhere (the file's value there is noise over a near-zero force). Forces and torques are kept
-as measured everywhere. Resampling onto other times is linear interpolation of each column.
+elsewhere (the file's value there is noise over a near-zero force). Units are judged on
+loaded rows only: a centre of pressure beyond :data:`MAX_COP_M` where the plate carries more
+than :data:`CONTACT_THRESHOLD` is refused as not in metres, whatever unloaded rows hold.
+Forces and torques are kept as measured everywhere. Resampling onto other times is linear
+interpolation of each column.
 """
 
 from __future__ import annotations
@@ -272,10 +275,7 @@ def _foot_wrench(table: Table, sets: list[_Set], R: np.ndarray, up: int
     if missing:
         warnings.warn(f"{table.path}: no free-torque columns for {missing}; their free torque "
                       "is taken as 0", CoordinateMismatchWarning, stacklevel=4)
-    cop_max = max(float(np.max(np.abs(p))) for p in P)
-    if cop_max > 20.0:
-        raise UnitError(f"{table.path}: centre of pressure reaches {cop_max:g}; positions must "
-                        "be in metres (millimetres? divide by 1000)")
+    _check_cop_units(table, F, P, up)
     if len(sets) == 1:
         f, p, tq = F[0], P[0], Tq[0]
     else:
@@ -287,6 +287,28 @@ def _foot_wrench(table: Table, sets: list[_Set], R: np.ndarray, up: int
         p[loaded] = _cop_on_plane(f[loaded], m[loaded], h[loaded], up)
         tq = m - np.cross(p, f)
     return f @ R.T, p @ R.T, tq @ R.T
+
+
+#: Largest |centre of pressure| coordinate [m] of a loaded row: a lab is not 20 m wide.
+MAX_COP_M = 20.0
+
+
+def _check_cop_units(table: Table, F: list[np.ndarray], P: list[np.ndarray], up: int) -> None:
+    """Refuse centre-of-pressure columns that are not in metres, judged on loaded rows only
+    (vertical force above :data:`CONTACT_THRESHOLD`): where a plate carries no load its centre
+    of pressure is a division by ~0 and holds arbitrary numbers (OpenSim's own example
+    ``grf_walk.mot`` has 330 and −496 "m" there)."""
+    for f, p in zip(F, P):
+        loaded = np.abs(f[:, up]) > CONTACT_THRESHOLD
+        if not loaded.any():
+            continue
+        worst = float(np.max(np.abs(p[loaded])))
+        if worst > MAX_COP_M:
+            row = int(np.flatnonzero(loaded)[np.argmax(np.max(np.abs(p[loaded]), axis=1))])
+            raise UnitError(
+                f"{table.path}: centre of pressure reaches {worst:g} at t = "
+                f"{table.t[row]:g} s where the plate carries {abs(f[row, up]):.0f} N; "
+                "positions must be in metres (millimetres? divide by 1000)")
 
 
 def _cop_on_plane(f: np.ndarray, m: np.ndarray, h: np.ndarray, up: int) -> np.ndarray:
@@ -320,7 +342,7 @@ def read_grf(path: str | Path, robot, external_loads: str | Path | None = None,
 
     Raises :class:`~gdimitate.errors.ForceDataError` (no force columns, a foot without a
     force, centre of pressure missing, an unassignable set, force not pointing up),
-    :class:`~gdimitate.errors.UnitError` (centre of pressure not in metres),
+    :class:`~gdimitate.errors.UnitError` (centre of pressure of a loaded row not in metres),
     :class:`~gdimitate.errors.OpenSimDataError` / :class:`~gdimitate.errors.TimeGridError`
     (malformed table, NaN, time not increasing, ``t`` outside the file).
     """
