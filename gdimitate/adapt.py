@@ -204,9 +204,33 @@ def _check_pair(motion: Motion, demonstrator: Robot, imitator: Robot) -> None:
         if r.base == "fixed":
             raise LegMatchError(f"{r.name} has a fixed base; a walking imitator needs a floating "
                                 "base to follow its feet")
-    for s in SIDES:
-        if s not in motion.contact:
-            raise InvalidInputError(f"motion.contact has no {s!r} schedule")
+    missing = [s for s in SIDES if s not in motion.contact]
+    if missing:
+        raise InvalidInputError(
+            f"the motion has no contact schedule for {missing} (a motion from "
+            "gd.opensim.read_coordinates has none yet): read the file with "
+            "gd.load_demonstration(path, grf=...) — contacts from the measured forces, or "
+            "from the feet when there are none —, or give the schedule yourself: "
+            "motion.replace(contact={'left': (T,) bool, 'right': (T,) bool}) (e.g. "
+            "contact=forces.contact of gd.opensim.read_grf(..., t=motion.t))")
+
+
+def _check_size(demo: Motion, imitator: Robot, method: str, rate: float | None) -> None:
+    """Refuse, before any allocation, a time axis in the wrong unit and an optimal knot grid
+    beyond :data:`~gdimitate.safety.MAX_KNOT_RATE` or :data:`~gdimitate.safety.MAX_ARRAY_BYTES`
+    (e.g. a BVH frame time of 1e6 s, ``rate=1e6``)."""
+    from .safety import MAX_KNOT_RATE, check_array_size, check_positive, check_time_axis
+
+    check_time_axis(demo.t, "the demonstration")
+    if method != "optimal":
+        return
+    if rate is not None:
+        check_positive("rate [knots/s]", rate, upper=MAX_KNOT_RATE)
+    from .retarget import DEFAULT_RATE
+
+    knots = (demo.t[-1] - demo.t[0]) * (DEFAULT_RATE if rate is None else rate) + 1
+    check_array_size("the optimal adaptor's knot grid (knots × state)",
+                     (knots, imitator.model.nq + 2 * imitator.model.nv))
 
 
 def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "optimal",
@@ -227,6 +251,7 @@ def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "opt
     if method not in METHODS:
         raise UnknownNameError("method", method, METHODS)
     _check_pair(demo, demonstrator, imitator)
+    _check_size(demo, imitator, method, rate)
     motion = demo
     if method == "optimal":
         from .retarget import adapt_optimal

@@ -38,9 +38,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import ExportError, FileFormatError
-from .motion import Motion
+from .errors import ExportError, FileFormatError, OutputError
+from .motion import Motion, check_base_quaternion
 from .robot import PLANAR_BASE, SIDES, Robot
+from .safety import check_array_size, check_positive
 
 __all__ = ["FORMATS", "MujocoMotion", "export_motion", "read_csv", "read_lafan1_csv",
            "read_mujoco", "read_wrenches"]
@@ -64,16 +65,27 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
     ``wrenches``: ``{"left": (T, 6), "right": (T, 6)}`` sole-frame contact wrenches [N, N·m]
     (``"npz"`` stores them); ``fps`` [Hz]: the frame rate of ``"lafan1_csv"``. Returns the
     path written. Raises :class:`~gdimitate.errors.ExportError` for an unknown format or a
-    robot/motion the format cannot hold."""
+    robot/motion the format cannot hold, :class:`~gdimitate.errors.ResourceLimitError` for an
+    ``fps`` whose frames exceed :data:`~gdimitate.safety.MAX_ARRAY_BYTES`,
+    :class:`~gdimitate.errors.OutputError` for a ``path`` that is a folder, in a folder that
+    does not exist, or cannot be written."""
     if format not in FORMATS:
         raise ExportError(f"unknown export format {format!r}; choose one of "
                           + ", ".join(f"{k} ({v})" for k, v in FORMATS.items()))
     if tuple(robot.joint_names) != motion.joint_names:
         raise ExportError(f"the motion's joints are not robot {robot.name!r}'s")
-    path = Path(path)
+    path = Path(path).expanduser()
+    if path.is_dir():
+        raise OutputError(f"cannot write {path}: it is a folder; give a file name")
+    if not path.parent.is_dir():
+        raise OutputError(f"cannot write {path}: folder {path.parent} does not exist; create "
+                          "it first")
     writer = {"csv": _write_csv, "npz": _write_npz, "mujoco": _write_mujoco,
               "lafan1_csv": _write_lafan1}[format]
-    writer(robot, motion, path, wrenches=wrenches, fps=fps)
+    try:
+        writer(robot, motion, path, wrenches=wrenches, fps=fps)
+    except OSError as e:
+        raise OutputError(f"cannot write {path}: {e.strerror or e}") from None
     return path
 
 
@@ -135,6 +147,7 @@ def _q_from_columns(robot: Robot, pose: np.ndarray | None, joints: np.ndarray,
         else:
             q[:, jm.idx_q] = joints[:, k]
     if robot.base == "free":
+        check_base_quaternion(pose, 7, where)
         q[:, :7] = pose
     elif robot.base == "planar":
         R = [pin.Quaternion(*p[[6, 3, 4, 5]]).normalized().matrix() for p in pose]
@@ -269,9 +282,10 @@ def _write_lafan1(robot, motion, path, fps=30.0, **_) -> None:
     if robot.base != "free":
         raise ExportError(f"lafan1_csv holds a free-floating base; robot {robot.name!r} has a "
                           f"{robot.base} base")
-    if not (np.isfinite(fps) and fps > 0):
-        raise ExportError(f"fps must be a positive number of frames per second; got {fps!r}")
-    n = int(np.floor((motion.t[-1] - motion.t[0]) * fps + 1e-9)) + 1
+    fps = check_positive("fps (frames per second)", fps, error=ExportError)
+    n = check_array_size(f"lafan1_csv at {fps:g} frames/s over {motion.t[-1] - motion.t[0]:g} s",
+                         (np.floor((motion.t[-1] - motion.t[0]) * fps + 1e-9) + 1,
+                          motion.q.shape[1]))[0]
     t = motion.t[0] + np.arange(n) / fps
     q = _resample(robot, motion, t)
     names, cols = _joint_columns(robot, q)

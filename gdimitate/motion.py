@@ -10,7 +10,11 @@ import numpy as np
 
 from .errors import InvalidInputError, TimeGridError, UnknownNameError
 
-__all__ = ["Motion", "RobotRecord", "check_time", "differentiate"]
+__all__ = ["Motion", "RobotRecord", "check_base_quaternion", "check_time", "differentiate"]
+
+#: Largest |norm − 1| of a free-flyer's base quaternion read from a file (float32 rounding
+#: is ~1e-7; a quaternion of another norm is not a rotation).
+QUATERNION_TOL = 1e-5
 
 
 def check_time(t: np.ndarray) -> np.ndarray:
@@ -26,6 +30,23 @@ def check_time(t: np.ndarray) -> np.ndarray:
         raise TimeGridError(
             f"time must be strictly increasing; t[{i}]={t[i]!r} ≥ t[{i + 1}]={t[i + 1]!r}")
     return t
+
+
+def check_base_quaternion(q: np.ndarray, base_nq: int, where: object) -> None:
+    """Refuse a free-flyer motion ``q (T, nq)`` (``base_nq == 7``: x, y, z, qx, qy, qz, qw)
+    whose base quaternion is not of unit norm (within :data:`QUATERNION_TOL`) in some frame:
+    a zero quaternion is no orientation, and Pinocchio and MuJoCo would compute on NaN."""
+    if base_nq != 7 or q.ndim != 2 or q.shape[1] < 7:
+        return
+    norm = np.linalg.norm(q[:, 3:7], axis=1)
+    bad = np.flatnonzero(~(np.abs(norm - 1.0) <= QUATERNION_TOL))
+    if bad.size:
+        k = int(bad[0])
+        raise InvalidInputError(
+            f"{where}: the base quaternion (q columns 3–6: qx, qy, qz, qw) has norm "
+            f"{norm[k]:.6g} at frame {k} ({bad.size} of {len(q)} frames are not unit "
+            "quaternions); a free-flyer's orientation must be a unit quaternion — normalise "
+            "it (a zero quaternion is no orientation)")
 
 
 @dataclass(frozen=True)
@@ -169,17 +190,21 @@ class Motion:
             FileFormatError: no such file, not an NPZ archive (empty, a CSV renamed ``.npz``,
                 pickled objects, larger than :data:`gdimitate.safety.MAX_NPZ_BYTES` unpacked)
                 or a key missing; the message names the file.
-            InvalidInputError: arrays that do not make a valid motion.
+            InvalidInputError: arrays that do not make a valid motion (among them a
+                free-flyer base quaternion that is not of unit norm,
+                :func:`check_base_quaternion`).
         """
         from .safety import open_npz
 
         with open_npz(path, ("t", "q", "joint_names", "joint_nq", "base_nq")) as z:
             contact = {k[8:]: z[k] for k in z.files if k.startswith("contact_")}
-            return cls(t=z["t"], joint_names=tuple(str(s) for s in z["joint_names"]), q=z["q"],
-                       contact=contact, base_nq=int(z["base_nq"]),
-                       joint_nq=tuple(int(i) for i in z["joint_nq"]),
-                       v=z["v"] if "v" in z.files else None,
-                       a=z["a"] if "a" in z.files else None)
+            motion = cls(t=z["t"], joint_names=tuple(str(s) for s in z["joint_names"]),
+                         q=z["q"], contact=contact, base_nq=int(z["base_nq"]),
+                         joint_nq=tuple(int(i) for i in z["joint_nq"]),
+                         v=z["v"] if "v" in z.files else None,
+                         a=z["a"] if "a" in z.files else None)
+        check_base_quaternion(motion.q, motion.base_nq, path)
+        return motion
 
     def to_csv(self, path, columns: list[str] | None = None) -> None:
         """Write ``time`` and 1-DoF joint columns (all by default) as CSV [s, rad]."""

@@ -10,6 +10,9 @@ Bounds (module constants, documented in ``docs/security.md``):
   :data:`MIN_SAMPLE_INTERVAL_S`, a duration of at most :data:`MAX_MOTION_DURATION_S` (a time
   axis in milliseconds read as seconds is refused, not integrated for 2500 "seconds").
 - NPZ files: at most :data:`MAX_NPZ_BYTES` unpacked, no pickled objects (:func:`open_npz`).
+- Arrays built from user numbers (frame counts, frame rates, knot rates, bank shapes): at
+  most :data:`MAX_ARRAY_BYTES` each, checked by :func:`check_array_size` before allocating.
+- Optimal adaptor: a knot rate of at most :data:`MAX_KNOT_RATE`.
 - Oscillators: at most :data:`MAX_HARMONICS` harmonics, :data:`MAX_CYCLES` teaching or free
   cycles, :data:`MAX_SIM_STEPS` integration steps per run and :data:`MAX_OUTPUT_SAMPLES`
   output frames, all checked before any array is allocated.
@@ -43,8 +46,10 @@ from .errors import (
 )
 
 __all__ = [
+    "MAX_ARRAY_BYTES",
     "MAX_CYCLES",
     "MAX_HARMONICS",
+    "MAX_KNOT_RATE",
     "MAX_MOTION_DURATION_S",
     "MAX_NPZ_BYTES",
     "MAX_OUTPUT_SAMPLES",
@@ -56,6 +61,7 @@ __all__ = [
     "MAX_URDF_LINKS",
     "MIN_SAMPLE_INTERVAL_S",
     "atomic_write",
+    "check_array_size",
     "check_count",
     "check_positive",
     "check_steps",
@@ -90,6 +96,12 @@ MAX_CYCLES = 1000
 MAX_SIM_STEPS = 1_000_000
 #: Most frames of a generated (replayed) motion.
 MAX_OUTPUT_SAMPLES = 1_000_000
+#: Largest array built from numbers a user gives (frames × channels of a BVH file, frames of
+#: an export at a frame rate, knots of an adaptation, a bank's shape) [bytes]: 1 GiB.
+MAX_ARRAY_BYTES = 2**30
+#: Highest knot rate of the optimal adaptor [knots/s] (its default is 50; motion capture
+#: rarely exceeds 1 kHz, and each knot is a whole-body state in one nonlinear program).
+MAX_KNOT_RATE = 1000.0
 #: Largest text table (``.mot``/``.sto``) read [bytes].
 MAX_TABLE_BYTES = 512 * 2**20
 #: Largest unpacked content of an ``.npz`` file read [bytes] (a compressed archive can
@@ -132,6 +144,34 @@ def check_count(name: str, value: object, lo: int, hi: int,
     if v > hi:
         raise ResourceLimitError(f"{name} = {v} exceeds the limit {hi}")
     return v
+
+
+def check_array_size(what: str, shape: Sequence[float], itemsize: int = 8) -> tuple[int, ...]:
+    """``shape`` as ints if an array of that shape and ``itemsize`` [bytes] fits in
+    :data:`MAX_ARRAY_BYTES`; else :class:`ResourceLimitError` naming ``what``, its size and the
+    limit. Call it before allocating any array whose size comes from a user's numbers (the
+    product is computed in Python integers: no overflow; NaN/inf/negative sizes are refused)."""
+    dims = []
+    for d in shape:
+        try:
+            x = float(d)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"{what}: size {d!r} is not a number") from None
+        if not np.isfinite(x):
+            raise ResourceLimitError(f"{what}: size {d!r} is not finite")
+        if x < 0:
+            raise InvalidInputError(f"{what}: size {d!r} is negative")
+        dims.append(int(np.ceil(x)))
+    total = itemsize
+    for d in dims:
+        total *= d
+    if total > MAX_ARRAY_BYTES:
+        shown = " × ".join(f"{d:,}" for d in dims)
+        raise ResourceLimitError(
+            f"{what} would need an array of {shown} values ({total / 2**30:.3g} GiB); the limit "
+            f"is {MAX_ARRAY_BYTES / 2**30:g} GiB (gdimitate.safety.MAX_ARRAY_BYTES): check the "
+            "frame count, rate or shape you gave")
+    return tuple(dims)
 
 
 def check_steps(steps: float, what: str) -> int:

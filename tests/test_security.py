@@ -428,3 +428,141 @@ def test_replay_duration_and_rate_are_bounded():
     with pytest.raises(ResourceLimitError, match="frames; the limit"):
         gd.entrain(robot, motion, duration=100.0, rate=1e6)
 
+
+
+# ----------------------------------------------- issue 22: one bound on user-sized arrays
+@contextlib.contextmanager
+def _bounded(peak_bytes: float = 50e6, seconds: float = 3.0):
+    """The block must finish within ``seconds`` and allocate at most ``peak_bytes``."""
+    import tracemalloc
+
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    try:
+        yield
+    finally:
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    assert peak < peak_bytes, f"allocated {peak / 1e6:.0f} MB before refusing"
+    assert time.perf_counter() - t0 < seconds
+
+
+def _bvh(frames: str = "3", frame_time: str = "0.0083333", depth: int = 3,
+         rows: int = 3) -> str:
+    """A chain skeleton ``depth`` joints deep with a 6-channel root and 3 channels per joint."""
+    head = ["HIERARCHY", "ROOT Hips", "{", "OFFSET 0 90 0",
+            "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"]
+    for k in range(1, depth):
+        head += [f"JOINT J{k}", "{", "OFFSET 0 -1 0", "CHANNELS 3 Zrotation Xrotation Yrotation"]
+    head += ["End Site", "{", "OFFSET 0 -1 0", "}"] + ["}"] * depth
+    n = 6 + 3 * (depth - 1)
+    return "\n".join(head + ["MOTION", f"Frames: {frames}", f"Frame Time: {frame_time}"]
+                     + [" ".join(["0"] * n)] * rows) + "\n"
+
+
+@pytest.mark.parametrize("frames", ["100000000", "1000000000000"])
+def test_bvh_frame_count_is_bounded_before_allocating(tmp_path, frames):
+    """A header claiming 1e8 or 1e12 frames raised numpy's bare MemoryError."""
+    from gdimitate.bvh.parse import parse_bvh
+
+    p = tmp_path / "big.bvh"
+    for frame_time in ("0.0083333", "0.00001"):  # over the duration bound, or the array bound
+        p.write_text(_bvh(frames, frame_time))
+        with _bounded(), pytest.raises(ResourceLimitError, match="limit"):
+            parse_bvh(p)
+
+
+def test_bvh_hierarchy_depth_is_bounded():
+    """A 1500-deep chain raised RecursionError; the bound is stated and a deep chain within it
+    parses with every joint."""
+    import tempfile
+
+    from gdimitate.bvh.parse import MAX_BVH_DEPTH, parse_bvh
+
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "deep.bvh"
+        p.write_text(_bvh(depth=1500))
+        with _bounded(), pytest.raises(ResourceLimitError, match="joints deep; the limit"):
+            parse_bvh(p)
+        p.write_text(_bvh(depth=MAX_BVH_DEPTH))
+        assert len(parse_bvh(p).joints) == MAX_BVH_DEPTH
+
+
+@pytest.mark.parametrize("frame_time", ["1000000", "2.5", "1e-9"])
+def test_bvh_frame_time_is_bounded(tmp_path, frame_time):
+    from gdimitate.bvh.parse import parse_bvh
+
+    p = tmp_path / "slow.bvh"
+    p.write_text(_bvh(frame_time=frame_time))
+    with pytest.raises(ResourceLimitError, match="Frame Time"):
+        parse_bvh(p)
+
+
+def _walk_with_contacts(t: np.ndarray) -> tuple[Robot, gd.Motion]:
+    from gdimitate.sagittal import kinematic_contact
+
+    robot, motion = _hoap2_walk(t)
+    return robot, motion.replace(contact=kinematic_contact(robot, motion.q))
+
+
+@pytest.mark.parametrize("step", [1e6, 2.0])
+def test_adapt_of_a_motion_on_seconds_apart_frames_is_refused(step):
+    """A BVH frame time of 1e6 s followed by adapt allocated 44 GiB (the knot grid); a motion
+    whose frames are seconds apart is refused by every method before any work."""
+    robot, motion = _walk_with_contacts(np.arange(40) * step)
+    for method in ("optimal", "analytic"):
+        with _bounded(), pytest.raises(ResourceLimitError, match="time step"):
+            gd.adapt(motion, robot, robot, method)
+
+
+@pytest.mark.parametrize("rate, says", [(1e6, "exceeds the limit 1000"),
+                                        (float("inf"), "finite")])
+def test_adapt_knot_rate_is_bounded(rate, says):
+    """adapt(..., rate=1e6) was still running after 90 s."""
+    from gdimitate.errors import InvalidInputError
+
+    robot, motion = _walk_with_contacts(np.arange(60) / 60.0)
+    with _bounded(), pytest.raises(InvalidInputError, match=says):
+        gd.adapt(motion, robot, robot, rate=rate)
+
+
+def test_a_long_motion_at_a_legal_rate_is_bounded_by_its_knot_array():
+    from gdimitate.safety import MAX_ARRAY_BYTES
+
+    robot, motion = _walk_with_contacts(np.arange(0, 3500, 0.5))
+    g1 = Robot.from_library("g1")
+    knots_fit = MAX_ARRAY_BYTES / 8 / (g1.model.nq + 2 * g1.model.nv)
+    assert 3500 * 1000 > knots_fit  # the grid below is beyond the bound
+    with _bounded(), pytest.raises(ResourceLimitError, match="knot grid"):
+        gd.adapt(motion, robot, g1, rate=1000.0)
+
+
+def test_export_frame_rate_is_bounded(tmp_path):
+    """export_motion(..., 'lafan1_csv', fps=1e9) wrote 15.5 GB in 90 s."""
+    from gdimitate.errors import ExportError
+    from gdimitate.export import export_motion
+
+    g1 = Robot.from_library("g1")
+    t = np.arange(30) / 30.0
+    motion = gd.Motion(t, g1.joint_names, np.tile(g1.neutral, (t.size, 1)), base_nq=7,
+                       joint_nq=tuple(g1.model.joints[j].nq for j in range(1, g1.model.njoints)))
+    out = tmp_path / "m.csv"
+    with _bounded(), pytest.raises(ResourceLimitError, match="lafan1_csv at 1e"):
+        export_motion(g1, motion, out, "lafan1_csv", fps=1e9)
+    for bad in (0.0, -30.0, float("nan")):
+        with pytest.raises(ExportError, match="fps"):
+            export_motion(g1, motion, out, "lafan1_csv", fps=bad)
+    assert not out.exists()
+    export_motion(g1, motion, out, "lafan1_csv", fps=60.0)  # within the bound: written
+    assert len(out.read_text().splitlines()) == 59
+
+
+@pytest.mark.parametrize("shape", [(10**6, 10**4), (10**12,), (2**40, 2**40)])
+def test_oscillator_bank_shape_is_bounded(shape):
+    """MatsuokaBank(..., shape=(10**6, 10**4)) raised a bare MemoryError."""
+    p = gd.oscillator.MatsuokaParams(tau_r=0.1, tau_a=0.4, b=2.5, w=2.5, s=1.0)
+    with _bounded(), pytest.raises(ResourceLimitError, match="MAX_ARRAY_BYTES"):
+        gd.oscillator.MatsuokaBank(p, shape=shape)
+    bank = gd.oscillator.MatsuokaBank(p, shape=(1000,))
+    with _bounded(), pytest.raises(ResourceLimitError, match="run of a bank"):
+        bank.simulate(np.arange(200_000) * 1e-3)

@@ -17,6 +17,14 @@ CHANNELS, an unknown channel, a frame line with the wrong number of values, NaN/
 zero or negative ``Frame Time``, fewer or more frame lines than ``Frames:`` says — raises
 :class:`~gdimitate.errors.BVHError` naming the line and what to fix. Nothing is dropped.
 
+Bounds (:mod:`gdimitate.safety`, checked before anything is allocated): a file of at most
+:data:`~gdimitate.safety.MAX_TABLE_BYTES`; a hierarchy at most :data:`MAX_BVH_DEPTH` joints
+deep; a ``Frame Time`` between :data:`~gdimitate.safety.MIN_SAMPLE_INTERVAL_S` and
+:data:`~gdimitate.safety.MAX_SAMPLE_INTERVAL_S` and a clip of at most
+:data:`~gdimitate.safety.MAX_MOTION_DURATION_S`; frames × channels within
+:data:`~gdimitate.safety.MAX_ARRAY_BYTES`. Beyond them:
+:class:`~gdimitate.errors.ResourceLimitError` naming the file, the line and the limit.
+
 Meaning of the numbers (used by :mod:`gdimitate.bvh.reader` and :mod:`gdimitate.bvh.urdf`):
 a joint's transform relative to its parent is a translation by its OFFSET plus its position
 channels (in the parent's axes), then the rotations of its rotation channels composed in the
@@ -38,9 +46,21 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import BVHError
+from ..errors import BVHError, ResourceLimitError
+from ..safety import (
+    MAX_MOTION_DURATION_S,
+    MAX_SAMPLE_INTERVAL_S,
+    MAX_TABLE_BYTES,
+    MIN_SAMPLE_INTERVAL_S,
+    check_array_size,
+    read_text_bounded,
+)
 
-__all__ = ["BVHJoint", "BVHFile", "parse_bvh", "CHANNEL_NAMES"]
+__all__ = ["BVHJoint", "BVHFile", "parse_bvh", "CHANNEL_NAMES", "MAX_BVH_DEPTH"]
+
+#: Deepest joint hierarchy read (a human skeleton with fingers is ~15 deep; the recursive
+#: reader and Python's stack stop far above it).
+MAX_BVH_DEPTH = 200
 
 #: The six channel names, as stored.
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
@@ -148,10 +168,13 @@ def _read_offset(tk: _Tokens, owner: str) -> np.ndarray:
 
 
 def _read_block(tk: _Tokens, name: str, kind: str, line0: int, parent: int,
-                joints: list[BVHJoint], column: int) -> int:
+                joints: list[BVHJoint], column: int, depth: int = 1) -> int:
     """Read one ROOT/JOINT block after its name; append it and its descendants; returns the
     next free column."""
     owner = f"{kind} {name!r} (line {line0})"
+    if depth > MAX_BVH_DEPTH:
+        raise ResourceLimitError(f"{tk.path}, line {line0}: {owner} is {depth} joints deep; "
+                                 f"the limit is {MAX_BVH_DEPTH} (a human skeleton is ~15)")
     if not name.isprintable():
         raise tk.error(line0, f"{kind} name {name!r} holds a control character; joint names "
                               "become URDF link and joint names and must be printable text")
@@ -193,7 +216,7 @@ def _read_block(tk: _Tokens, name: str, kind: str, line0: int, parent: int,
             child, cl = tk.take(what="a joint name after JOINT")
             if child in ("{", "}"):
                 raise tk.error(cl, "JOINT needs a name before '{'")
-            column = _read_block(tk, child, "JOINT", cl, index, joints, column)
+            column = _read_block(tk, child, "JOINT", cl, index, joints, column, depth + 1)
         elif key == "END":
             tk.take()
             tk.take("Site", "after 'End' ")
@@ -237,10 +260,8 @@ def parse_bvh(path: str | Path) -> BVHFile:
     path = Path(path)
     if not path.is_file():
         raise BVHError(f"no such BVH file: {path}")
-    try:
-        lines = path.read_text().splitlines()
-    except UnicodeDecodeError as e:
-        raise BVHError(f"{path}: not a text file ({e})") from None
+    lines = read_text_bounded(path, MAX_TABLE_BYTES, "BVH file", BVHError,
+                              ResourceLimitError).splitlines()
     p = str(path)
     motion_at = next((i for i, s in enumerate(lines) if s.strip().upper() == "MOTION"), None)
     tk = _Tokens(p, lines[: motion_at + 1] if motion_at is not None else lines)
@@ -271,8 +292,26 @@ def parse_bvh(path: str | Path) -> BVHFile:
     if not (math.isfinite(dt) and dt > 0):
         raise BVHError(f"{p}, line {i}: 'Frame Time: {value}' must be a positive number of "
                        "seconds per frame (e.g. 0.0083333 for 120 Hz)")
+    _check_clip(p, i, n_frames, dt, column)
     frames = _read_frames(lines, i, p, n_frames, column, joints)
     return BVHFile(p, tuple(joints), dt, frames)
+
+
+def _check_clip(path: str, line: int, n_frames: int, dt: float, n_channels: int) -> None:
+    """Refuse a frame time or clip length out of the bounds of :mod:`gdimitate.safety` and a
+    frame array too large to allocate — before reading the frames."""
+    where = f"{path}, line {line}"
+    if dt > MAX_SAMPLE_INTERVAL_S or dt < MIN_SAMPLE_INTERVAL_S:
+        raise ResourceLimitError(
+            f"{where}: 'Frame Time: {dt:g}' s is outside {MIN_SAMPLE_INTERVAL_S:g}–"
+            f"{MAX_SAMPLE_INTERVAL_S:g} s; it is the time between frames in seconds (e.g. "
+            "0.0083333 for 120 Hz)")
+    if dt * (n_frames - 1) > MAX_MOTION_DURATION_S:
+        raise ResourceLimitError(
+            f"{where}: {n_frames:,} frames of {dt:g} s last {dt * (n_frames - 1):.3g} s; the "
+            f"limit is {MAX_MOTION_DURATION_S:g} s")
+    check_array_size(f"{where}: 'Frames: {n_frames}' × {n_channels} channels",
+                     (n_frames, n_channels))
 
 
 def _channel_label(joints: list[BVHJoint], col: int) -> str:

@@ -30,6 +30,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import OscillatorError, TimeGridError
+from ..safety import check_array_size
 from . import _kernel
 from .params import MatsuokaParams, validate_coupling, validate_params, validate_step
 
@@ -204,9 +205,13 @@ class MatsuokaBank:
                 n = np.shape(coupling)[0] if np.ndim(coupling) == 2 else 1
                 if shape[-1] == 1 and n > 1:
                     shape = (*shape[:-1], n)
-        shape = tuple(int(d) for d in shape)
+        try:
+            shape = tuple(int(d) for d in shape)
+        except (TypeError, ValueError, OverflowError):
+            raise OscillatorError(f"bank shape must be a tuple of integers: {shape!r}") from None
         if len(shape) == 0 or min(shape) < 1:
             raise OscillatorError(f"bank shape must be (*batch, n) with positive sizes: {shape}")
+        check_array_size(f"MatsuokaBank of shape {shape} (4 states each)", (4, *shape))
         self.shape: tuple[int, ...] = shape
         self.params: MatsuokaParams = validate_params(params, shape)
         n = shape[-1]
@@ -259,6 +264,8 @@ class MatsuokaBank:
         """
         t = _check_t(t)
         T = t.shape[0]
+        check_array_size(f"a {T}-step run of a bank of shape {self.shape}",
+                         (T, 4 if record == "all" else 1, *self.shape))
         validate_step(self.params, float(np.max(np.diff(t))), self.shape)
         if g is not None:
             g = _check_array("g", g, (T, *self.shape), lead="time step")
