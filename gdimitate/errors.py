@@ -153,6 +153,11 @@ class UnitsWarning(GdimitateWarning):
     """A unit flag that the values seem to contradict (e.g. ``inDegrees=no`` with 60 rad)."""
 
 
+class UnlimitedJointWarning(GdimitateWarning):
+    """URDF joints whose effort or velocity limit is 0 (many URDFs write 0 for "unknown"):
+    read as no limit, so not checked; the audit lists them in ``unlimited``."""
+
+
 class SimulationError(GdimitateError):
     """The physics check (:mod:`gdimitate.sim`) could not run as asked."""
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import re
 import tempfile
+import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -34,6 +35,7 @@ from .errors import (
     MeshPathError,
     UnknownNameError,
     UnknownRobotError,
+    UnlimitedJointWarning,
     URDFError,
 )
 from .library import LIBRARY, library_entry, list_robots
@@ -212,6 +214,71 @@ def check_urdf_physics(root: ET.Element, source: object,
                     f"massless_joints=({jname!r},) if that is intended")
 
 
+def _numbers(el: ET.Element | None, key: str, n: int) -> list[float] | None:
+    """The ``n`` numbers of attribute ``key`` of ``el`` (None when absent), or None-free
+    ValueError text on NaN/inf/wrong count."""
+    text = el.get(key) if el is not None else None
+    if text is None:
+        return None
+    vals = [float(v) for v in text.split()]  # ValueError on junk
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
+        raise ValueError(text)
+    return vals
+
+
+def check_urdf_joints(root: ET.Element, source: object) -> None:
+    """Refuse what Pinocchio would reject without naming it, or accept wrongly: a duplicate
+    link or joint name; an ``<origin>`` (joint, visual, collision) or ``<axis>`` that is not
+    three finite numbers; a joint limit that is not a finite number or whose lower limit
+    exceeds its upper one (the audit would then check no position of that joint). Warn
+    (:class:`~gdimitate.errors.UnlimitedJointWarning`) about moving joints whose effort or
+    velocity limit is 0, which many URDFs write for "unknown": they are not checked (the
+    audit lists them in ``unlimited``)."""
+    for kind in ("link", "joint"):
+        names = [str(e.get("name")) for e in root.findall(kind)]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise URDFError(f"{source}: {kind} names must be unique; repeated: {dup[:10]}")
+    where = [(f"joint {j.get('name')!r}", j) for j in root.findall("joint")] + [
+        (f"link {lk.get('name')!r} <{g.tag}>", g) for lk in root.findall("link")
+        for g in lk if g.tag in ("visual", "collision")]
+    for what, el in where:
+        for tag, keys in (("origin", ("xyz", "rpy")), ("axis", ("xyz",))):
+            for key in keys:
+                try:
+                    _numbers(el.find(tag), key, 3)
+                except ValueError:
+                    raise URDFError(f"{source}: {what}: <{tag} {key}="
+                                    f"{el.find(tag).get(key)!r}> must be three finite numbers"
+                                    ) from None
+    zero: dict[str, list[str]] = {"effort": [], "velocity": []}
+    for j in root.findall("joint"):
+        lim, name = j.find("limit"), j.get("name")
+        if lim is None or j.get("type") in ("fixed", "floating", "planar"):
+            continue
+        vals = {}
+        for key in ("lower", "upper", "effort", "velocity"):
+            try:
+                v = _numbers(lim, key, 1)
+            except ValueError:
+                raise URDFError(f"{source}: joint {name!r}: <limit {key}={lim.get(key)!r}> "
+                                "must be a finite number") from None
+            vals[key] = None if v is None else v[0]
+        lo, hi = vals["lower"], vals["upper"]
+        if j.get("type") != "continuous" and lo is not None and hi is not None and lo > hi:
+            raise URDFError(f"{source}: joint {name!r} has lower limit {lo:g} > upper limit "
+                            f"{hi:g}; swap them (no position could satisfy both)")
+        for key in zero:
+            if vals[key] == 0 and name not in PLANAR_BASE:  # our planar base: unactuated
+                zero[key].append(str(name))
+    for key, names in zero.items():
+        if names:
+            warnings.warn(f"{source}: {len(names)} joints have {key} limit 0, read as 'no "
+                          f"limit given' (not checked; the audit lists them in unlimited): "
+                          f"{', '.join(names[:12])}{' …' if len(names) > 12 else ''}",
+                          UnlimitedJointWarning, stacklevel=3)
+
+
 class Robot:
     """A robot model (Pinocchio) with its legs described for sagittal imitation.
 
@@ -294,6 +361,7 @@ class Robot:
             raise URDFError(f"URDF file not found: {path}")
         root = parse_xml(read_text_bounded(path, MAX_URDF_BYTES, "URDF"), path)
         check_urdf_bounds(root, path)
+        check_urdf_joints(root, path)
         check_urdf_physics(root, path, massless_joints)
         if floating is None:
             joints = {j.get("name") for j in root.findall("joint")}

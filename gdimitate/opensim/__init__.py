@@ -27,13 +27,14 @@ Data files (:mod:`.coordinates`, :mod:`.grf`, :mod:`.trc`, :mod:`.treadmill`)::
 
 from .coordinates import read_coordinates
 from .grf import CONTACT_THRESHOLD, ExternalForceSpec, read_external_loads, read_grf
-from .joints import WORLD_FROM_OPENSIM, Approximation, pelvis_to_freeflyer
+from .joints import WORLD_FROM_OPENSIM, Approximation, follow_coordinates, pelvis_to_freeflyer
 from .model import OsimModel, read_osim
 from .trc import Markers, read_trc
 from .treadmill import belt_speed, treadmill_to_overground
 from .urdf import EFFORT_LIMIT, VELOCITY_LIMIT, OsimConversion, convert_osim, opensim_to_urdf
 
 __all__ = [
+    "follow_coordinates",
     "CONTACT_THRESHOLD",
     "EFFORT_LIMIT",
     "VELOCITY_LIMIT",

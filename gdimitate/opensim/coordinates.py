@@ -119,7 +119,8 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
 
     Returns a :class:`~gdimitate.Motion`: ``t`` ``(T,)`` [s] (the file's times), ``q``
     ``(T, nq)`` [rad, m] in Pinocchio order (free-flyer ``[x, y, z, qx, qy, qz, qw]`` in our
-    world frame from the ground→pelvis coordinates), and an empty contact schedule (fill it
+    world frame from the ground→pelvis coordinates; the spline-driven joints of a converted
+    walker knee from their coordinate), and an empty contact schedule (fill it
     from measured forces, :func:`gdimitate.opensim.read_grf`).
 
     Raises :class:`~gdimitate.errors.CoordinateMismatchError` (no column matches the model),
@@ -131,7 +132,9 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
 
     table = read_table(path)
     cols, ignored = coordinate_columns(table)
-    joints = robot_coordinates(robot)
+    plans = getattr(getattr(robot, "osim", None), "plans", ())
+    followed = {s.coordinate for pl in plans for s in pl.steps if s.follows is not None}
+    joints = {j: k for j, k in robot_coordinates(robot).items() if j not in followed}
     root = _root_joint(robot, osim)
     root_kind = {c.name: c.motion_type for c in root[0].coordinates} if root else {}
     root_in = [c for c in root_kind if c in cols]
@@ -160,6 +163,10 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
             q[:, i], q[:, i + 1] = np.cos(x), np.sin(x)
         else:
             q[:, i] = x
+    if followed:  # spline-driven joints (a walker knee's coupled axes) follow their coordinate
+        from .joints import follow_coordinates
+
+        follow_coordinates(plans, q, robot.idx_q)
     if root_in:
         from .joints import pelvis_to_freeflyer
 

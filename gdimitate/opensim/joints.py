@@ -17,10 +17,15 @@ Each transform axis is classified:
 Coupled axes are approximated, keeping every URDF joint value equal to its coordinate:
 
 * coupled *rotations* of the coordinate q of the joint's one exact rotation (a walker knee,
-  whose ab/adduction and axial rotation are splines of the flexion angle) are replaced,
-  together with that rotation, by a revolute joint about the best fixed axis:
-  A·R(axis, q)·B with constant rotations A, B and unit axis fitted by least squares (rotation
-  vectors of the error) over q's range;
+  whose ab/adduction and axial rotation — and translations — are splines of the flexion
+  angle): every coupled axis of the joint becomes its own *spline-driven* URDF joint
+  (revolute about / prismatic along the OpenSim axis, in OpenSim's order) named
+  ``<coordinate>__<axis name>`` (e.g. ``knee_angle_r__rotation2``), whose value is
+  ``f(q) − f(q_default)`` (:attr:`Step.follows`; readers fill it from q,
+  :func:`follow_coordinates`). The chain is then OpenSim's transform exactly (no fixed axis
+  follows a rotation that grows along a spline: the least-squares fixed axis it replaces was
+  5.5 mm / 0.9° off on the synthetic walker knee over its range, 10.5 mm on a Rajagopal
+  model's walk);
 * coupled *translations* of a coordinate that drives an exact rotation of the joint (a knee
   whose centre of rotation slides with flexion) are replaced by the best fixed centre of
   rotation: the child origin is modelled as ``p + R(q)·d`` with constant ``p``, ``d`` [m]
@@ -40,9 +45,9 @@ Measured (tests/test_opensim_model.py, OpenSim 4.6 as reference):
   centre of mass stays within 0.17 mm. (A translation held at the default knee angle would be
   17 mm off at 70° of flexion.)
 * Rajagopal-style walker knee (the synthetic test model's knee: ab/adduction 0.05·sin(q/1.3)
-  and axial rotation 0.1·q/2.09 rad, translation splines): fixed axis and centre within 0.9°
-  and 5.5 mm over 0–120° (holding the coupled rotations at their default-angle values instead
-  would be 6.4° off).
+  and axial rotation 0.1·q/2.09 rad, translation splines): spline-driven joints, every body
+  origin within 1 µm of OpenSim's over −10°…120° of flexion (a fixed axis and centre: 0.9°
+  and 5.5 mm; holding the coupled rotations at their default-angle values: 6.4°).
 * Coordinates with no exact axis (a patella's ``knee_angle_r_beta``, a slope-0.5 rotation):
   the body is welded at the default value; the error is reported, the coordinate has no URDF
   joint.
@@ -55,14 +60,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ..errors import OsimError
+from .functions import Function
 from .model import OsimJoint, OsimModel, read_osim
 
 __all__ = ["WORLD_FROM_OPENSIM", "Step", "Approximation", "JointPlan", "plan_joint",
-           "joint_transform", "pelvis_to_freeflyer", "root_joint"]
+           "joint_transform", "pelvis_to_freeflyer", "root_joint", "follow_coordinates"]
 
 #: Rotation turning OpenSim's ground axes (X forward, Y up, Z right) into ours (x forward,
 #: y left, z up): v_ours = WORLD_FROM_OPENSIM @ v_osim, i.e. x = X, y = −Z, z = Y.
@@ -81,12 +86,26 @@ def rotations(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
 class Step:
     """One URDF joint of a chain: ``kind`` ``"revolute"``/``"prismatic"``; ``coordinate``
     (the URDF joint's name); ``origin`` (R (3, 3), p (3,)) placing the joint frame in the
-    previous link (OpenSim axes); unit ``axis`` (3,) in the joint frame."""
+    previous link (OpenSim axes); unit ``axis`` (3,) in the joint frame; ``follows``: for a
+    spline-driven joint (a coupled axis of a walker knee) ``(coordinate, function, f0)``: its
+    value is ``function(q_coordinate) − f0`` (``f0``: the function at the coordinate's default,
+    built into ``origin``), else ``None`` (the joint value IS the coordinate)."""
 
     kind: str
     coordinate: str
     origin: tuple[np.ndarray, np.ndarray]
     axis: np.ndarray
+    follows: tuple[str, Function, float] | None = None
+
+    def value(self, values: Mapping[str, np.ndarray], n: int) -> np.ndarray:
+        """The joint's value ``(n,)`` [rad, m] for coordinate ``values`` (missing ones at 0 —
+        the URDF's neutral; a spline-driven joint at 0 when its coordinate is missing)."""
+        if self.follows is None:
+            return _values(values, self.coordinate, n, 0.0)
+        driver, f, f0 = self.follows
+        if driver not in values:
+            return np.zeros(n)
+        return f(_values(values, driver, n, 0.0)) - f0
 
 
 @dataclass(frozen=True)
@@ -94,8 +113,8 @@ class Approximation:
     """How a joint's coupled axes were approximated and how far off that is.
 
     ``coupled``: the transform-axis names approximated; ``coordinates``: the coordinates
-    swept to measure the error; ``method``: ``"fixed-axis fit"``, ``"fixed-centre fit"``,
-    both joined by ``" + "``, or ``"held at default"``;
+    swept to measure the error; ``method``: ``"spline-driven joints"`` (exact up to
+    round-off), ``"fixed-centre fit"`` or ``"held at default"``;
     ``max_position_error`` [m] of the child body origin and ``max_rotation_error`` [rad] of
     its orientation, over the coordinates' ranges.
     """
@@ -173,9 +192,11 @@ def _classify(joint: OsimJoint, claimed: set[str]):
     return out
 
 
-def _build(joint: OsimJoint, kinds, held: Mapping[str, float], p_fit, d_fit, axis_fit=None):
+def _build(joint: OsimJoint, kinds, held: Mapping[str, float], p_fit, d_fit,
+           follow: bool = False):
     """Steps and tail of the approximating chain; coupled axes at their ``held`` values, or,
-    with ``axis_fit`` = (A, axis, B), all rotations replaced by A·R(axis, q)·B."""
+    with ``follow``, each coupled axis a spline-driven joint (``Step.follows``) — the chain is
+    then OpenSim's transform exactly."""
     pending = joint.parent_offset
     tvec = np.asarray(p_fit, float).copy()
     steps: list[Step] = []
@@ -186,38 +207,42 @@ def _build(joint: OsimJoint, kinds, held: Mapping[str, float], p_fit, d_fit, axi
             tvec = tvec + k[1] * a.axis
         elif k[0] == "exact":
             tvec = tvec + k[2] * a.axis
-        else:  # coupled: held (a fit's p then corrects it)
+        else:  # coupled: held (a fit's p then corrects it) or followed from there
             tvec = tvec + held[a.name] * a.axis
     pending = _compose(pending, (np.eye(3), tvec))
     for a, k in trans:
-        if k[0] == "exact":
-            steps.append(Step("prismatic", a.coordinate, pending, k[1] * a.axis))
+        if k[0] == "exact" or (follow and k[0] == "coupled"):
+            steps.append(_step("prismatic", a, k, held, pending))
             pending = (np.eye(3), np.zeros(3))
-    if axis_fit is not None:
-        A, axis, B = axis_fit
-        c = next(a.coordinate for a, k in rots if k[0] == "exact")
-        steps.append(Step("revolute", c, _compose(pending, (A, np.zeros(3))), axis))
-        pending = (B, np.zeros(3))
-        rots = []
     for a, k in rots:
         if k[0] == "constant":
             pending = _compose(pending, (rotations(a.axis, k[1]), np.zeros(3)))
-        elif k[0] == "coupled":
+        elif k[0] == "coupled" and not follow:
             pending = _compose(pending, (rotations(a.axis, held[a.name]), np.zeros(3)))
         else:
-            pending = _compose(pending, (rotations(a.axis, k[2]), np.zeros(3)))
-            steps.append(Step("revolute", a.coordinate, pending, k[1] * a.axis))
+            at = k[2] if k[0] == "exact" else held[a.name]
+            pending = _compose(pending, (rotations(a.axis, at), np.zeros(3)))
+            steps.append(_step("revolute", a, k, held, pending))
             pending = (np.eye(3), np.zeros(3))
     tail = _compose(_compose(pending, (np.eye(3), np.asarray(d_fit, float))),
                     _inverse(joint.child_offset))
     return tuple(steps), tail
 
 
+def _step(kind: str, a, k, held: Mapping[str, float], origin) -> Step:
+    """The URDF joint of one exact axis (named after its coordinate, axis flipped for slope
+    −1) or one followed coupled axis (named ``<coordinate>__<axis name>``)."""
+    if k[0] == "exact":
+        return Step(kind, a.coordinate, origin, k[1] * a.axis)
+    return Step(kind, f"{a.coordinate}__{a.name}", origin, a.axis,
+                (a.coordinate, a.function, held[a.name]))
+
+
 def chain_transform(steps, tail, values: Mapping[str, np.ndarray], n: int):
     """X_P_B of an approximating chain for ``n`` samples (R (n,3,3), p (n,3))."""
     X = (np.broadcast_to(np.eye(3), (n, 3, 3)), np.zeros((n, 3)))
     for s in steps:
-        q = _values(values, s.coordinate, n, 0.0)
+        q = s.value(values, n)
         if s.kind == "revolute":
             M = (rotations(s.axis, q), np.zeros((n, 3)))
         else:
@@ -242,50 +267,16 @@ def _rotation_angle(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
     return 2.0 * np.arcsin(np.clip(f / (2.0 * np.sqrt(2.0)), 0.0, 1.0))
 
 
-def _fit_axis(joint: OsimJoint, kinds, held: Mapping[str, float]):
-    """(A, axis, B) with A·R(axis, q)·B ≈ R₁R₂R₃(q) (least squares over q's range) for a
-    joint whose one exact rotation's coordinate q also drives its coupled rotations (a walker
-    knee); ``None`` for other joints."""
+def _walker(joint: OsimJoint, kinds) -> bool:
+    """True for a joint whose one exact rotation's coordinate q also drives coupled rotations
+    (a walker knee): its coupled axes of q become spline-driven joints. (A fixed axis fitted
+    by least squares was 5.5 mm / 0.9° off on the synthetic walker knee, 10.5 mm on a
+    Rajagopal model's: no fixed axis follows a rotation that grows along a spline.)"""
     rots = [(a, k) for a, k in zip(joint.axes, kinds) if a.kind == "rotation"]
-    exact = [a for a, k in rots if k[0] == "exact"]
-    coupled = [a for a, k in rots if k[0] == "coupled"]
-    if len(exact) != 1 or not coupled or any(a.coordinate != exact[0].coordinate
-                                             for a in coupled):
-        return None
-    coord = next(c for c in joint.coordinates if c.name == exact[0].coordinate)
-    q = np.linspace(coord.range[0], coord.range[1], 201)
-    R_true = np.broadcast_to(np.eye(3), (len(q), 3, 3))
-    A0, B0, axis0, after = np.eye(3), np.eye(3), None, False
-    for a, k in rots:
-        R_true = R_true @ rotations(a.axis, a.function(q))
-        value = {"constant": lambda k=k: k[1], "coupled": lambda a=a: held[a.name],
-                 "exact": lambda k=k: k[2]}[k[0]]()
-        if k[0] == "exact":
-            A0, axis0, after = A0 @ rotations(a.axis, value), k[1] * a.axis, True
-        elif after:
-            B0 = B0 @ rotations(a.axis, value)
-        else:
-            A0 = A0 @ rotations(a.axis, value)
-    e1 = np.cross(axis0, [1.0, 0, 0] if abs(axis0[0]) < 0.9 else [0, 1.0, 0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(axis0, e1)
-
-    def unpack(x):
-        ax = axis0 + x[3] * e1 + x[4] * e2
-        return (A0 @ Rotation.from_rotvec(x[:3]).as_matrix(), ax / np.linalg.norm(ax),
-                Rotation.from_rotvec(x[5:]).as_matrix() @ B0)
-
-    def residual(x):
-        A, ax, B = unpack(x)
-        R = A @ rotations(ax, q) @ B
-        return Rotation.from_matrix(np.swapaxes(R_true, 1, 2) @ R).as_rotvec().ravel()
-
-    sol = least_squares(residual, np.zeros(8), xtol=1e-12, ftol=1e-12)
-    A, ax, B = unpack(sol.x)
-    # A·R(ax, q)·B = (A·G)·R(Gᵀ·ax, q)·(Gᵀ·B) for any G: take G = Aᵀ·A0 so that the joint
-    # frame keeps its default orientation A0 and only the axis tilts
-    G = A.T @ A0
-    return A0, G.T @ ax, G.T @ B
+    exact = [a.coordinate for a, k in rots if k[0] == "exact"]
+    coupled = [a for a, k in zip(joint.axes, kinds) if k[0] == "coupled"]
+    return (len(exact) == 1 and any(a.kind == "rotation" for a in coupled)
+            and all(a.coordinate == exact[0] for a in coupled))
 
 
 def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
@@ -306,12 +297,12 @@ def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
     n = len(next(iter(grid.values())))
     R_true, p_true = joint_transform(joint, grid, n)
     p_fit, d_fit, methods = zero, zero, []
-    axis_fit = _fit_axis(joint, kinds, held)
-    if axis_fit is not None:
-        methods.append("fixed-axis fit")
-    if riding:
+    follow = _walker(joint, kinds)
+    if follow:
+        methods.append("spline-driven joints")
+    elif riding:
         # fit p, d in  p + T_exact(q) + R(q)·d  ≈  true child origin (F frame), over the sweep
-        steps0, tail0 = _build(joint, kinds, held, zero, zero, axis_fit)
+        steps0, tail0 = _build(joint, kinds, held, zero, zero)
         Xf = _inverse(joint.parent_offset)
         Rt_F, pt_F = _compose((np.broadcast_to(Xf[0], (n, 3, 3)),
                                np.broadcast_to(Xf[1], (n, 3))), (R_true, p_true))
@@ -325,7 +316,7 @@ def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
         p_fit, d_fit = sol[:3], sol[3:]
         methods.append("fixed-centre fit")
     method = " + ".join(methods) or "held at default"
-    steps, tail = _build(joint, kinds, held, p_fit, d_fit, axis_fit)
+    steps, tail = _build(joint, kinds, held, p_fit, d_fit, follow)
     R_apx, p_apx = chain_transform(steps, tail, grid, n)
     approx = Approximation(
         joint.name, tuple(a.name for a in coupled), tuple(c.name for c in swept), method,
@@ -386,3 +377,15 @@ def pelvis_to_freeflyer(values: Mapping[str, np.ndarray],
     pw = p @ C.T
     quat = Rotation.from_matrix(Rw).as_quat()  # x, y, z, w
     return np.concatenate([pw, quat], axis=1)
+
+
+def follow_coordinates(plans, q: np.ndarray, idx_q) -> np.ndarray:
+    """Fill the spline-driven joints of ``q`` ``(T, nq)`` from their coordinates' columns, in
+    place, and return it. ``plans``: the conversion's :class:`JointPlan` s; ``idx_q``: joint
+    name → column (e.g. ``Robot.idx_q``)."""
+    for pl in plans:
+        for s in pl.steps:
+            if s.follows is not None:
+                driver, f, f0 = s.follows
+                q[:, idx_q(s.coordinate)] = f(q[:, idx_q(driver)]) - f0
+    return q

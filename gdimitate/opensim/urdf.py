@@ -163,7 +163,7 @@ def _lateral_revolute(plan: JointPlan, R_parent: np.ndarray, where: str) -> str:
     R = R_parent
     for s in plan.steps:
         R = R @ s.origin[0]
-        if s.kind == "revolute":
+        if s.kind == "revolute" and s.follows is None:
             a = C @ (R @ s.axis)
             if abs(a[1]) > score:
                 best, score = s.coordinate, abs(a[1])
@@ -293,7 +293,7 @@ def convert_osim(osim_path: str | Path, out: str | Path | None = None) -> OsimCo
             child = pl.child if last and ident else f"{pl.joint}__{s.coordinate}"
             if child != pl.child:
                 links.append(_link(child))
-            lim = next(c for c in model.coordinates if c.name == s.coordinate).range
+            lim = _limits(model, s)
             joints.append(yourdfpy.Joint(
                 name=s.coordinate, type=s.kind, parent=parent, child=child, origin=_T(s.origin),
                 axis=C @ s.axis, limit=yourdfpy.Limit(effort=EFFORT_LIMIT,
@@ -333,6 +333,17 @@ def convert_osim(osim_path: str | Path, out: str | Path | None = None) -> OsimCo
     approx = tuple(p.approximation for p in plans.values() if p.approximation is not None)
     return OsimConversion(path, model, tuple(plans.values()), approx, root, rj.name, legs,
                           soles, tuple(m.name for m in model.markers))
+
+
+def _limits(model: OsimModel, s) -> tuple[float, float]:
+    """A URDF joint's limits: its coordinate's range, or for a spline-driven joint the range
+    its function sweeps over its coordinate's (widened by 1e-6 where it barely moves)."""
+    name = s.follows[0] if s.follows is not None else s.coordinate
+    lo, hi = next(c for c in model.coordinates if c.name == name).range
+    if s.follows is None:
+        return lo, hi
+    v = s.follows[1](np.linspace(lo, hi, 401)) - s.follows[2]
+    return float(v.min()) - 1e-6, float(v.max()) + 1e-6
 
 
 def _check_names(model, links, joints):
