@@ -320,3 +320,169 @@ def test_every_shipped_grf_file_loads():
         cf = read_grf(f, robot)
         assert all(cf[s].contact.any() for s in ("left", "right"))
     human_walk()
+
+
+def test_adapt_of_read_coordinates_motion_says_how_to_get_contacts():
+    """adapt() of a motion read by gd.opensim.read_coordinates (no contact schedule yet)
+    failed with "motion.contact has no 'left' schedule"; now the message says what to do —
+    for every method, and for a motion that lacks one side only."""
+    from gdimitate.gait import human_walk_3d_folder
+    from gdimitate.opensim import read_coordinates
+
+    folder = human_walk_3d_folder()
+    human = Robot.from_osim(folder / "subject01.osim")
+    motion = read_coordinates(folder / "subject01_walk1_ik.mot", human)
+    g1 = Robot.from_library("g1")
+    for method in ("optimal", "analytic", "copy"):
+        with pytest.raises(InvalidInputError, match=r"load_demonstration\(path, grf=") as e:
+            gd.adapt(motion, human, g1, method)
+        assert "['left', 'right']" in str(e.value) and "contact=" in str(e.value)
+    half = motion.replace(contact={"left": np.ones(motion.T, bool)})
+    with pytest.raises(InvalidInputError, match=r"for \['right'\]"):
+        gd.adapt(half, human, g1)
+
+
+@pytest.fixture(scope="module")
+def g1() -> Robot:
+    return Robot.from_library("g1")
+
+
+def _g1_motion(g1: Robot, quat) -> Motion:
+    t = np.arange(20) / 30.0
+    q = np.tile(g1.neutral, (t.size, 1))
+    q[5:9, 3:7] = quat
+    return Motion(t, g1.joint_names, q, base_nq=7,
+                  joint_nq=tuple(g1.model.joints[j].nq for j in range(1, g1.model.njoints)))
+
+
+@pytest.mark.parametrize("quat", [(0, 0, 0, 0), (0, 0, 0, 2.0), (0.1, 0, 0, 1.0)])
+def test_non_unit_base_quaternion_is_refused_on_reading(tmp_path, g1, quat, capsys):
+    """A motion NPZ with a zero (or non-unit) base quaternion passed Motion.from_npz,
+    load_demonstration, export (writing [0,0,0,0]) and simulate (ran on NaN, printed "FELL",
+    exit 0); now every reader refuses it, naming the frame."""
+    from gdimitate.export import export_motion, read_csv, read_lafan1_csv
+
+    bad = _g1_motion(g1, quat)
+    p = tmp_path / "bad.npz"
+    bad.to_npz(p, robot=g1)
+    with pytest.raises(InvalidInputError, match="at frame 5 .*unit quaternion"):
+        Motion.from_npz(p)
+    with pytest.raises(InvalidInputError, match="at frame 5"):
+        gd.load_demonstration(p)
+    for argv in (["export", str(p), "--out", str(tmp_path / "x.csv")],
+                 ["simulate", str(p), "--out", str(tmp_path / "sim")]):
+        assert main(argv) == 2
+        assert "unit quaternion" in capsys.readouterr().err
+    assert not (tmp_path / "x.csv").exists() and not (tmp_path / "sim").exists()
+    # the CSV formats: written from a good motion, the quaternion spoiled in the file
+    good = _g1_motion(g1, g1.neutral[3:7])
+    for fmt, reader, col in (("csv", read_csv, 4), ("lafan1_csv", read_lafan1_csv, 3)):
+        f = tmp_path / f"m.{fmt}.csv"
+        export_motion(g1, good, f, fmt)
+        lines = f.read_text().splitlines()
+        head = 1 if fmt == "csv" else 0
+        row = lines[head + 5].split(",")
+        row[col:col + 4] = [str(v) for v in quat]
+        lines[head + 5] = ",".join(row)
+        f.write_text("\n".join(lines) + "\n")
+        with pytest.raises(InvalidInputError, match="unit quaternion"):
+            reader(f, g1)
+    Motion.from_npz(_saved(good, tmp_path / "good.npz", g1))  # a unit quaternion reads
+
+
+def _saved(motion: Motion, path, robot) -> str:
+    motion.to_npz(path, robot=robot)
+    return str(path)
+
+
+def test_export_onto_a_folder_or_into_a_missing_one_names_the_problem(tmp_path, hoap2):
+    """export/save to a missing folder or onto a folder raised bare FileNotFoundError /
+    IsADirectoryError; now OutputError saying which."""
+    from gdimitate.errors import OutputError
+    from gdimitate.export import FORMATS, export_motion
+
+    robot, motion = hoap2, _motion(hoap2, T=20)
+    (tmp_path / "folder.csv").mkdir()
+    for fmt in FORMATS:
+        if fmt == "lafan1_csv":
+            continue  # needs a free-flyer; the path is checked the same way first
+        with pytest.raises(OutputError, match="it is a folder"):
+            export_motion(robot, motion, tmp_path / "folder.csv", fmt)
+        with pytest.raises(OutputError, match="does not exist"):
+            export_motion(robot, motion, tmp_path / "no" / "such" / "m.out", fmt)
+    res = gd.adapt(motion.replace(contact={"left": np.ones(20, bool),
+                                           "right": np.ones(20, bool)}), robot, robot, "copy")
+    with pytest.raises(OutputError, match="does not exist"):
+        res.save(tmp_path / "missing" / "m.npz")
+    assert list(tmp_path.iterdir()) == [tmp_path / "folder.csv"]
+
+
+# ------------------------------------------------ issue 22: URDFs that cannot be right
+def _hoap2_edit(pattern: str, repl: str, count: int = 1) -> str:
+    text, n = re.subn(pattern, repl, HOAP2, count=count, flags=re.S)
+    assert n == count, pattern
+    return text
+
+
+@pytest.mark.parametrize("joint", ["left_knee", "right_hip", "base_z"])
+def test_urdf_lower_limit_above_upper_is_refused(tmp_path, joint):
+    """A joint with lower > upper was accepted, and the audit then checked no position of that
+    joint (it skips lo >= hi) and called motions feasible."""
+    block = re.search(rf'<joint name="{joint}".*?</joint>', HOAP2, re.S).group(0)
+    lo, hi = re.search(r'lower="([^"]+)" upper="([^"]+)"', block).groups()
+    swapped = block.replace(f'lower="{lo}" upper="{hi}"', f'lower="{float(hi) + 0.5:g}" '
+                                                         f'upper="{float(lo) - 0.5:g}"')
+    with pytest.raises(URDFError, match=rf"joint '{joint}' has lower limit .* > upper limit"):
+        _load(tmp_path, HOAP2.replace(block, swapped))
+
+
+def test_urdf_zero_effort_or_velocity_warns_and_stays_unchecked(tmp_path):
+    """0 means "unknown" in many URDFs: a warning names the joints; the audit still lists them
+    in ``unlimited`` (no torque/velocity check is made against 0)."""
+    from gdimitate.audit import audit
+    from gdimitate.errors import UnlimitedJointWarning
+
+    text = _hoap2_edit(r'(<joint name="left_knee".*?)effort="[^"]+"', r'\1effort="0"')
+    text = re.sub(r'(<joint name="right_ankle".*?)velocity="[^"]+"', r'\1velocity="0.0"', text,
+                  count=1, flags=re.S)
+    with pytest.warns(UnlimitedJointWarning) as rec:
+        robot = _load(tmp_path, text)
+    said = " ".join(str(w.message) for w in rec)
+    assert "effort limit 0" in said and "left_knee" in said
+    assert "velocity limit 0" in said and "right_ankle" in said
+    T = 5
+    t = np.arange(T) / 50.0
+    m = Motion(t, robot.joint_names, np.tile(robot.neutral, (T, 1)),
+               contact={s: np.ones(T, bool) for s in ("left", "right")}, base_nq=3)
+    m = m.replace(v=np.zeros((T, robot.model.nv)), a=np.zeros((T, robot.model.nv)))
+    rep = audit(robot, m, {s: np.zeros((T, 6)) for s in ("left", "right")})
+    assert ("left_knee", "effort") in rep.unlimited
+    assert ("right_ankle", "velocity") in rep.unlimited
+    assert "torque:left_knee" not in [c.name for c in rep.checks]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the unchanged model loads without the warning
+        _load(tmp_path, HOAP2)
+
+
+@pytest.mark.parametrize("pattern, repl, says", [
+    (r'(<joint name="left_knee".*?<origin xyz=")[^"]+"', r'\1nan 0 -0.1"',
+     r"joint 'left_knee': <origin xyz='nan 0 -0.1'> must be three finite numbers"),
+    (r'(<joint name="right_hip".*?<origin xyz="[^"]+" rpy=")[^"]+"', r'\1 0 inf 0"',
+     r"joint 'right_hip': <origin rpy="),
+    (r'(<joint name="left_ankle".*?<axis xyz=")[^"]+"', r'\1 0 1"',
+     r"joint 'left_ankle': <axis xyz="),
+    (r'(<link name="left_shank">.*?<visual>\s*<origin xyz=")[^"]+"', r'\g<1>0 nan 0"',
+     r"link 'left_shank' <visual>: <origin xyz="),
+    (r'<link name="left_thigh">', r'<link name="left_thigh"/><link name="left_thigh">',
+     r"link names must be unique; repeated: \['left_thigh'\]"),
+    (r'<joint name="left_hip" type', r'<joint name="right_hip" type',
+     r"joint names must be unique; repeated: \['right_hip'\]"),
+    (r'(<joint name="left_knee".*?)lower="[^"]+"', r'\1lower="nan"',
+     r"joint 'left_knee': <limit lower='nan'> must be a finite number"),
+])
+def test_urdf_faults_are_named_not_left_to_pinocchio(tmp_path, pattern, repl, says):
+    """A NaN in an origin or a duplicate link got Pinocchio's "not a valid URDF model"."""
+    text, n = re.subn(pattern, repl, HOAP2, count=1, flags=re.S)
+    assert n == 1
+    with pytest.raises(URDFError, match=says):
+        _load(tmp_path, text)
