@@ -486,3 +486,40 @@ def test_urdf_faults_are_named_not_left_to_pinocchio(tmp_path, pattern, repl, sa
     assert n == 1
     with pytest.raises(URDFError, match=says):
         _load(tmp_path, text)
+
+
+@pytest.mark.parametrize("entry, says", [
+    (["left_hip", "big", 0.0], "scale must be a finite number"),
+    (["left_hip", 1.0, "x"], r"offset \[rad\] must be a finite number"),
+    (["left_hip", float("nan")], "scale must be a finite number"),
+    (["left_hip", True], "scale must be a finite number"),
+    (["left_hip", 1.0, 0.0, 5.0], r"\[name, scale, offset\]"),
+    (5, r"\[name, scale, offset\]"),
+    ([1.0, "left_hip"], r"\[name, scale, offset\]"),
+    ({"name": "left_hip"}, r"\[name, scale, offset\]"),
+])
+def test_body_map_entries_of_the_wrong_kind_are_named(tmp_path, entry, says):
+    """A body-map entry with a non-numeric scale or the wrong shape raised a bare ValueError
+    (or TypeError)."""
+    import json
+
+    from gdimitate.retarget.bodymap import BodyMap
+
+    d = {"joints": {"hip_flexion_l": entry}}
+    with pytest.raises(InvalidInputError, match=rf"body map joint 'hip_flexion_l': .*{says}"):
+        BodyMap.from_dict(d)
+    p = tmp_path / "map.json"
+    p.write_text(json.dumps(d, allow_nan=True))
+    with pytest.raises(InvalidInputError, match="body map joint"):
+        BodyMap.from_json(p)
+
+
+@pytest.mark.parametrize("d, says", [({"joints": ["a", "b"]}, "'joints' must be a dict"),
+                                     ({"segments": {"torso": 3}}, "segment 'torso'")])
+def test_body_map_sections_of_the_wrong_kind_are_named(d, says):
+    from gdimitate.retarget.bodymap import BodyMap
+
+    with pytest.raises(InvalidInputError, match=says):
+        BodyMap.from_dict(d)
+    good = BodyMap.from_dict({"joints": {"a": ["b", -1, 0.25], "c": "d"}})
+    assert good.joints == {"a": ("b", -1.0, 0.25), "c": ("d", 1.0, 0.0)}

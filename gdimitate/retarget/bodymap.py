@@ -129,6 +129,24 @@ def _axis(robot: Robot, joint: str) -> np.ndarray | None:
     return col[3:] if np.linalg.norm(col[3:]) > 1e-9 else col[:3]
 
 
+def _joint_entry(k: object, v: object) -> tuple[str, float, float]:
+    """One ``joints`` entry → ``(imitator joint, scale, offset)``; a wrong shape or a scale or
+    offset that is not a finite number is an :class:`InvalidInputError` naming the entry."""
+    if isinstance(v, str):
+        return (v, 1.0, 0.0)
+    form = "give an imitator joint name or [name, scale, offset] (scale, offset: numbers)"
+    if not isinstance(v, list | tuple) or len(v) not in (2, 3) or not isinstance(v[0], str):
+        raise InvalidInputError(f"body map joint {k!r}: {form}; got {v!r:.200}")
+    nums = []
+    for what, x in zip(("scale", "offset [rad]"), (*v[1:], 0.0)):
+        ok = isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
+        if not ok or not np.isfinite(x):
+            raise InvalidInputError(f"body map joint {k!r}: {what} must be a finite number; "
+                                    f"got {x!r:.100} ({form})")
+        nums.append(float(x))
+    return (v[0], nums[0], nums[1])
+
+
 @dataclass(frozen=True)
 class BodyMap:
     """Correspondence from a demonstrator's joints/segments to an imitator's (module doc)."""
@@ -144,18 +162,19 @@ class BodyMap:
         if not isinstance(d, Mapping) or set(d) - {"joints", "segments"}:
             raise InvalidInputError("a body map is a dict with keys 'joints' and/or "
                                     f"'segments'; got {d!r:.200}")
+        for key in ("joints", "segments"):
+            if not isinstance(d.get(key, {}), Mapping):
+                raise InvalidInputError(f"body map {key!r} must be a dict; got "
+                                        f"{d[key]!r:.200}")
         joints = {}
         for k, v in dict(d.get("joints", {})).items():
-            if isinstance(v, str):
-                v = (v, 1.0, 0.0)
-            v = tuple(v)
-            if len(v) == 2:
-                v = (*v, 0.0)
-            if len(v) != 3 or not isinstance(v[0], str):
-                raise InvalidInputError(f"body map joint {k!r}: give an imitator joint name or "
-                                        f"[name, scale, offset]; got {v!r}")
-            joints[str(k)] = (v[0], float(v[1]), float(v[2]))
-        segs = {str(k): str(v) for k, v in dict(d.get("segments", {})).items()}
+            joints[str(k)] = _joint_entry(k, v)
+        segs = {}
+        for k, v in dict(d.get("segments", {})).items():
+            if not isinstance(v, str):
+                raise InvalidInputError(f"body map segment {k!r}: give an imitator frame name; "
+                                        f"got {v!r:.200}")
+            segs[str(k)] = v
         return cls(joints, segs, name)
 
     @classmethod
