@@ -10,184 +10,18 @@ used, the solver's account and the independent physical audit (:func:`gdimitate.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
-
 import numpy as np
 
 from .errors import InvalidInputError, LegMatchError, UnknownNameError
-from .metrics import (
-    angle_down,
-    foot_heights,
-    force_direction,
-    hip_height_ratio,
-    joint_limit_margins,
-)
 from .motion import Motion
 from .planar import eq1
+from .result import AdaptationReport, AdaptedMotion, compare
 from .robot import SIDES, Robot
 from .sagittal import compose_q, ground_base, leg_angles, robot_motion
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "adapt", "METHODS", "compare"]
 
 METHODS = ("analytic", "copy", "optimal")
-
-
-@dataclass
-class AdaptationReport:
-    """What an adaptation achieved.
-
-    ``feasible``: per leg ``(T,)`` bool, frames where the method met its constraints (Eq. 1:
-    ``|arg| ≤ 1``); ``infeasible_frames``: their count per leg; ``force_direction_error``: per
-    leg ``(T,)`` imitator − demonstrator push direction [rad] under ``force_model`` (NaN in
-    swing), and its max; ``hip_height_ratio_error_max``: max |hip-over-ankle height / leg
-    length − the demonstrator's| over all frames; ``joint_limit_violation``: per joint the
-    largest excursion beyond a position limit [rad] (only joints that violate), and its max;
-    ``ground_penetration_max``: deepest any sole frame goes below the ground z = 0 [m]. The
-    physical checks (torques, cones, every sole corner) are the audit's
-    (:attr:`AdaptedMotion.audit`).
-    """
-
-    method: str
-    force_model: str
-    feasible: dict[str, np.ndarray]
-    infeasible_frames: dict[str, int]
-    force_direction_error: dict[str, np.ndarray]
-    force_direction_error_max: float
-    hip_height_ratio_error_max: float
-    joint_limit_violation: dict[str, float]
-    joint_limit_violation_max: float
-    ground_penetration_max: float = 0.0
-
-    @property
-    def all_feasible(self) -> bool:
-        """True when every frame of both legs is feasible and no limit is violated."""
-        return (all(v == 0 for v in self.infeasible_frames.values())
-                and self.joint_limit_violation_max <= 1e-9)
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready summary (no per-frame arrays except the feasibility masks)."""
-        return {
-            "method": self.method,
-            "force_model": self.force_model,
-            "infeasible_frames": dict(self.infeasible_frames),
-            "frames": int(next(iter(self.feasible.values())).size),
-            "force_direction_error_max_rad": self.force_direction_error_max,
-            "hip_height_ratio_error_max": self.hip_height_ratio_error_max,
-            "joint_limit_violation_max_rad": self.joint_limit_violation_max,
-            "joint_limit_violation_rad": dict(self.joint_limit_violation),
-            "ground_penetration_max_m": self.ground_penetration_max,
-            "feasible": {s: m.astype(int).tolist() for s, m in self.feasible.items()},
-        }
-
-
-def _jsonable(v: Any) -> Any:
-    """Plain JSON types: NumPy scalars → numbers, arrays → (nested) lists, NaN/inf → None."""
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return _jsonable(v.tolist())
-    if isinstance(v, (np.bool_, bool)):
-        return bool(v)
-    if isinstance(v, (np.integer, int)):
-        return int(v)
-    if isinstance(v, (np.floating, float)):
-        return float(v) if np.isfinite(v) else None
-    return v
-
-
-@dataclass(frozen=True)
-class AdaptedMotion:
-    """An adaptation's result.
-
-    - ``motion``: the imitator's :class:`Motion` (the optimal method fills ``v``, ``a``
-      ``(T, nv)`` in Pinocchio's conventions and ``contact`` with the schedule it used);
-    - ``report``: the kinematic comparison with the demonstration (:class:`AdaptationReport`);
-    - ``robot``: the imitator;
-    - ``wrenches`` (optimal only): ``{"left": (T, 6), "right": (T, 6)}`` — ``[f; τ]`` [N, N·m]
-      the ground applies to each foot, in its sole frame at the frame's origin (zeros in
-      swing; planar models: f_y = τ_x = τ_z = 0);
-    - ``contacts`` (optimal only): ``{"left": SoleContact, "right": SoleContact}`` used;
-    - ``audit`` (optimal only): :class:`gdimitate.audit.AuditReport` recomputed from
-      ``motion`` and ``wrenches`` with Pinocchio (``audit.feasible``, ``audit.binding``);
-    - ``solver`` (optimal only): :class:`gdimitate.retarget.SolverInfo`;
-    - ``force_model``: the force-direction model of the goal;
-    - ``frame_feasible`` (streaming mode only): ``(T,)`` per-frame audit flags.
-    """
-
-    motion: Motion
-    report: AdaptationReport
-    robot: Robot
-    wrenches: dict[str, np.ndarray] | None = None
-    contacts: dict[str, Any] | None = None
-    audit: Any = None
-    solver: Any = None
-    force_model: str = "segment"
-    frame_feasible: np.ndarray | None = None
-
-    def save(self, path, format: str = "npz", *, fps: float = 30.0):
-        """Write the motion (and, in ``"npz"``, the contact wrenches and the robot's record)
-        in ``format``: ``"csv"``, ``"npz"``, ``"mujoco"`` or ``"lafan1_csv"``
-        (:func:`gdimitate.export.export_motion` describes each; ``fps`` [Hz] is the
-        ``"lafan1_csv"`` rate). Returns the path written."""
-        from .export import export_motion
-
-        return export_motion(self.robot, self.motion, path, format, wrenches=self.wrenches,
-                             fps=fps)
-
-    @property
-    def feasible(self) -> bool:
-        """The audit's verdict (optimal method); for Eq. (1) and joint copying, whether every
-        frame was reachable and within the position limits."""
-        if self.audit is not None:
-            return bool(self.audit.feasible)
-        return self.report.all_feasible
-
-
-def _nanmax_abs(arrs) -> float:
-    vals = np.concatenate([np.abs(a[~np.isnan(a)]) for a in arrs])
-    return float(vals.max()) if vals.size else 0.0
-
-
-def compare(demonstrator: Robot, demo: Motion, imitator: Robot, motion: Motion, method: str,
-            feasible: dict[str, np.ndarray], force: str = "segment",
-            push_m: dict[str, np.ndarray] | None = None,
-            push_r: dict[str, np.ndarray] | None = None) -> AdaptationReport:
-    """Measure an imitator motion against the demonstration (used by every method).
-
-    ``push_m``/``push_r``: ``{side: (T, 3)}`` push directions of the demonstrator/imitator
-    when they are not computed by ``force_direction(robot, motion, force)`` (measured forces,
-    an optimiser's wrenches)."""
-    if push_m is None:
-        fd_m = {s: f.sagittal for s, f in force_direction(demonstrator, demo, force).items()}
-    else:
-        fd_m = {s: angle_down(push_m[s]) for s in SIDES}
-    if push_r is None:
-        fd_r = {s: f.sagittal for s, f in force_direction(imitator, motion, force).items()}
-    else:
-        fd_r = {s: angle_down(push_r[s]) for s in SIDES}
-    err = {s: fd_r[s] - fd_m[s] for s in SIDES}
-    hr_m = hip_height_ratio(demonstrator, demo)
-    hr_r = hip_height_ratio(imitator, motion)
-    viol = {}
-    for j, margin in joint_limit_margins(imitator, motion).items():
-        worst = float(-margin.min())
-        if worst > 1e-12:
-            viol[j] = worst
-    return AdaptationReport(
-        method=method, force_model=force,
-        feasible={s: np.asarray(feasible[s], bool) for s in SIDES},
-        infeasible_frames={s: int((~np.asarray(feasible[s], bool)).sum()) for s in SIDES},
-        force_direction_error=err,
-        force_direction_error_max=_nanmax_abs(err.values()),
-        hip_height_ratio_error_max=float(max(np.max(np.abs(hr_r[s] - hr_m[s])) for s in SIDES)),
-        joint_limit_violation=viol,
-        joint_limit_violation_max=max(viol.values(), default=0.0),
-        ground_penetration_max=float(max(0.0, -min(h.min() for h in
-                                                   foot_heights(imitator, motion).values()))),
-    )
 
 
 def _check_pair(motion: Motion, demonstrator: Robot, imitator: Robot) -> None:

@@ -4,16 +4,19 @@ quantities (CasADi SX) that tasks and constraints are written in.
 Variables of knot k, stacked in this order (:class:`Layout`): ``q`` ``(nq,)``, ``v`` ``(nv,)``,
 ``a`` ``(nv,)`` (Pinocchio's conventions), one contact wrench per foot in its sole frame at the
 sole origin, divided by the robot's weight m·g — ``[f; τ]`` ``(6,)``, or ``(f_x, f_z, τ_y)``
-``(3,)`` for planar models — and the
-elastic slacks ``s⁺, s⁻ ≥ 0`` of every relaxable row (fixed at 0 except in the
-least-infeasible fallback). Parameters of knot k are named blocks of one vector (targets, the
-force-direction frame, sole sizes, weights, step ``h``), so the NLP built from these
-expressions is reused for any demonstration of the same shape.
+``(3,)`` for planar models — and the elastic slacks ``s⁺, s⁻ ≥ 0`` of every relaxable row
+(fixed at 0 except in the least-infeasible solve). Parameters of knot k are named blocks of
+one vector (step ``h``; targets ``height_<side>``, ``placement_<side>``, ``shank_<side>``,
+``thigh_<side>``, ``foot_<side>``, ``torso``, ``joint_target``; the force-direction frame
+``d_<side>``, ``e1_<side>``, ``e2_<side>``; ``sole_<side>`` = X, Y, μ, X − margin, Y −
+margin; ``joint_weight``, ``inv_effort``, ``weights`` (√ of each cost part's weight),
+``elastic``, ``tan2``, ``f_min``; then any block a part declares), so the NLP built from
+these expressions is reused for any demonstration of the same shape.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -63,37 +66,40 @@ def base_dofs(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     return np.array(base, int), np.array(act, int)
 
 
-@dataclass
 class Knot:
     """The SX symbols and derived expressions of one knot (see the module docstring).
 
     ``robot``: the imitator; ``sym``: its :class:`SymbolicModel`; ``flags``: :class:`Flags`;
-    ``slack_rows``: how many relaxable rows the constraints declare (set before
-    :meth:`build`)."""
+    ``weights``: the weight names of the cost parts, in the order of the ``weights`` parameter
+    block; ``extra``: further parameter blocks ``{name: size}`` the parts declare. The elastic
+    slacks are added by :meth:`add_slacks` once the relaxable rows are counted; ``x`` (the
+    knot's variables) exists from then on. ``memo`` holds quantities parts share (built
+    once per knot: :meth:`torques`)."""
 
-    robot: Robot
-    sym: SymbolicModel
-    flags: Flags
-    slack_rows: int
-    var: Layout = field(default_factory=Layout)
-    par: Layout = field(default_factory=Layout)
-
-    def __post_init__(self) -> None:
-        r, s = self.robot, self.sym
+    def __init__(self, robot: Robot, sym: SymbolicModel, flags: Flags,
+                 weights: tuple[str, ...] = (), extra: dict[str, int] | None = None):
+        self.robot, self.sym, self.flags = robot, sym, flags
+        self.var, self.par = Layout(), Layout()
+        self.memo: dict = {}
+        r, s = robot, sym
         self.planar = r.base == "planar"
         self.nw = 3 if self.planar else 6
         self.base_idx, self.act_idx = base_dofs(r)
+        m = r.model
+        self.act_names = tuple(
+            next(m.names[j] for j in range(1, m.njoints)
+                 if m.joints[j].idx_v <= iv < m.joints[j].idx_v + m.joints[j].nv)
+            for iv in self.act_idx)
         self.contacts = r.require_contacts()
         self.mg = float(r.mass * np.linalg.norm(s.gravity))  # weight m·g [N]
         self.leg = {side: r.legs[side] for side in SIDES}
+        self.weight_names = tuple(weights)
         v = self.var
         v.add("q", s.nq)
         v.add("v", s.nv)
         v.add("a", s.nv)
         for side in SIDES:
             v.add(f"w_{side}", self.nw)
-        v.add("s_plus", self.slack_rows)
-        v.add("s_minus", self.slack_rows)
         p = self.par
         p.add("h", 1)
         for side in SIDES:
@@ -110,45 +116,55 @@ class Knot:
         p.add("joint_target", len(self.act_idx))
         p.add("joint_weight", len(self.act_idx))
         p.add("inv_effort", len(self.act_idx))
-        # √ of the weights height, placement, shank, thigh, torso, smoothness, wrench, foot
-        # (the residuals carry them; a parameter under a sqrt would put inf·0 in the
-        # derivatives), then the elastic weight itself
-        p.add("weights", 9)
+        # √ of each cost part's weight (the residuals carry them; a parameter under a sqrt
+        # would put inf·0 in the derivatives), then the elastic weight itself
+        p.add("weights", len(self.weight_names))
+        p.add("elastic", 1)
         p.add("tan2", 1)
         p.add("f_min", 1)
+        for name, n in (extra or {}).items():
+            p.add(name, n)
         # q, v, a are the symbolic model's own symbols, so that kinematics, centre of mass
         # and dynamics share one forward pass
-        self._w = {side: ca.SX.sym(f"w_{side}", self.nw) for side in SIDES}
-        self.s_plus = ca.SX.sym("s_plus", self.slack_rows)
-        self.s_minus = ca.SX.sym("s_minus", self.slack_rows)
-        self.x = ca.vertcat(s.q, s.v, s.a, *[self._w[side] for side in SIDES], self.s_plus,
-                            self.s_minus)
+        self.w = {side: ca.SX.sym(f"w_{side}", self.nw) for side in SIDES}
         self.p = ca.SX.sym("p", p.size)
         self.q, self.v, self.a = s.q, s.v, s.a
-        self._slack_used = 0
+        self.slack_rows = 0
         self._kin()
+
+    def add_slacks(self, n: int) -> None:
+        """Add the elastic slack pairs ``s⁺, s⁻ ≥ 0`` of ``n`` relaxable rows; defines ``x``."""
+        self.slack_rows = n
+        self.var.add("s_plus", n)
+        self.var.add("s_minus", n)
+        self.s_plus = ca.SX.sym("s_plus", n)
+        self.s_minus = ca.SX.sym("s_minus", n)
+        self.x = ca.vertcat(self.q, self.v, self.a, *[self.w[side] for side in SIDES],
+                            self.s_plus, self.s_minus)
 
     # ------------------------------------------------------------------ access
     def P(self, name: str) -> ca.SX:
         """Parameter block ``name`` of this knot."""
         return self.p[self.par[name]]
 
-    def weight(self, i: int) -> ca.SX:
-        return self.P("weights")[i]
+    def weight(self, name: str) -> ca.SX:
+        """``√w`` of the cost weight ``name`` (a :class:`~.params.Weights` field)."""
+        return self.P("weights")[self.weight_names.index(name)]
 
-    def slack(self, n: int) -> ca.SX:
-        """The next ``n`` relaxation terms ``s⁺ − s⁻`` (a constraint adds them to its rows)."""
-        i = self._slack_used
-        self._slack_used += n
-        if self._slack_used > self.slack_rows:
-            raise RuntimeError("more relaxable rows than declared")
-        return self.s_plus[i:i + n] - self.s_minus[i:i + n]
+    def torques(self) -> ca.SX:
+        """Generalised forces ``(nv,)`` [N, N·m] the actuators must supply at this knot:
+        ``rnea(q, v, a) − Σ_c J_c(q)ᵀ w_c`` (built once, shared by the dynamics parts)."""
+        if "torques" not in self.memo:
+            frames = [self.contacts[s].frame for s in SIDES]
+            self.memo["torques"] = self.sym.rnea_contact_expr(
+                frames, [self.wrench_world(s) for s in SIDES])
+        return self.memo["torques"]
 
     def wrench_local(self, side: str) -> ca.SX:
         """``(6,)`` ``[f; τ]`` [N, N·m] of a foot in its sole frame (planar: f_y = τ_x = τ_z =
         0). The decision variables are this wrench divided by m·g (scaling: a standing foot's
         variables are of order 1, like the configuration's)."""
-        w = self.mg * self._w[side]
+        w = self.mg * self.w[side]
         if self.planar:
             z = ca.SX(0)
             return ca.vertcat(w[0], z, w[1], z, w[2], z)

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import InvalidInputError, UnknownNameError
-from ...robot import Robot
-from ..params import Limits
+from ..errors import InvalidInputError, UnknownNameError
+from ..robot import Robot
+from .params import Limits
 
 __all__ = ["Resolved", "resolve"]
 

@@ -1,12 +1,17 @@
-"""The parametric NLP: one knot's functions (:mod:`.knot`, :mod:`.tasks`,
-:mod:`.constraints`) mapped over the knots with ``casadi.Function.map``, assembled once per
-problem *shape* and cached; a demonstration only fills parameters and bounds.
+"""The parametric NLP, assembled from a list of parts (:mod:`.parts`).
 
-Shape = (the imitator's fingerprint, number of knots T, :class:`~.knot.Flags`, mapped segment
-frames, IPOPT options). The contact schedule, targets, weights, limits, sole sizes and μ are
-numbers (parameter values and bounds: a row the schedule does not impose gets infinite bounds,
-which IPOPT drops), so a second demonstration of the same shape skips the build
-(:data:`BUILD_COUNT` counts builds).
+Two levels, each cached:
+
+- :class:`Formulation` — one knot's functions (constraint rows, their Jacobian, the cost and
+  its gradient, the Hessian of the knot's Lagrangian; the same for the rows between two
+  knots), written in SX from the parts and compiled to C once per robot and list of parts
+  (:mod:`.codegen`: kept on disk, loaded by later processes without building anything);
+- :class:`Compiled` — those functions mapped over ``T`` knots (``casadi.Function.map``) and
+  assembled into the sparse block structure IPOPT needs, keeping only the rows the
+  demonstration's schedule bounds (a row with infinite bounds on both sides is left out of
+  the KKT system, not carried with infinite bounds). Key: the formulation, ``T``, the kept
+  rows and IPOPT's options; a demonstration only fills parameters and bounds
+  (:data:`BUILD_COUNT` counts builds).
 """
 
 from __future__ import annotations
@@ -18,18 +23,22 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from .. import symbolic
 from ..robot import Robot
 from ..symbolic import SymbolicModel
-from . import tasks
-from .constraints import PER_KNOT, cone, contact, force, integration, swing
+from . import codegen
+from . import knot as knot_module
+from . import parts as parts_module
 from .interrupt import Progress
-from .knot import Flags, Knot, base_dofs
+from .knot import Flags, Knot
+from .parts import Constraint, Cost, PairConstraint, Part, Spec
 
-__all__ = ["Spec", "Compiled", "compiled", "clear_cache", "BUILD_COUNT", "CACHE_SIZE",
-           "fingerprint", "row_bounds", "row_scale"]
+__all__ = ["Formulation", "Compiled", "formulation", "compiled", "clear_cache", "BUILD_COUNT",
+           "CACHE_SIZE", "fingerprint", "Spec", "IPOPT_DEFAULTS"]
 
 CACHE_SIZE = 8
 _CACHE: OrderedDict[tuple, Compiled] = OrderedDict()
+_FORM: OrderedDict[tuple, Formulation] = OrderedDict()
 _SYM: OrderedDict[str, SymbolicModel] = OrderedDict()
 BUILD_COUNT = 0
 """How many NLPs this process has built (a cached call leaves it unchanged)."""
@@ -37,10 +46,12 @@ BUILD_COUNT = 0
 IPOPT_DEFAULTS = {
     "print_level": 0, "sb": "yes", "tol": 1e-8, "constr_viol_tol": 1e-8,
     "acceptable_tol": 1e-6, "acceptable_constr_viol_tol": 1e-7, "acceptable_iter": 5,
-    "max_iter": 500, "mu_strategy": "adaptive", "linear_solver": "mumps",
-    "fixed_variable_treatment": "make_parameter", "bound_relax_factor": 0.0,
+    "max_iter": 150, "mu_strategy": "adaptive", "linear_solver": "mumps",
+    "mumps_pivot_order": 0, "fixed_variable_treatment": "make_parameter",
+    "bound_relax_factor": 0.0,
 }
-"""IPOPT options (MUMPS, the solver of the PyPI CasADi wheel); ``ipopt=`` adds to them."""
+"""IPOPT options (MUMPS, the solver of the PyPI CasADi wheel, with AMD ordering: steadier
+than METIS here); ``ipopt=`` adds to them."""
 
 
 def fingerprint(robot: Robot) -> str:
@@ -61,93 +72,207 @@ def fingerprint(robot: Robot) -> str:
     return h.hexdigest()
 
 
+def _lru(cache: OrderedDict, key, make):
+    if key not in cache:
+        cache[key] = make()
+        while len(cache) > CACHE_SIZE:
+            cache.popitem(last=False)
+    cache.move_to_end(key)
+    return cache[key]
+
+
 def symbolic_model(robot: Robot) -> SymbolicModel:
     """The (cached) :class:`SymbolicModel` of a robot."""
-    key = fingerprint(robot)
-    if key not in _SYM:
-        _SYM[key] = SymbolicModel(robot.model)
-        while len(_SYM) > CACHE_SIZE:
-            _SYM.popitem(last=False)
-    _SYM.move_to_end(key)
-    return _SYM[key]
+    return _lru(_SYM, fingerprint(robot), lambda: SymbolicModel(robot.model))
 
 
 def clear_cache() -> None:
-    """Forget every cached NLP and symbolic model."""
+    """Forget every cached NLP, formulation and symbolic model (not the compiled libraries on
+    disk: :func:`gdimitate.retarget.codegen.cache_dir`)."""
     _CACHE.clear()
+    _FORM.clear()
     _SYM.clear()
 
 
-@dataclass(frozen=True)
-class Spec:
-    """The numbers that decide the bounds of one demonstration's rows."""
+# ---------------------------------------------------------------------- one knot
+@dataclass
+class Formulation:
+    """One knot's functions from a list of parts (module docstring).
 
-    T: int
-    stance: dict
-    swing: dict
-    liftoff: dict
-    goal_active: dict
-    planar: bool
-    free: bool
-    cone: bool
-    clearance: float
-    leg_length: float
-    n_base: int
-    n_act: int
+    ``knot``: the :class:`Knot` (layouts of variables and parameters); ``parts``; per-knot
+    constraint parts ``cons`` with their row ``slices``; ``pairs`` with ``pair_slices``;
+    ``labels`` ``(ngk,)`` and ``scale`` ``(ngk,)`` (each row's divisor into scaled units) of
+    the per-knot rows; ``fun``: the functions by name — ``kg (x, p) -> g``,
+    ``kjac (x, p) -> ∂g/∂x``, ``kf (x, p) -> f`` (the knot's cost, not divided by T),
+    ``kgrad``, ``kh (x, p, σ, λ) -> triu ∇²(σf + λᵀg)``, ``pg (x₀, x₁, p₁) -> rows``,
+    ``pjac``, ``ph (x₀, x₁, p₁, μ)``, ``kres (x, p) -> weighted residuals``,
+    ``tau (x, p) -> τ (nv,)``; ``compiled``: whether they run as compiled C."""
+
+    knot: Knot
+    parts: tuple[Part, ...]
+    cons: list[Constraint]
+    slices: list[slice]
+    pairs: list[PairConstraint]
+    pair_slices: list[slice]
+    labels: list[str]
+    scale: np.ndarray
+    fun: dict[str, ca.Function]
+    compiled: bool
+
+    @property
+    def nx(self) -> int:
+        return self.knot.var.size
+
+    @property
+    def ngk(self) -> int:
+        return len(self.labels)
+
+    @property
+    def ns(self) -> int:
+        return self.pair_slices[-1].stop if self.pair_slices else 0
+
+    def rows_of(self, kind: type) -> slice:
+        """The per-knot row slice of the first constraint part of type ``kind``."""
+        return next(s for c, s in zip(self.cons, self.slices) if isinstance(c, kind))
 
 
-def slack_rows(robot: Robot, flags: Flags) -> int:
-    planar = robot.base == "planar"
-    _, act = base_dofs(robot)
-    return len(act) + 2 * (cone.rows_per_side(planar) + swing.rows_per_side(planar)
-                           + force.rows_per_side(flags.cone))
+def _weights(parts) -> tuple[str, ...]:
+    out: list[str] = []
+    for p in parts:
+        if isinstance(p, Cost) and p.weight and p.weight not in out:
+            out.append(p.weight)
+    return tuple(out)
 
 
+def _knot_expressions(k: Knot, parts) -> tuple:
+    """``(cons, slices, rows, labels, scale, pairs, pair rows (x0 symbol), costs)``."""
+    cons = [p for p in parts if isinstance(p, Constraint)]
+    pairs = [p for p in parts if isinstance(p, PairConstraint)]
+    costs = [p for p in parts if isinstance(p, Cost)]
+    rows = [c.rows(k) for c in cons]
+    n_relax = sum(int(r.shape[0]) for c, r in zip(cons, rows) if c.relaxable)
+    k.add_slacks(n_relax)
+    out, labels, scale, slices, o, used = [], [], [], [], 0, 0
+    for c, r in zip(cons, rows):
+        n = int(r.shape[0])
+        if c.relaxable:  # the elastic pair s⁺ − s⁻ of each row (0 outside the fallback)
+            r = r + k.s_plus[used:used + n] - k.s_minus[used:used + n]
+            used += n
+        out.append(r)
+        lab = c.labels(k)
+        if len(lab) != n:
+            raise RuntimeError(f"part {c.name!r}: {len(lab)} labels for {n} rows")
+        labels += lab
+        scale += [c.scale(k)] * n
+        slices.append(slice(o, o + n))
+        o += n
+    x0 = ca.SX.sym("x_prev", k.var.size)
+    prow, pslices, o = [], [], 0
+    for pp in pairs:
+        carry = ca.Function("carry", [k.x], [pp.carry(k)])
+        r = pp.rows(k, carry(x0), pp.carry(k))
+        prow.append(r)
+        pslices.append(slice(o, o + int(r.shape[0])))
+        o += int(r.shape[0])
+    return cons, slices, out, labels, np.array(scale), pairs, pslices, prow, x0, costs
+
+
+def _functions(k: Knot, g_rows, costs, prow, x0) -> list[ca.Function]:
+    gk = ca.vertcat(*g_rows)
+    res = ca.vertcat(*[(k.weight(c.weight) if c.weight else 1) * c.residual(k) for c in costs])
+    fk = ca.sumsqr(res) + k.P("elastic")[0] * (ca.sum1(k.s_plus) + ca.sum1(k.s_minus))
+    lam, sigma = ca.SX.sym("lam", gk.shape[0]), ca.SX.sym("sigma")
+    hk = ca.triu(ca.hessian(sigma * fk + ca.dot(lam, gk), k.x)[0])
+    gs = ca.vertcat(*prow) if prow else ca.SX(0, 1)
+    mu = ca.SX.sym("mu", gs.shape[0])
+    xx = ca.vertcat(x0, k.x)
+    x, p = k.x, k.p
+    return [ca.Function("kg", [x, p], [gk]), ca.Function("kjac", [x, p], [ca.jacobian(gk, x)]),
+            ca.Function("kf", [x, p], [fk]), ca.Function("kgrad", [x, p], [ca.gradient(fk, x)]),
+            ca.Function("kh", [x, p, sigma, lam], [hk]),
+            ca.Function("pg", [x0, x, p], [gs]),
+            ca.Function("pjac", [x0, x, p], [ca.jacobian(gs, xx)]),
+            ca.Function("ph", [x0, x, p, mu], [ca.hessian(ca.dot(mu, gs), xx)[0]]),
+            ca.Function("kres", [x, p], [res]),
+            ca.Function("tau", [x, p], [k.torques()])]
+
+
+def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulation:
+    """The (cached) :class:`Formulation` of a robot and a list of parts."""
+    parts = tuple(parts)
+    key = (fingerprint(robot), flags, repr(parts))
+
+    def make() -> Formulation:
+        sym = symbolic_model(robot)
+        extra: dict[str, int] = {}
+        k = Knot(robot, sym, flags, _weights(parts), extra)
+        for p in parts:
+            extra.update(p.params(k))
+        if extra:
+            k = Knot(robot, sym, flags, _weights(parts), extra)
+        cons, slices, g_rows, labels, scale, pairs, pslices, prow, x0, costs = \
+            _knot_expressions(k, parts)
+        digest = hashlib.sha1(repr((key, _SOURCE)).encode()).hexdigest()
+        fun, comp = codegen.compiled_functions(
+            digest, lambda: _functions(k, g_rows, costs, prow, x0))
+        return Formulation(k, parts, cons, slices, pairs, pslices, labels, scale, fun, comp)
+
+    return _lru(_FORM, key, make)
+
+
+_SOURCE = codegen.source_digest(parts_module, knot_module, symbolic)
+
+
+# ---------------------------------------------------------------------- all knots
 @dataclass
 class Compiled:
-    """A built NLP: ``solver`` (``nlpsol``), ``knot`` (the per-knot :class:`Knot`),
-    ``g_fun`` ``(z, P) -> g`` and ``parts`` ``(z, P) -> (G_knot, tau, R)`` for reports,
-    ``T``, ``nx``, ``ng_knot``, ``ng``, ``progress`` (the iteration callback)."""
+    """A built NLP over ``T`` knots: ``solver`` (``nlpsol``), ``form`` (the
+    :class:`Formulation`), ``keep`` (indices of the rows of :func:`row_bounds` the solver
+    sees), ``g_fun`` ``(z, P) -> g`` of every row (for reports), ``tau_fun``, ``progress``
+    (the iteration callback), ``labels`` (one per row of :func:`row_bounds`)."""
 
     solver: ca.Function
-    knot: Knot
+    form: Formulation
     g_fun: ca.Function
-    tau_fun: ca.Function
     T: int
-    nx: int
-    ng_knot: int
-    ng: int
+    keep: np.ndarray
     progress: Progress
-    segment_frames: tuple[str, ...]
-    knot_fun: ca.Function
+    labels: list[str]
+
+    @property
+    def knot(self) -> Knot:
+        return self.form.knot
+
+    @property
+    def nx(self) -> int:
+        return self.form.nx
+
+    @property
+    def ng_knot(self) -> int:
+        return self.form.ngk
+
+    @property
+    def ng(self) -> int:
+        return self.form.ngk * self.T + self.form.ns * (self.T - 1)
 
 
 def _freeze(d: dict) -> tuple:
     return tuple(sorted((k, repr(v)) for k, v in d.items()))
 
 
-def compiled(robot: Robot, flags: Flags, segment_frames: tuple[str, ...], q_index: tuple,
-             T: int, ipopt: dict | None = None) -> tuple[Compiled, bool]:
-    """The NLP of this shape, built now or taken from the cache; ``(compiled, cached)``."""
-    key = (fingerprint(robot), T, flags, tuple(segment_frames), tuple(q_index),
-           _freeze(ipopt or {}))
-    if key in _CACHE:
+def compiled(form: Formulation, T: int, keep: np.ndarray, ipopt: dict | None = None
+             ) -> tuple[Compiled, bool]:
+    """The NLP over ``T`` knots keeping rows ``keep``, built now or taken from the cache;
+    ``(compiled, cached)``."""
+    keep = np.asarray(keep, int)
+    key = (id(form), T, hashlib.sha1(keep.tobytes()).hexdigest(), _freeze(ipopt or {}))
+    if key in _CACHE and _CACHE[key].form is form:
         _CACHE.move_to_end(key)
         return _CACHE[key], True
-    c = _build(robot, flags, tuple(segment_frames), tuple(q_index), T, ipopt or {})
-    _CACHE[key] = c
+    _CACHE[key] = c = _build(form, T, keep, ipopt or {})
     while len(_CACHE) > CACHE_SIZE:
         _CACHE.popitem(last=False)
     return c, False
-
-
-def _pair_functions(k: Knot) -> ca.Function:
-    """Rows linking knot k − 1 (``x0``) to knot k (``x``): integration, then contact hold."""
-    step = integration.step_function(k)
-    x0 = ca.SX.sym("x_prev", k.var.size)
-    hold = ca.Function("hold", [k.x], [contact.hold_quantities(k)])
-    rows = ca.vertcat(step(x0, k.x, k.p), contact.hold_rows(hold(x0), hold(k.x), k.planar))
-    return ca.Function("pair", [x0, k.x, k.p], [rows])
 
 
 def _blockdiag(M: ca.MX, n: int) -> ca.MX:
@@ -162,101 +287,78 @@ def _pair_spread(nx: int, T: int) -> ca.DM:
         for i in range(2 * nx):
             rows.append(2 * nx * j + i)
             cols.append(nx * j + i)
-    sp = ca.Sparsity.triplet(2 * nx * (T - 1), nx * T, rows, cols)
+    return ca.DM(ca.Sparsity.triplet(2 * nx * (T - 1), nx * T, rows, cols), 1.0)
+
+
+def _select(keep: np.ndarray, ng: int) -> ca.DM:
+    """``(len(keep), ng)`` selection matrix."""
+    sp = ca.Sparsity.triplet(len(keep), ng, list(range(len(keep))), keep.tolist())
     return ca.DM(sp, 1.0)
 
 
-def _build(robot: Robot, flags: Flags, segment_frames: tuple[str, ...], q_index: tuple,
-           T: int, ipopt: dict) -> Compiled:
-    """Build the NLP of one shape. The derivatives IPOPT needs are written per knot (SX:
-    constraint Jacobian, cost gradient, Hessian of the knot's Lagrangian) and per pair of
-    knots, mapped over the knots and assembled into the sparse block structure; CasADi's
-    MX-level differentiation of the mapped graph is never used (it is two orders of magnitude
-    slower here)."""
+def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled:
+    """Map the knot's functions over ``T`` knots and assemble values and derivatives (never
+    CasADi's MX-level differentiation of the mapped graph: two orders of magnitude slower)."""
     global BUILD_COUNT
-    sym = symbolic_model(robot)
-    k = Knot(robot, sym, flags, slack_rows(robot, flags))
-    nx = k.var.size
-    # ---- one knot: constraint rows, cost, hold quantities
-    base_rows, tau_rows = PER_KNOT[0].expr(k)
-    g_parts = [base_rows, tau_rows] + [m.expr(k) for m in PER_KNOT[1:]]
-    g_parts.append(integration.quaternion_row(k))
-    gk = ca.vertcat(*g_parts)
-    res = ca.vertcat(tasks.keypoints.residual(k, segment_frames),
-                     tasks.joints.residual(k, q_index), tasks.smoothness.residual(k),
-                     tasks.wrench.residual(k))
-    l1 = k.weight(8) * (ca.sum1(k.s_plus) + ca.sum1(k.s_minus))
-    fk = (ca.sumsqr(res) + l1) / T
-    ngk = int(gk.shape[0])
-    lam_k, sigma = ca.SX.sym("lam", ngk), ca.SX.sym("sigma")
-    hk = ca.triu(ca.hessian(sigma * fk + ca.dot(lam_k, gk), k.x)[0])
-    knot_fun = ca.Function("knot", [k.x, k.p], [gk, res, l1, contact.hold_quantities(k)])
-    kf = ca.Function("knot_f", [k.x, k.p], [fk, ca.gradient(fk, k.x)])
-    kg = ca.Function("knot_g", [k.x, k.p], [gk, ca.jacobian(gk, k.x)])
-    kh = ca.Function("knot_h", [k.x, k.p, sigma, lam_k], [hk])
-    tau_fun = ca.Function("tau", [k.x, k.p], [PER_KNOT[0].torques(k)])
-    # ---- pairs of knots
-    pair = _pair_functions(k)
-    x0s, x1s = ca.SX.sym("x0", nx), ca.SX.sym("x1", nx)
-    gs = pair(x0s, x1s, k.p)
-    ns = int(gs.shape[0])
-    mu = ca.SX.sym("mu", ns)
-    xx = ca.vertcat(x0s, x1s)
-    pg = ca.Function("pair_g", [x0s, x1s, k.p], [gs, ca.jacobian(gs, xx)])
-    ph = ca.Function("pair_h", [x0s, x1s, k.p, mu], [ca.hessian(ca.dot(mu, gs), xx)[0]])
-    # ---- all knots (MX): values and the assembled derivatives
+    f, nx, ngk, ns = form.fun, form.nx, form.ngk, form.ns
     X = ca.MX.sym("X", nx, T)
-    P = ca.MX.sym("P", k.par.size, T)
+    P = ca.MX.sym("P", form.knot.par.size, T)
     z, p = ca.vec(X), ca.vec(P)
-    F, GF = kf.map(T)(X, P)
-    Gk, JK = kg.map(T)(X, P)
-    g_list, j_list = [ca.vec(Gk)], [_blockdiag(JK, nx)]
+    g_list, j_list = [ca.vec(f["kg"].map(T)(X, P))], [_blockdiag(f["kjac"].map(T)(X, P), nx)]
     ng = ngk * T + ns * (T - 1)
-    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
-    H = _blockdiag(kh.map(T)(X, P, lam_f, ca.reshape(lam_g[:ngk * T], ngk, T)), nx)
-    if T > 1:
+    S = _select(keep, ng)
+    lam_f, lam_s = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(keep))
+    lam_g = ca.mtimes(S.T, lam_s)
+    H = _blockdiag(f["kh"].map(T)(X, P, lam_f / T, ca.reshape(lam_g[:ngk * T], ngk, T)), nx)
+    if T > 1 and ns:
         E = _pair_spread(nx, T)
-        Gs, JS = pg.map(T - 1)(X[:, :-1], X[:, 1:], P[:, 1:])
-        g_list.append(ca.vec(Gs))
-        j_list.append(ca.mtimes(_blockdiag(JS, 2 * nx), E))
-        HS = ph.map(T - 1)(X[:, :-1], X[:, 1:], P[:, 1:],
-                           ca.reshape(lam_g[ngk * T:], ns, T - 1))
+        args = (X[:, :-1], X[:, 1:], P[:, 1:])
+        g_list.append(ca.vec(f["pg"].map(T - 1)(*args)))
+        j_list.append(ca.mtimes(_blockdiag(f["pjac"].map(T - 1)(*args), 2 * nx), E))
+        HS = f["ph"].map(T - 1)(*args, ca.reshape(lam_g[ngk * T:], ns, T - 1))
         H = H + ca.triu(ca.mtimes([E.T, _blockdiag(HS, 2 * nx), E]))
-    G, JG, f = ca.vertcat(*g_list), ca.vertcat(*j_list), ca.sum2(F)
-    grad_f = ca.Function("grad_f", [z, p], [f, ca.vec(GF)], ["x", "p"], ["f", "grad_f_x"])
-    jac_g = ca.Function("jac_g", [z, p], [G, JG], ["x", "p"], ["g", "jac_g_x"])
-    hess = ca.Function("hess_lag", [z, p, lam_f, lam_g], [ca.triu(H)],
+    G = ca.vertcat(*g_list)
+    Gs, Js = ca.mtimes(S, G), ca.mtimes(S, ca.vertcat(*j_list))
+    F = ca.sum2(f["kf"].map(T)(X, P)) / T
+    grad_f = ca.Function("grad_f", [z, p], [F, ca.vec(f["kgrad"].map(T)(X, P)) / T],
+                         ["x", "p"], ["f", "grad_f_x"])
+    jac_g = ca.Function("jac_g", [z, p], [Gs, Js], ["x", "p"], ["g", "jac_g_x"])
+    hess = ca.Function("hess_lag", [z, p, lam_f, lam_s], [ca.triu(H)],
                        ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
-    progress = Progress(f"progress_{BUILD_COUNT}", int(z.shape[0]), ng, int(p.shape[0]))
+    progress = Progress(f"progress_{BUILD_COUNT}", int(z.shape[0]), len(keep),
+                        int(p.shape[0]))
     opts = {"print_time": False, "iteration_callback": progress, "grad_f": grad_f,
+            "calc_lam_p": False, "no_nlp_grad": True,
             "jac_g": jac_g, "hess_lag": hess, "ipopt": {**IPOPT_DEFAULTS, **ipopt}}
-    solver = ca.nlpsol(f"retarget_{BUILD_COUNT}", "ipopt", {"x": z, "p": p, "f": f, "g": G},
+    solver = ca.nlpsol(f"retarget_{BUILD_COUNT}", "ipopt", {"x": z, "p": p, "f": F, "g": Gs},
                        opts)
     g_fun = ca.Function("g", [z, p], [G])
     BUILD_COUNT += 1
-    return Compiled(solver, k, g_fun, tau_fun, T, nx, ngk, ng, progress, segment_frames,
-                    knot_fun)
+    return Compiled(solver, form, g_fun, T, keep, progress, row_labels(form, T))
 
 
-def row_scale(c: Compiled, ng: int) -> np.ndarray:
-    """``(ng,)`` divisors putting each row in scaled units: m·g for the base rows of the
-    dynamics (in N and N·m, made exact after the solve by :mod:`.polish`), 1 elsewhere."""
-    scale = np.ones(ng)
-    nb = len(c.knot.base_idx)
-    scale[: c.T * c.ng_knot].reshape(c.T, c.ng_knot)[:, :nb] = c.knot.mg
-    return scale
-
-
-def row_bounds(c: Compiled, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
-    """``(lbg, ubg)`` of every row for a demonstration (see :class:`Spec`)."""
-    parts = [m.bounds(spec) for m in PER_KNOT] + [integration.quaternion_bounds(spec)]
-    lo = np.concatenate([p[0] for p in parts], axis=1).ravel()
-    hi = np.concatenate([p[1] for p in parts], axis=1).ravel()
+def row_bounds(form: Formulation, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
+    """``(lbg, ubg)`` of every row for a demonstration: per knot the constraint parts' rows in
+    list order, then per pair of knots the pair parts' rows."""
+    lo = np.concatenate([c.bounds(spec)[0] for c in form.cons], axis=1).ravel()
+    hi = np.concatenate([c.bounds(spec)[1] for c in form.cons], axis=1).ravel()
     los, his = [lo], [hi]
-    if spec.T > 1:  # per pair of knots: integration rows (= 0), then the hold rows
-        n_step = c.knot.sym.nq + c.knot.sym.nv
-        hl, hh = contact.hold_bounds(spec)
-        z = np.zeros((spec.T - 1, n_step))
-        los.append(np.concatenate([z, hl], axis=1).ravel())
-        his.append(np.concatenate([z, hh], axis=1).ravel())
+    if spec.T > 1 and form.pairs:
+        b = [pp.bounds(spec, s.stop - s.start) for pp, s in zip(form.pairs, form.pair_slices)]
+        los.append(np.concatenate([x[0] for x in b], axis=1).ravel())
+        his.append(np.concatenate([x[1] for x in b], axis=1).ravel())
     return np.concatenate(los), np.concatenate(his)
+
+
+def row_scale(form: Formulation, T: int) -> np.ndarray:
+    """``(ng,)`` divisors putting each row in scaled units (:meth:`Constraint.scale`)."""
+    return np.r_[np.tile(form.scale, T), np.ones(form.ns * max(T - 1, 0))]
+
+
+def row_labels(form: Formulation, T: int) -> list[str]:
+    """A label for each of the ``ng`` rows (per-knot rows, then pair rows)."""
+    out = form.labels * T
+    for _ in range(T - 1):
+        for pp, s in zip(form.pairs, form.pair_slices):
+            out += [pp.name] * (s.stop - s.start)
+    return out

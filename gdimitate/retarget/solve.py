@@ -15,19 +15,22 @@ from ..metrics import FORCE_MODELS
 from ..motion import Motion
 from ..robot import SIDES, Robot
 from ..sagittal import robot_motion
+from . import limits
 from . import problem as pb
 from .bodymap import body_map
-from .constraints import cone, contact, force, limits, swing
 from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
 from .knot import Flags, base_dofs
 from .params import DEFAULT_RATE, Contact, Limits, Weights
+from .parts import default_parts, liftoff_knots
 from .polish import make_consistent
 from .stopping import PLATEAU, Plateau
 from .targets import Targets, demonstration_targets, direction_frame, resample
+from .threads import single_thread
 
 __all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "STOPS", "Numbers",
-           "setup"]
+           "Context", "setup", "problem_for", "run_solver", "unmet", "package", "wrenches_of",
+           "limited_robot", "resolve_contacts"]
 
 MODES = ("trajectory", "per_frame")
 STOPS = ("settled", "converged")
@@ -71,11 +74,27 @@ class SolverInfo:
     unmet: tuple[Unmet, ...] = ()
 
 
+@dataclass(frozen=True)
+class Context:
+    """What a part's :meth:`~.parts.Part.values` may read: the demonstration's
+    :class:`~.targets.Targets` ``tg``, the robots, the :class:`~.params.Weights`, the resolved
+    limits ``lim``, the :class:`~.params.Contact` options and the soles ``cs``."""
+
+    tg: Targets
+    imitator: Robot
+    demonstrator: Robot
+    weights: Weights
+    lim: limits.Resolved
+    contact: Contact
+    cs: dict
+
+
 @dataclass
 class Numbers:
     """One demonstration's parameter matrix ``P`` ``(n_p, T)``, variable bounds and start
-    ``(n_x, T)``, row bounds, the per-row divisor that puts every row in scaled units
-    (:func:`~.problem.row_scale`), the resolved limits and the :class:`~.problem.Spec`."""
+    ``(n_x, T)``, bounds of every row, the per-row divisor that puts every row in scaled units
+    (:func:`~.problem.row_scale`), the resolved limits, the :class:`~.problem.Spec` and
+    ``keep``: the rows some bound applies to (the only ones the solver sees)."""
 
     P: np.ndarray
     lbx: np.ndarray
@@ -86,9 +105,10 @@ class Numbers:
     spec: pb.Spec
     lim: limits.Resolved
     row_scale: np.ndarray
+    keep: np.ndarray
 
 
-def _contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:
+def resolve_contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:
     cs = dict(imitator.require_contacts())
     if given:
         for s, c in dict(given).items():
@@ -109,12 +129,12 @@ def _contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:
     return cs
 
 
-def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: Weights,
-          lim_opts: Limits, copts: Contact, cs: dict[str, SoleContact],
+def setup(form: pb.Formulation, tg: Targets, imitator: Robot, demonstrator: Robot,
+          w: Weights, lim_opts: Limits, copts: Contact, cs: dict[str, SoleContact],
           x_start: np.ndarray | None = None) -> Numbers:
-    """Parameters, bounds and warm start of a demonstration for a compiled problem
+    """Parameters, bounds and warm start of a demonstration for a formulation
     (``x_start`` ``(n_x, T)``: a given start, e.g. the previous frame's in streaming)."""
-    k = c.knot
+    k = form.knot
     T = tg.T
     lay, var = k.par, k.var
     P = np.zeros((lay.size, T))
@@ -134,19 +154,23 @@ def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: 
         X, Y, mu = cs[s].half_length, cs[s].half_width, cs[s].mu
         m = copts.cop_margin
         P[lay[f"sole_{s}"]] = np.array([X, Y, mu, X - m, Y - m])[:, None]
-    if c.segment_frames:
+    if k.flags.segments:
         P[lay["torso"]] = np.concatenate([tg.segments[:, i].transpose(0, 2, 1).reshape(T, 9)
-                                          for i in range(len(c.segment_frames))], axis=1).T
+                                          for i in range(k.flags.segments)], axis=1).T
     lim = limits.resolve(imitator, k.act_idx, lim_opts)
     P[lay["joint_target"]] = tg.joints.T
     jw = np.where(tg.mapped, w.joints, w.posture) * ~lim.frozen
     P[lay["joint_weight"]] = np.sqrt(jw)[:, None]  # residuals carry √weight
     with np.errstate(divide="ignore"):
         P[lay["inv_effort"]] = np.where(np.isfinite(lim.effort), 1.0 / lim.effort, 0.0)[:, None]
-    P[lay["weights"]] = np.r_[np.sqrt([w.height, w.placement, w.shank, w.thigh, w.torso,
-                                        w.smoothness, w.wrench, w.foot]), w.elastic][:, None]
+    P[lay["weights"]] = np.sqrt([getattr(w, n) for n in k.weight_names])[:, None]
+    P[lay["elastic"]] = w.elastic
     P[lay["tan2"]] = math.tan(copts.cone_half_angle) ** 2
     P[lay["f_min"]] = copts.f_min
+    ctx = Context(tg, imitator, demonstrator, w, lim, copts, cs)
+    for part in form.parts:
+        for name, val in part.values(ctx).items():
+            P[lay[name]] = np.asarray(val, float).reshape(T, -1).T
     # ---- variable bounds
     lbx = np.full((var.size, T), -np.inf)
     ubx = np.full((var.size, T), np.inf)
@@ -164,30 +188,31 @@ def setup(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot, w: 
     for name in ("s_plus", "s_minus"):
         lbx[var[name]] = ubx[var[name]] = 0.0
     if x_start is None:
-        x0 = _warm_start(c, tg, imitator, demonstrator, lim, copts, cs)
+        x0 = _warm_start(form, tg, imitator, demonstrator, lim, copts, cs)
     else:
         x0 = np.array(x_start, dtype=float)
     q0 = x0[var["q"]].T
     # the start's horizontal base position is the motion's origin
     base_xy = [0, 1] if imitator.base == "free" else [imitator.idx_q("base_x")]
     lbx[qs + np.array(base_xy), 0] = ubx[qs + np.array(base_xy), 0] = q0[0, base_xy]
-    lift = {s: (contact.liftoff_knots(tg.stance[s], tg.swing[s]) if copts.rule == "all"
+    lift = {s: (liftoff_knots(tg.stance[s], tg.swing[s]) if copts.rule == "all"
                 else np.zeros(T, bool)) for s in SIDES}
     spec = pb.Spec(T=T, stance=tg.stance, swing=tg.swing, liftoff=lift,
                    goal_active={s: tg.stance[s] & np.all(np.isfinite(tg.push[s]), axis=1)
                                 for s in SIDES},
-                   planar=k.planar, free=imitator.base == "free", cone=c.knot.flags.cone,
+                   planar=k.planar, free=imitator.base == "free", cone=k.flags.cone,
                    clearance=copts.clearance, leg_length=imitator.legs["left"].length,
                    n_base=len(k.base_idx), n_act=len(k.act_idx))
-    lbg, ubg = pb.row_bounds(c, spec)
-    return Numbers(P, lbx, ubx, x0, lbg, ubg, spec, lim, pb.row_scale(c, len(lbg)))
+    lbg, ubg = pb.row_bounds(form, spec)
+    keep = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
+    return Numbers(P, lbx, ubx, x0, lbg, ubg, spec, lim, pb.row_scale(form, T), keep)
 
 
-def _warm_start(c: pb.Compiled, tg: Targets, imitator: Robot, demonstrator: Robot,
+def _warm_start(form: pb.Formulation, tg: Targets, imitator: Robot, demonstrator: Robot,
                 lim: limits.Resolved, copts: Contact, cs: dict[str, SoleContact]) -> np.ndarray:
     """``(n_x, T)``: :mod:`.initial`'s configurations inside the limits, integration-consistent
     velocities and accelerations, wrenches from a per-knot QP."""
-    k, var = c.knot, c.knot.var
+    k, var = form.knot, form.knot.var
     qi, vi, fz = lim.q_index, k.act_idx, lim.frozen
     q0 = initial_q(demonstrator, imitator, tg, qi).copy()
     q0[:, qi[fz]] = lim.freeze_at[fz]
@@ -226,41 +251,19 @@ def limited_robot(robot: Robot, lim: limits.Resolved) -> Robot:
     return out
 
 
-def _group_names(c: pb.Compiled, lim: limits.Resolved, planar: bool, cone_mode: bool
-                 ) -> list[str]:
-    """A name for every per-knot row (in order)."""
-    k = c.knot
-    names = ["dynamics: base residual"] * len(k.base_idx)
-    names += [f"torque limit: {j}" for j in lim.names]
-    for mod, label in ((contact, "flat contact"), (cone, "contact wrench cone"),
-                       (swing, "swing clearance"), (force, "force direction")):
-        n = mod.rows_per_side(cone_mode if mod is force else planar)
-        for s in SIDES:
-            names += [f"{label}: {s}"] * n
-    names += ["quaternion norm"] * (1 if k.robot.base == "free" else 0)
-    return names
-
-
 def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unmet, ...]:
-    """Constraint groups violated by more than ``tol`` (scaled units) at ``z``."""
+    """Constraint groups (the parts' row labels) violated by more than ``tol`` (scaled units)
+    at ``z``, worst first."""
     g = np.asarray(c.g_fun(z, num.P.T.ravel())).ravel()
     viol = (np.maximum(num.lbg - g, 0) + np.maximum(g - num.ubg, 0)) / num.row_scale
     T, n = num.spec.T, c.ng_knot
-    names = _group_names(c, num.lim, num.spec.planar, num.spec.cone)
     worst: dict[str, tuple[float, int]] = {}
-    vk = viol[: T * n].reshape(T, n)
-    for j, name in enumerate(names):
-        kk = int(np.argmax(vk[:, j]))
-        if vk[kk, j] > worst.get(name, (0.0, 0))[0]:
-            worst[name] = (float(vk[kk, j]), kk)
-    rest = viol[T * n:]
-    if T > 1 and rest.size:
-        n_step = c.knot.sym.nq + c.knot.sym.nv
-        pr = rest.reshape(T - 1, -1)
-        st, ho = pr[:, :n_step].max(axis=1), pr[:, n_step:].max(axis=1)
-        worst["integration"] = (float(st.max()), int(np.argmax(st)) + 1)
-        worst["contact hold (slip)"] = (float(ho.max()), int(np.argmax(ho)) + 1)
-    out = [Unmet(k_, v, kk) for k_, (v, kk) in worst.items() if v > tol]
+    knot_of = np.r_[np.repeat(np.arange(T), n), np.repeat(np.arange(1, T), c.form.ns)]
+    for i in np.flatnonzero(viol > tol):
+        name = c.labels[i]
+        if viol[i] > worst.get(name, (0.0, 0))[0]:
+            worst[name] = (float(viol[i]), int(knot_of[i]))
+    out = [Unmet(k_, v, kk) for k_, (v, kk) in worst.items()]
     return tuple(sorted(out, key=lambda u: -u.violation))
 
 
@@ -273,11 +276,12 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
         for name in ("s_plus", "s_minus"):
             ubx[c.knot.var[name]] = np.inf
     c.progress.reset()
-    stopper = Plateau(num.lbg, num.ubg, num.row_scale) if stop == "settled" else None
-    with guard(verbose, num.lbg, num.ubg, label, stopper):
+    lbg, ubg = num.lbg[num.keep], num.ubg[num.keep]
+    stopper = Plateau(lbg, ubg, num.row_scale[num.keep]) if stop == "settled" else None
+    with guard(verbose, lbg, ubg, label, stopper), single_thread():
         try:
             sol = c.solver(x0=x0.T.ravel(), p=num.P.T.ravel(), lbx=lbx.T.ravel(),
-                           ubx=ubx.T.ravel(), lbg=num.lbg, ubg=num.ubg)
+                           ubx=ubx.T.ravel(), lbg=lbg, ubg=ubg)
         except RuntimeError as e:
             raise SolverError(f"IPOPT could not run the optimal adaptor's NLP: {e}") from None
     st = dict(c.solver.stats())
@@ -347,7 +351,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     stop = options.get("stop", "settled")
     if stop not in STOPS:
         raise UnknownNameError("stop rule", stop, STOPS)
-    cs = _contacts(imitator, copts, options.get("contacts"))
+    cs = resolve_contacts(imitator, copts, options.get("contacts"))
     bmap = body_map(demonstrator, imitator, options.get("body_map"))
     if mode == "per_frame":
         from .streaming import adapt_per_frame
@@ -361,14 +365,11 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     act_names = limits.resolve(imitator, act, lim_opts).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
                                copts.rule)
-    flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
-                  cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
-    q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
     t0 = time.perf_counter()
-    c, cached = pb.compiled(imitator, flags, tuple(bmap.segments.values()), q_index, tg.T,
-                            options.get("ipopt"))
+    form = problem_for(imitator, force, copts, bmap, act_names)
+    num = setup(form, tg, imitator, demonstrator, w, lim_opts, copts, cs)
+    c, cached = pb.compiled(form, tg.T, num.keep, options.get("ipopt"))
     build_s = 0.0 if cached else time.perf_counter() - t0
-    num = setup(c, tg, imitator, demonstrator, w, lim_opts, copts, cs)
     t1 = time.perf_counter()
     z, st = run_solver(c, num, num.x0, False, verbose, f"{imitator.name} ({tg.T} knots)",
                        stop)
@@ -387,9 +388,21 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                       iterations=iters, time_s=time.perf_counter() - t1, build_s=build_s,
                       cached=cached, elastic=elastic, knots=tg.T,
                       variables=int(np.sum(num.lbx != num.ubx)),
-                      constraints=int(np.sum(np.isfinite(num.lbg) | np.isfinite(num.ubg))),
+                      constraints=int(num.keep.size),
                       unmet=bad)
     return package(c, num, z, tg, demonstrator, imitator, cs, force, copts, info)
+
+
+def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, parts=None
+                ) -> pb.Formulation:
+    """The :class:`~.problem.Formulation` of an imitator under a force model, contact options
+    and body map (``parts``: a list of parts instead of :func:`~.parts.default_parts`)."""
+    flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
+                  cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
+    q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
+    if parts is None:
+        parts = default_parts(tuple(bmap.segments.values()), q_index)
+    return pb.formulation(imitator, flags, tuple(parts))
 
 
 def _zero_slacks(c: pb.Compiled, z: np.ndarray, T: int) -> np.ndarray:
@@ -419,7 +432,7 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
             imitator: Robot, cs: dict[str, SoleContact], force: str, copts: Contact,
             info: SolverInfo):
     """The :class:`~gdimitate.adapt.AdaptedMotion` of a solution vector ``z``."""
-    from ..adapt import AdaptedMotion, compare
+    from ..result import AdaptedMotion, compare
 
     T = tg.T
     Z = z.reshape(T, -1).T

@@ -25,14 +25,25 @@ import numpy as np
 from ..contact import ContactForces, FootForces, SoleContact
 from ..errors import InvalidInputError, UnknownNameError
 from ..motion import Motion
+from ..result import AdaptedMotion, compare
 from ..robot import SIDES, Robot
 from ..sagittal import robot_motion
+from . import limits as limits_mod
 from . import problem as pb
 from .bodymap import BodyMap, body_map
-from .constraints import contact as contact_rows
-from .constraints import limits
-from .knot import Flags, base_dofs
+from .knot import base_dofs
 from .params import Contact, Limits, Weights
+from .parts import FlatContact
+from .solve import (
+    SolverInfo,
+    Unmet,
+    limited_robot,
+    problem_for,
+    resolve_contacts,
+    run_solver,
+    setup,
+    wrenches_of,
+)
 from .targets import demonstration_targets
 
 __all__ = ["StreamingAdaptor", "FrameResult", "adapt_per_frame", "STREAMING_FORCE_MODELS"]
@@ -70,8 +81,6 @@ class StreamingAdaptor:
                  contact: Contact | None = None, contacts: dict | None = None,
                  body_map: BodyMap | dict | str | None = None, dt: float = 1 / 60,
                  ipopt: dict | None = None):
-        from .solve import _contacts
-
         if force not in STREAMING_FORCE_MODELS:
             raise UnknownNameError("streaming force model", force, STREAMING_FORCE_MODELS)
         if not (np.isfinite(dt) and dt > 0):
@@ -83,21 +92,18 @@ class StreamingAdaptor:
         self.demonstrator, self.imitator, self.force, self.dt = (demonstrator, imitator, force,
                                                                  float(dt))
         self.weights, self.limits = weights or Weights(), limits or Limits()
-        self.contacts: dict[str, SoleContact] = _contacts(imitator, self.contact, contacts)
+        self.contacts: dict[str, SoleContact] = resolve_contacts(imitator, self.contact,
+                                                                 contacts)
         bm = body_map if isinstance(body_map, BodyMap) else None
         self.body_map = bm or _body_map(demonstrator, imitator, body_map)
         _, act = base_dofs(imitator)
         self._lim = limits_resolved = limits_mod.resolve(imitator, act, self.limits)
         self._act_names = limits_resolved.names
-        from .solve import limited_robot
-
         self._audit_robot = limited_robot(imitator, limits_resolved)
-        flags = Flags(goal="force" if force == "measured" else force,
-                      cone=self.contact.cone_half_angle > 0,
-                      segments=len(self.body_map.segments))
-        q_index = tuple(int(imitator.idx_q(j)) for j in self._act_names)
-        self._c, _ = pb.compiled(imitator, flags, tuple(self.body_map.segments.values()),
-                                 q_index, 2, {"max_iter": 60, **(ipopt or {})})
+        self._form = problem_for(imitator, force, self.contact, self.body_map, self._act_names)
+        ng = self._form.ngk * 2 + self._form.ns
+        self._c, _ = pb.compiled(self._form, 2, np.arange(ng), {"max_iter": 60,
+                                                                 **(ipopt or {})})
         self.reset()
 
     def reset(self) -> None:
@@ -129,8 +135,6 @@ class StreamingAdaptor:
         """Adapt one demonstrator configuration ``q_demo`` ``(nq_demo,)`` with its stance flags
         ``{"left": bool, "right": bool}``; ``dt`` [s] since the previous frame; ``forces``
         ``{side: (3,)}`` [N] the measured ground force on each foot (``force="measured"``)."""
-        from .solve import run_solver, setup
-
         d = self.demonstrator
         q_demo = np.asarray(q_demo, dtype=float)
         if q_demo.shape != (d.model.nq,):
@@ -151,12 +155,14 @@ class StreamingAdaptor:
         if self._x is not None:
             x_start = np.column_stack([self._x, self._x])
             x_start[var["q"], 1] = self._integrate(self._x, dt)  # constant velocity
-        num = setup(c, tg, self.imitator, d, self.weights, self.limits, self.contact,
+        num = setup(self._form, tg, self.imitator, d, self.weights, self.limits, self.contact,
                     self.contacts, x_start)
+        num.keep = np.arange(num.lbg.size)
         if self._x is not None:  # the previous frame's configuration and velocity are final
             for blk in ("q", "v"):
                 num.lbx[var[blk], 0] = num.ubx[var[blk], 0] = self._x[var[blk]]
-            rows = contact_rows.start_velocity_rows(num.spec)  # and so is its foot velocity
+            fc = self._form.rows_of(FlatContact)  # and so is its foot velocity
+            rows = fc.start + FlatContact().start_velocity_rows(num.spec)
             num.lbg[rows], num.ubg[rows] = -np.inf, np.inf
         t0 = time.perf_counter()
         z, st = run_solver(c, num, num.x0, False, verbose, "frame", "converged")
@@ -211,16 +217,11 @@ class StreamingAdaptor:
         return bool(rep.knot_feasible[col])
 
 
-limits_mod = limits
-
-
 def _body_map(demonstrator: Robot, imitator: Robot, given) -> BodyMap:
     return body_map(demonstrator, imitator, given)
 
 
 def _wrenches(c: pb.Compiled, Z: np.ndarray) -> dict[str, np.ndarray]:
-    from .solve import wrenches_of
-
     return wrenches_of(c, Z)
 
 
@@ -235,9 +236,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     ``a``, whose ``solver`` is a :class:`~.solve.SolverInfo` (frames per second in
     ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags (also
     in ``solver``'s ``unmet`` when some frames fail); ``audit`` is the whole motion's."""
-    from ..adapt import AdaptedMotion, compare
     from ..audit import audit
-    from .solve import SolverInfo, Unmet
 
     if demo.base_nq and demo.q.shape[1] != demonstrator.model.nq:
         raise InvalidInputError("the demonstration does not match the demonstrator")

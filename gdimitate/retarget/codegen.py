@@ -1,0 +1,116 @@
+"""Per-knot functions compiled once per robot and kept on disk (docs/design.md §6, "the
+solver").
+
+CasADi's SX virtual machine evaluates the per-knot derivatives several times slower than the
+same expressions compiled to C. :func:`compiled_functions` generates C for a set of
+``casadi.Function`` objects, compiles it with the system C compiler into a shared library in the
+user's cache folder (:func:`cache_dir`: ``$GDIMITATE_CACHE_DIR``, else
+``$XDG_CACHE_HOME/gdimitate``, else ``~/.cache/gdimitate``) under a key the caller derives from
+everything the expressions depend on (the robot's fingerprint, the list of parts, the code's
+own version), and loads it with ``casadi.external``. A later process with the same key loads
+the library without building or compiling anything; nothing is written to the working folder.
+A machine without a C compiler (or a failed compilation) keeps CasADi's virtual machine and
+says so once in a :class:`SlowDerivativesWarning`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import casadi as ca
+
+__all__ = ["cache_dir", "compiled_functions", "SlowDerivativesWarning", "source_digest",
+           "COMPILE_COUNT"]
+
+ENV = "GDIMITATE_CACHE_DIR"
+CFLAGS = ("-O1", "-shared", "-fPIC", "-fno-math-errno")
+COMPILE_COUNT = 0
+"""How many libraries this process has compiled (a disk-cache hit leaves it unchanged)."""
+_WARNED = False
+
+
+class SlowDerivativesWarning(UserWarning):
+    """No C compiler: the adaptor's derivatives run in CasADi's virtual machine (slower)."""
+
+
+def cache_dir() -> Path:
+    """The folder compiled libraries are kept in (module docstring)."""
+    if os.environ.get(ENV):
+        return Path(os.environ[ENV]).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "gdimitate"
+
+
+def source_digest(*modules) -> str:
+    """A digest of the source files of ``modules`` (packages: every ``.py`` below them), so
+    that a library compiled by another version of the code is never loaded."""
+    h = hashlib.sha1(ca.__version__.encode())
+    for mod in modules:
+        p = Path(mod.__file__)
+        files = sorted(p.parent.rglob("*.py")) if p.name == "__init__.py" else [p]
+        for f in files:
+            h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def _compiler() -> str | None:
+    return os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
+
+
+def _warn(why: str) -> None:
+    global _WARNED
+    if not _WARNED:
+        warnings.warn(f"the optimal adaptor's derivatives run in CasADi's virtual machine "
+                      f"(several times slower): {why}", SlowDerivativesWarning, stacklevel=3)
+        _WARNED = True
+
+
+def _build(funcs: list[ca.Function], lib: Path, cc: str) -> None:
+    global COMPILE_COUNT
+    lib.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp:
+        cg = ca.CodeGenerator("knot.c", {"with_header": False})
+        for f in funcs:
+            cg.add(f)
+        cg.generate(tmp + os.sep)
+        out = Path(tmp) / lib.name
+        subprocess.run([cc, *CFLAGS, str(Path(tmp) / "knot.c"), "-o", str(out), "-lm"],
+                       check=True, capture_output=True, text=True)
+        os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
+    COMPILE_COUNT += 1
+
+
+def compiled_functions(key: str, make: Callable[[], list[ca.Function]]
+                       ) -> tuple[dict[str, ca.Function], bool]:
+    """``({name: function}, compiled)`` for the functions ``make()`` builds: loaded from the
+    cached library of ``key`` when it exists (``make`` is then not called), else built,
+    compiled and cached; ``make()``'s own functions when no C compiler is available
+    (``compiled`` False)."""
+    lib = cache_dir() / f"knot-{key[:24]}.so"
+    names_file = lib.with_suffix(".names")
+    if lib.exists() and names_file.exists():
+        names = names_file.read_text().split()
+        try:
+            return {n: ca.external(n, str(lib)) for n in names}, True
+        except RuntimeError:
+            pass  # a damaged library: rebuild it
+    funcs = make()
+    cc = _compiler()
+    if cc is None:
+        _warn("no C compiler found (set CC or install gcc)")
+        return {f.name(): f for f in funcs}, False
+    try:
+        _build(funcs, lib, cc)
+    except (OSError, subprocess.CalledProcessError) as e:
+        detail = getattr(e, "stderr", "") or str(e)
+        _warn(f"compiling the derivatives failed ({detail.strip()[:200]})")
+        return {f.name(): f for f in funcs}, False
+    names_file.write_text("\n".join(f.name() for f in funcs))
+    return {f.name(): ca.external(f.name(), str(lib)) for f in funcs}, True

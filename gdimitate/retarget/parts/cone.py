@@ -1,0 +1,67 @@
+"""Contact wrench cone of each stance foot's sole rectangle.
+
+Caron, Pham, Nakamura, "Stability of surface contacts for humanoid robots: closed-form
+formulae of the contact wrench cone for rectangular support areas" (ICRA 2015): with the
+wrench ``[f; τ]`` at the sole centre in the sole frame, half-lengths X, Y and friction μ,
+
+    |f_x| ≤ μ f_z, |f_y| ≤ μ f_z, |τ_x| ≤ Y f_z, |τ_y| ≤ X f_z, τ_min ≤ τ_z ≤ τ_max
+
+(16 linear rows, :func:`gdimitate.contact.wrench_cone`), plus ``f_z ≥ f_min``. The centre-of-
+pressure rows use X − margin, Y − margin. X, Y and μ are parameters. Planar models keep the
+in-plane rows (friction along x, centre of pressure along x, f_z ≥ f_min). Rows are divided
+by m·g; relaxable. Swing feet carry no wrench (their variables are bounded to 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ...robot import SIDES
+from .base import Constraint, per_side_labels
+
+
+def rows_per_side(planar: bool) -> int:
+    return 5 if planar else 17
+
+
+def cone_rows(w, X, Y, mu, Xc, Yc, f_min, planar: bool) -> list:
+    """The rows (≤ 0 inside the cone) of a sole wrench ``w = [f; τ]`` (6,)."""
+    fx, fy, fz, tx, ty, tz = (w[i] for i in range(6))
+    if planar:
+        return [fx - mu * fz, -fx - mu * fz, ty - Xc * fz, -ty - Xc * fz, f_min - fz]
+    rows = [fx - mu * fz, -fx - mu * fz, fy - mu * fz, -fy - mu * fz,
+            tx - Yc * fz, -tx - Yc * fz, ty - Xc * fz, -ty - Xc * fz]
+    for s1 in (1.0, -1.0):
+        for s2 in (1.0, -1.0):
+            rows.append(s1 * Y * fx + s2 * X * fy - mu * (X + Y) * fz - s1 * mu * tx
+                        - s2 * mu * ty - tz)
+            rows.append(s1 * Y * fx + s2 * X * fy - mu * (X + Y) * fz + s1 * mu * tx
+                        + s2 * mu * ty + tz)
+    return rows + [f_min - fz]
+
+
+@dataclass(frozen=True)
+class WrenchCone(Constraint):
+    name: str = "contact wrench cone"
+    relaxable: bool = True
+
+    def rows(self, k):
+        out = []
+        for s in SIDES:
+            X, Y, mu, Xc, Yc = (k.P(f"sole_{s}")[i] for i in range(5))
+            rows = cone_rows(k.wrench_local(s), X, Y, mu, Xc, Yc, k.P("f_min")[0], k.planar)
+            out.append(ca.vertcat(*rows) / k.mg)
+        return ca.vertcat(*out)
+
+    def labels(self, k):
+        return per_side_labels(self.name, rows_per_side(k.planar))
+
+    def bounds(self, spec):
+        n = rows_per_side(spec.planar)
+        hi = np.full((spec.T, 2 * n), np.inf)
+        for i, s in enumerate(SIDES):
+            hi[spec.stance[s], i * n:(i + 1) * n] = 0.0
+        return np.full_like(hi, -np.inf), hi

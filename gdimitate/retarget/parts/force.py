@@ -1,0 +1,76 @@
+"""The goal: each stance foot's force direction parallel to the demonstrator's.
+
+``d`` is the unit direction of the ground's force on the demonstrator's foot (its push on the
+ground reversed), ``e1``, ``e2`` complete it to an orthonormal frame (parameters per knot).
+The imitator's vector ``c`` is, by force model:
+
+- ``measured``, ``dynamics`` — its own contact force in world axes (divided by m·g);
+- ``segment`` — the reverse of its shank (ankle → knee, divided by the shank length): the
+  paper's model, under which Eq. (1) is the optimum;
+- ``com`` — from its contact point to its centre of mass (divided by the leg length).
+
+Equality: ``e1·c = e2·c = 0``, ``d·c ≥ 0``. Cone of half-angle α:
+``(e1·c)² + (e2·c)² ≤ tan²α (d·c)²``, ``d·c ≥ 0``. Rows are imposed where the demonstrator's
+direction exists and the imitator's foot is in stance; relaxable. Planar models: ``e2`` is
+unused (its row is never imposed).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ...robot import SIDES
+from .base import Constraint, per_side_labels
+
+
+def rows_per_side(cone: bool) -> int:
+    return 2 if cone else 3
+
+
+def vector(k, side: str) -> ca.SX:
+    """The imitator's ``c`` (see the module docstring)."""
+    goal = k.flags.goal
+    if goal == "force":
+        return k.wrench_world(side)[:3] / k.mg
+    if goal == "segment":
+        return (k.knee[side] - k.ankle[side]) / k.leg[side].shank
+    return (k.com - k.sole_p[side]) / k.leg[side].length
+
+
+@dataclass(frozen=True)
+class ForceDirection(Constraint):
+    name: str = "force direction"
+    relaxable: bool = True
+
+    def rows(self, k):
+        out = []
+        for s in SIDES:
+            c = vector(k, s)
+            d, e1, e2 = k.P(f"d_{s}"), k.P(f"e1_{s}"), k.P(f"e2_{s}")
+            dc, a, b = ca.dot(d, c), ca.dot(e1, c), ca.dot(e2, c)
+            out += [a * a + b * b - k.P("tan2")[0] * dc * dc, dc] if k.flags.cone else \
+                [a, b, dc]
+        return ca.vertcat(*out)
+
+    def labels(self, k):
+        return per_side_labels(self.name, rows_per_side(k.flags.cone))
+
+    def bounds(self, spec):
+        n = rows_per_side(spec.cone)
+        lo = np.full((spec.T, 2 * n), -np.inf)
+        hi = np.full((spec.T, 2 * n), np.inf)
+        for i, s in enumerate(SIDES):
+            on = spec.goal_active[s]
+            o = i * n
+            if spec.cone:
+                hi[on, o] = 0.0
+                lo[on, o + 1] = 0.0
+            else:
+                lo[on, o] = hi[on, o] = 0.0
+                if not spec.planar:
+                    lo[on, o + 1] = hi[on, o + 1] = 0.0
+                lo[on, o + 2] = 0.0
+        return lo, hi
