@@ -6,14 +6,24 @@ the weight layout, the elastic slacks, the row labels and the cache key follow f
 from __future__ import annotations
 
 from .base import Constraint, Cost, PairConstraint, Part, Spec, per_side_labels
+from .base_dynamics import BaseDynamics
 from .cone import WrenchCone
-from .contact import ContactHold, FlatContact, liftoff_knots, velocity_knots
-from .dynamics import BaseDynamics, TorqueLimits
+from .contact_hold import ContactHold
+from .flat_contact import FlatContact, liftoff_knots, velocity_knots
+from .foot import Foot
 from .force import ForceDirection
-from .integration import Integration, QuaternionNorm
-from .keypoints import Foot, Height, Placement, Segments, Shank, Thigh
-from .regularisation import Joints, Smoothness, WrenchRegularisation
+from .height import Height
+from .integration import Integration
+from .joints import Joints
+from .placement import Placement
+from .quaternion import QuaternionNorm
+from .segments import Segments
+from .shank import Shank
+from .smoothness import Smoothness
 from .swing import SwingClearance
+from .thigh import Thigh
+from .torque_limits import TorqueLimits
+from .wrench import WrenchRegularisation
 
 __all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Spec", "per_side_labels",
            "default_parts", "BaseDynamics", "TorqueLimits", "FlatContact", "ContactHold",

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .base import Constraint, PairConstraint
+from .base import PairConstraint
 
 
 @dataclass(frozen=True)
@@ -40,22 +40,3 @@ class Integration(PairConstraint):
     def bounds(self, spec, n):
         z = np.zeros((spec.T - 1, n))
         return z, z
-
-
-@dataclass(frozen=True)
-class QuaternionNorm(Constraint):
-    """``|quat|² − 1 = 0`` of a free-flyer base at knot 0 (no rows otherwise)."""
-
-    name: str = "quaternion norm"
-
-    def rows(self, k):
-        if k.robot.base != "free":
-            return ca.SX(0, 1)
-        quat = k.q[3:7]
-        return ca.dot(quat, quat) - 1.0
-
-    def bounds(self, spec):
-        n = 1 if spec.free else 0
-        lo = np.full((spec.T, n), -np.inf)
-        lo[0] = 0.0
-        return lo, np.where(np.isfinite(lo), 0.0, np.inf)

@@ -51,10 +51,9 @@ import casadi as ca
 import numpy as np
 
 from ...robot import SIDES
-from .base import Constraint, PairConstraint, per_side_labels
+from .base import Constraint, per_side_labels
 
-__all__ = ["FlatContact", "ContactHold", "velocity_knots", "liftoff_knots",
-           "PLANAR_VELOCITY_ROWS"]
+__all__ = ["FlatContact", "velocity_knots", "liftoff_knots", "PLANAR_VELOCITY_ROWS"]
 
 #: Rows of the sole frame's spatial velocity ``[v; ω]`` kept by planar models (x, z, pitch).
 PLANAR_VELOCITY_ROWS = (0, 2, 4)
@@ -87,6 +86,7 @@ def liftoff_knots(stance: np.ndarray, swing: np.ndarray) -> np.ndarray:
     ``Spec.liftoff`` holds under the ``"all"`` contact rule."""
     st, sw = np.asarray(stance, bool), np.asarray(swing, bool)
     return sw & np.r_[False, st[:-1]]
+
 
 
 @dataclass(frozen=True)
@@ -124,37 +124,3 @@ class FlatContact(Constraint):
         npose, nvel = _per_side(spec.planar)
         n = npose + nvel
         return np.array([i * n + j for i in range(len(SIDES)) for j in range(npose, n)], int)
-
-
-@dataclass(frozen=True)
-class ContactHold(PairConstraint):
-    """Between knots: per foot ``Δp_x``, ``Δp_y`` and ``sin Δψ`` of the sole's x axis (planar:
-    ``Δp_x``), imposed where the foot is in stance at k − 1 and in stance or lifting off at
-    k."""
-
-    name: str = "contact hold (slip)"
-
-    def carry(self, k):
-        out = []
-        for s in SIDES:
-            p, R = k.sole_p[s], k.sole_R[s]
-            out += [p[0]] if k.planar else [p[0], p[1], R[0, 0], R[1, 0]]
-        return ca.vertcat(*out)
-
-    def rows(self, k, prev, cur):
-        if k.planar:
-            return cur - prev
-        rows = []
-        for i in range(2):
-            o = 4 * i
-            rows += [cur[o] - prev[o], cur[o + 1] - prev[o + 1],
-                     cur[o + 3] * prev[o + 2] - cur[o + 2] * prev[o + 3]]  # sin Δψ
-        return ca.vertcat(*rows)
-
-    def bounds(self, spec, n):
-        m = n // 2
-        lo = np.full((spec.T - 1, n), -np.inf)
-        for i, s in enumerate(SIDES):
-            h = (spec.stance[s] | spec.liftoff[s])[1:] & spec.stance[s][:-1]
-            lo[h, i * m:(i + 1) * m] = 0.0
-        return lo, np.where(np.isfinite(lo), 0.0, np.inf)

@@ -1,0 +1,21 @@
+"""Keypoint cost: per leg, the horizontal ankle − hip offset / leg length minus the
+demonstrator's (parameter ``placement_<side>``; weight ``placement``). Eq. (1) gives it up."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from ...robot import SIDES
+from .base import Cost
+
+
+@dataclass(frozen=True)
+class Placement(Cost):
+    name: str = "placement"
+    weight: str = "placement"
+
+    def residual(self, k):
+        return ca.vertcat(*[(k.ankle[s][:2] - k.hip[s][:2]) / k.leg[s].length
+                            - k.P(f"placement_{s}") for s in SIDES])

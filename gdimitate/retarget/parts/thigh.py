@@ -1,0 +1,23 @@
+"""Keypoint cost: per leg, the unit thigh direction (hip → knee, divided by the imitator's thigh
+length) minus the demonstrator's (parameter ``thigh_<side>``; weight ``thigh``). Eq. (1) gives
+it up."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from ...robot import SIDES
+from .base import Cost
+
+
+@dataclass(frozen=True)
+class Thigh(Cost):
+    name: str = "thigh"
+    weight: str = "thigh"
+
+    def residual(self, k):
+        L = k.segment_lengths()
+        return ca.vertcat(*[(k.knee[s] - k.hip[s]) / L[s][0] - k.P(f"thigh_{s}")
+                            for s in SIDES])

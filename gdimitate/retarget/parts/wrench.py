@@ -1,0 +1,20 @@
+"""Wrench regularisation: the contact wrenches divided by m·g (weight ``wrench``); it chooses
+the split between the feet in double support, where the dynamics leave it open."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from ...robot import SIDES
+from .base import Cost
+
+
+@dataclass(frozen=True)
+class WrenchRegularisation(Cost):
+    name: str = "wrench"
+    weight: str = "wrench"
+
+    def residual(self, k):
+        return ca.vertcat(*[k.w[s] for s in SIDES])  # already over m·g
