@@ -400,21 +400,25 @@ class Robot:
     @classmethod
     def from_osim(cls, path: str | Path, *, name: str | None = None) -> Robot:
         """An OpenSim model (``.osim``, 3.x or 4.x) converted by
-        :func:`gdimitate.opensim.convert_osim` (URDF in a temporary folder, kept as
-        :attr:`urdf_path`) and loaded with a free-flyer. Joint names are the OpenSim coordinate
-        names; the legs (hip flexion, knee and ankle joints from the model's topology, the
-        sole frame under the ankle) and the sole rectangles (the foot boxes) are passed
-        explicitly. The conversion report is kept as ``robot.osim``
+        :func:`gdimitate.opensim.convert_osim` (into a temporary folder that is removed once
+        the URDF is loaded: :attr:`urdf_path` is ``None``; write the URDF yourself with
+        :func:`gdimitate.opensim.opensim_to_urdf`) and loaded with a free-flyer. Joint names
+        are the OpenSim coordinate names; the legs (hip flexion, knee and ankle joints from the
+        model's topology, the sole frame under the ankle) and the sole rectangles (the foot
+        boxes) are passed explicitly. The conversion report is kept as ``robot.osim``
         (:class:`~gdimitate.opensim.OsimConversion`). Raises
         :class:`~gdimitate.errors.OsimError` for a model that cannot be converted."""
         from .opensim import convert_osim
 
-        conv = convert_osim(path)
-        legs = {s: {k: conv.legs[s][k] for k in ("hip", "knee", "ankle", "sole")} for s in SIDES}
-        contacts = {s: {"frame": conv.legs[s]["contact"], "half_length": conv.soles[s][0],
-                        "half_width": conv.soles[s][1]} for s in SIDES}
-        robot = cls.from_urdf(conv.urdf, legs, name=name or conv.model.name, floating=True,
-                              contacts=contacts)
+        with tempfile.TemporaryDirectory(prefix="gdimitate_osim_") as tmp:
+            conv = convert_osim(path, Path(tmp) / f"{Path(path).stem}.urdf")
+            legs = {s: {k: conv.legs[s][k] for k in ("hip", "knee", "ankle", "sole")}
+                    for s in SIDES}
+            contacts = {s: {"frame": conv.legs[s]["contact"], "half_length": conv.soles[s][0],
+                            "half_width": conv.soles[s][1]} for s in SIDES}
+            robot = cls.from_urdf(conv.urdf, legs, name=name or conv.model.name, floating=True,
+                                  contacts=contacts)
+        robot.urdf_path = None  # the folder is gone: nothing is left in the temp directory
         robot.osim = conv
         return robot
 

@@ -566,3 +566,40 @@ def test_oscillator_bank_shape_is_bounded(shape):
     bank = gd.oscillator.MatsuokaBank(p, shape=(1000,))
     with _bounded(), pytest.raises(ResourceLimitError, match="run of a bank"):
         bank.simulate(np.arange(200_000) * 1e-3)
+
+
+# ------------------------------------------- issue 22: nothing written outside the output
+def test_a_diverging_simulation_writes_no_mujoco_log(tmp_path, monkeypatch):
+    """MuJoCo appends its warnings to MUJOCO_LOG.TXT in the working folder; a simulation that
+    goes to NaN (here: a 1e30 N push) left one there. Now the warning is a Python warning."""
+    from gdimitate.baselines import kinematic_plan
+    from gdimitate.errors import GdimitateWarning
+    from gdimitate.sim import simulate
+    from gdimitate.sim.simulate import Push
+
+    monkeypatch.chdir(tmp_path)
+    robot = Robot.from_library("hoap2")
+    T = 30
+    motion = gd.Motion(np.arange(T) / 60, robot.joint_names, np.tile(robot.neutral, (T, 1)),
+                       contact={s: np.ones(T, bool) for s in ("left", "right")}, base_nq=3)
+    plan = kinematic_plan(robot, motion, "copy", 0.0)
+    with pytest.warns(GdimitateWarning, match="MuJoCo: Nan, Inf or huge value"):
+        res = simulate(robot, plan, push=Push(0.05, 0.1, (1e30, 0.0, 0.0)), stop_on_fall=False)
+    assert res.metrics.fell
+    assert list(tmp_path.iterdir()) == []
+    import mujoco
+
+    assert mujoco.get_mju_user_warning() is None  # MuJoCo's own handler is back
+
+
+def test_opensim_model_loads_leave_nothing_in_the_temp_folder(tmp_path, monkeypatch):
+    """Every Robot.from_osim left a gdimitate_osim_* folder in the system temp directory (68
+    after one afternoon)."""
+    import tempfile
+
+    from gdimitate.gait import human_walk_3d_folder
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    robot = Robot.from_osim(human_walk_3d_folder() / "subject01.osim")
+    assert robot.model.nq > 20 and robot.urdf_path is None
+    assert list(tmp_path.iterdir()) == []

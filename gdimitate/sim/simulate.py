@@ -12,7 +12,10 @@ FallCriteria`) if ``stop_on_fall``.
 
 from __future__ import annotations
 
+import contextlib
 import time
+import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,9 +24,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..contact import ContactForces
-from ..errors import PlanError, SimulationError
+from ..errors import GdimitateWarning, PlanError, SimulationError
 from ..motion import Motion
 from ..robot import SIDES, Robot
+from ..safety import check_array_size
 from .controller import ControllerGains, TrackingController
 from .metrics import (
     DirectionAgreement,
@@ -278,24 +282,56 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
     dur = (ref.end - t0) if duration is None else float(duration)
     if not dur > 0:
         raise SimulationError(f"duration must be > 0 s; got {duration!r}")
-    n_ctrl = int(np.floor(dur / control_period + 1e-9)) + 1
     mo = plan.motion
     data = sim.new_data()
-    sim.set_state(data, mo.q[0], mo.v[0])
     m = robot.model
     nu = sim.idx_v_act.size
+    n_ctrl = check_array_size(f"a {dur:g} s simulation record",
+                              (np.floor(dur / control_period + 1e-9) + 1,
+                               3 * m.nq + 2 * m.nv + nu))[0]
     rec = _Recorder(n_ctrl, m.nq, m.nv, nu)
     samples = ref.samples(t0 + control_period * np.arange(n_ctrl))
-    base_body = sim.base_body
-    fails = 0
     wall, cpu = time.perf_counter(), time.process_time()
+    with mujoco_warnings():
+        sim.set_state(data, mo.q[0], mo.v[0])
+        steps = _run(sim, data, ctl, rec, ref, samples, fall, push, stop_on_fall, t0,
+                     control_period, every, dt, n_ctrl)
+    fails = rec.fails
+    ms = (1e3 * (time.perf_counter() - wall) / max(steps, 1),
+          1e3 * (time.process_time() - cpu) / max(steps, 1))
+    return _finish(robot, sim, plan, ref, rec, demo_forces, fall, fails, ms, dt,
+                   control_period)
+
+
+@contextlib.contextmanager
+def mujoco_warnings() -> Iterator[list[str]]:
+    """MuJoCo's warnings (NaN states, contact buffer overflow, …) collected into a list and
+    raised once as a :class:`~gdimitate.errors.GdimitateWarning` when the block ends, instead
+    of MuJoCo's default: appending them to ``MUJOCO_LOG.TXT`` in the working folder."""
+    got: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(got.append)
+    try:
+        yield got
+    finally:
+        mujoco.set_mju_user_warning(previous)
+        if got:
+            more = f" (and {len(got) - 1} more)" if len(got) > 1 else ""
+            warnings.warn(f"MuJoCo: {got[0]}{more}", GdimitateWarning, stacklevel=3)
+
+
+def _run(sim, data, ctl, rec, ref, samples, fall, push, stop_on_fall, t0, control_period,
+         every, dt, n_ctrl) -> int:
+    """The control loop; returns the number of simulation steps (controller failures are
+    counted in ``rec.fails``)."""
+    base_body = sim.base_body
     steps = 0
     for k in range(n_ctrl):
         t = t0 + k * control_period
         q, v = sim.state(data)
         s = samples[k]
         out = ctl.step(q, v, s)
-        fails += out.status < 0
+        rec.fails += out.status < 0
         data.ctrl[:] = out.tau
         rec.put(k, t, q, v, out, s, measure_contacts(sim, data), sim, data)
         height, plan_h, tilt = rec.base_state(k, sim, data, s)
@@ -310,10 +346,7 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
             mujoco.mj_step(sim.mj, data)
             steps += 1
             t += dt
-    ms = (1e3 * (time.perf_counter() - wall) / max(steps, 1),
-          1e3 * (time.process_time() - cpu) / max(steps, 1))
-    return _finish(robot, sim, plan, ref, rec, demo_forces, fall, fails, ms, dt,
-                   control_period)
+    return steps
 
 
 class _Recorder:
@@ -321,6 +354,7 @@ class _Recorder:
 
     def __init__(self, n: int, nq: int, nv: int, nu: int):
         z = np.zeros
+        self.fails = 0
         self.t, self.q, self.v, self.tau = z(n), z((n, nq)), z((n, nv)), z((n, nu))
         self.plan_q = z((n, nq))
         self.wrench_world = {s: z((n, 6)) for s in SIDES}
