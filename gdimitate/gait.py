@@ -234,7 +234,8 @@ def human_walk_3d(overground: bool = True):
     """The shipped full-body 3-D treadmill walk → ``(robot, motion, forces)``.
 
     ``robot``: :meth:`Robot.from_osim` of the subject's scaled OpenSim model (free-flyer
-    pelvis, 72.6 kg); ``motion``: its inverse-kinematics angles (60 Hz, t = 0.5–4.0 s, 211
+    pelvis, 72.6 kg; soles on the lab floor below the foot markers of the trial's ``.trc``);
+    ``motion``: its inverse-kinematics angles (60 Hz, t = 0.5–4.0 s, 211
     frames) read by :func:`gdimitate.opensim.read_coordinates`, ``contact`` the measured stance
     (vertical force > 20 N); ``forces``: the measured ground reaction forces of both feet on
     the motion's times (:func:`gdimitate.opensim.read_grf` with the trial's ExternalLoads).
@@ -251,7 +252,7 @@ def human_walk_3d(overground: bool = True):
     from .robot import Robot
 
     folder = human_walk_3d_folder()
-    robot = Robot.from_osim(folder / "subject01.osim")
+    robot = Robot.from_osim(folder / "subject01.osim", markers=folder / "subject01_walk1.trc")
     motion = read_coordinates(folder / "subject01_walk1_ik.mot", robot)
     forces = read_grf(folder / "subject01_walk1_grf.mot", robot,
                       folder / "subject01_walk1_grf.xml", t=motion.t)

@@ -398,7 +398,8 @@ class Robot:
                    collision_model=geoms[1])
 
     @classmethod
-    def from_osim(cls, path: str | Path, *, name: str | None = None) -> Robot:
+    def from_osim(cls, path: str | Path, *, name: str | None = None,
+                  markers=None) -> Robot:
         """An OpenSim model (``.osim``, 3.x or 4.x) converted by
         :func:`gdimitate.opensim.convert_osim` (into a temporary folder that is removed once
         the URDF is loaded: :attr:`urdf_path` is ``None``; write the URDF yourself with
@@ -406,12 +407,14 @@ class Robot:
         are the OpenSim coordinate names; the legs (hip flexion, knee and ankle joints from the
         model's topology, the sole frame under the ankle) and the sole rectangles (the foot
         boxes) are passed explicitly. The conversion report is kept as ``robot.osim``
-        (:class:`~gdimitate.opensim.OsimConversion`). Raises
-        :class:`~gdimitate.errors.OsimError` for a model that cannot be converted."""
+        (:class:`~gdimitate.opensim.OsimConversion`). ``markers``: a marker trial of the
+        subject (``.trc`` path or ``Markers``) that puts the soles on the lab floor below the
+        feet's markers (else they lie at the bones; ``robot.osim.sole_height`` says which).
+        Raises :class:`~gdimitate.errors.OsimError` for a model that cannot be converted."""
         from .opensim import convert_osim
 
         with tempfile.TemporaryDirectory(prefix="gdimitate_osim_") as tmp:
-            conv = convert_osim(path, Path(tmp) / f"{Path(path).stem}.urdf")
+            conv = convert_osim(path, Path(tmp) / f"{Path(path).stem}.urdf", markers=markers)
             legs = {s: {k: conv.legs[s][k] for k in ("hip", "knee", "ankle", "sole")}
                     for s in SIDES}
             contacts = {s: {"frame": conv.legs[s]["contact"], "half_length": conv.soles[s][0],

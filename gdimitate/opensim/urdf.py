@@ -20,7 +20,9 @@
   to each child joint and, where no child joint lies along the centre of mass, to twice the
   centre of mass (radius from the mass at the density of water), a sphere for bodies without
   either, and per foot one box covering the foot body and its descendants (their
-  origins, mirrored centres of mass and markers). On each foot box's lowest face two frames:
+  origins, mirrored centres of mass and markers), its bottom at the bones or, given a marker
+  trial of the subject, on the lab floor below the foot marker that came closest to it
+  (``OsimConversion.sole_height`` says which). On each foot box's lowest face two frames:
   ``<foot>_sole`` directly below the ankle (the leg's sole frame) and ``<foot>_contact`` at
   the face's centre (the centre of the foot's contact rectangle, the box's length × width).
 """
@@ -30,7 +32,7 @@ from __future__ import annotations
 import math
 import re
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -48,8 +50,8 @@ from .joints import (
 )
 from .model import OsimModel, read_osim
 
-__all__ = ["OsimConversion", "convert_osim", "opensim_to_urdf", "EFFORT_LIMIT",
-           "VELOCITY_LIMIT"]
+__all__ = ["OsimConversion", "convert_osim", "opensim_to_urdf", "marker_floor_heights",
+           "EFFORT_LIMIT", "VELOCITY_LIMIT"]
 
 #: Nominal joint limits written into the URDF [N·m or N], [rad/s or m/s] (OpenSim models have
 #: none: muscles drive them). 300 N·m is above the peak hip, knee and ankle moments of adult
@@ -71,7 +73,8 @@ class OsimConversion:
     ``{"left": {"hip", "knee", "ankle", "sole", "contact", "foot"}, "right": …}`` (URDF joint
     / frame / body names: ``sole`` under the ankle, ``contact`` at the sole rectangle's
     centre, both on the foot box's lowest face); ``soles``: ``{"left": (half_length,
-    half_width), …}`` [m] of the sole rectangles; ``markers``: marker frame names.
+    half_width), …}`` [m] of the sole rectangles; ``markers``: marker frame names;
+    ``sole_height``: ``{"left": how the sole plane's height was chosen, …}``.
     """
 
     urdf: Path
@@ -83,6 +86,7 @@ class OsimConversion:
     legs: dict[str, dict[str, str]]
     soles: dict[str, tuple[float, float]]
     markers: tuple[str, ...]
+    sole_height: dict[str, str] = field(default_factory=dict)
 
 
 def _conj(X):
@@ -173,13 +177,16 @@ def _lateral_revolute(plan: JointPlan, R_parent: np.ndarray, where: str) -> str:
     return best
 
 
-def _foot_box(model, poses, foot: str):
+def _foot_box(model, poses, foot: str, floor: dict[str, float] | None = None):
     """Axis-aligned (world at neutral) box of the foot subtree, in world-oriented coordinates
-    relative to the foot origin (ours): (lo (3,), hi (3,)). Forward, backward and sideways it
-    spans the subtree's body origins, their centres of mass mirrored through them (a segment
-    reaches about twice as far as its centre of mass) and the markers on the subtree; its
-    bottom is the lowest body origin or centre of mass (markers sit on the skin, above the
-    sole)."""
+    relative to the foot origin (ours): (lo (3,), hi (3,)), and how its bottom was placed.
+    Forward, backward and sideways it spans the subtree's body origins, their centres of mass
+    mirrored through them (a segment reaches about twice as far as its centre of mass) and the
+    markers on the subtree. Its bottom (the sole plane): with ``floor`` (marker → its lowest
+    recorded height over the lab floor [m], :func:`marker_floor_heights`), that height below
+    the foot's marker that came closest to the floor (markers sit on the shoe; the bones stand
+    a shoe's sole and a heel pad above the floor: 4.6–5.4 cm for subject01); else the lowest
+    body origin or centre of mass."""
     Rf, pf = poses[foot]
     pts, low = [], []  # horizontal extent; bottom
     for b in _subtree(model, foot):
@@ -190,18 +197,42 @@ def _foot_box(model, poses, foot: str):
     P = (np.array(pts) - pf) @ C.T
     lo, hi = P.min(axis=0), P.max(axis=0)
     lo[2] = float(((np.array(low) - pf) @ C.T)[:, 2].min())
-    marks = [poses[m.body][1] + poses[m.body][0] @ m.location for m in model.markers
-             if m.body in _subtree(model, foot)]
-    if marks:  # skin markers widen and lengthen the box; its bottom stays at the bones'
-        Mk = (np.array(marks) - pf) @ C.T
+    note = "bones (lowest body origin or centre of mass)"
+    sub = _subtree(model, foot)
+    marks = {m.name: (poses[m.body][1] + poses[m.body][0] @ m.location - pf) @ C.T
+             for m in model.markers if m.body in sub}
+    if marks:  # skin markers widen and lengthen the box
+        Mk = np.array(list(marks.values()))
         lo[:2], hi[:2] = np.minimum(lo[:2], Mk.min(axis=0)[:2]), np.maximum(hi[:2],
                                                                             Mk.max(axis=0)[:2])
+    seen = {n: float(marks[n][2] - h) for n, h in (floor or {}).items() if n in marks}
+    if seen:  # each marker's lowest height is at most its flat-foot one: an upper bound
+        low_mark = min(seen, key=seen.get)
+        lo[2] = seen[low_mark]
+        note = (f"marker {low_mark}: {floor[low_mark] * 1e3:.1f} mm over the floor at its "
+                "lowest (the tightest of the foot markers' bounds)")
     length = hi[0] - lo[0]
     if hi[1] - lo[1] < 0.35 * length:  # no markers across the foot: a typical width
         mid = 0.5 * (hi[1] + lo[1])
         lo[1], hi[1] = mid - 0.175 * length, mid + 0.175 * length
     hi[2] = max(hi[2], lo[2] + 0.03)
-    return lo, hi
+    return lo, hi, note
+
+
+def marker_floor_heights(markers) -> dict[str, float]:
+    """``{marker: its lowest recorded height [m]}`` over a marker trial (a ``.trc`` path or
+    :class:`~gdimitate.opensim.trc.Markers`; our world frame, the lab floor at z = 0 as
+    OpenSim's ground has it) — the 1st percentile of its heights, robust to a stray frame.
+    Markers never seen are left out."""
+    from .trc import Markers, read_trc
+
+    mk = markers if isinstance(markers, Markers) else read_trc(markers)
+    out = {}
+    for i, n in enumerate(mk.names):
+        z = mk.xyz[:, i, 2]
+        if np.isfinite(z).any():
+            out[n] = float(np.nanpercentile(z, 1))
+    return out
 
 
 def _cylinder(v: np.ndarray, radius: float, name: str) -> yourdfpy.Visual:
@@ -259,17 +290,23 @@ def _link(name, body=None, visuals=()) -> yourdfpy.Link:
     return yourdfpy.Link(name=name, inertial=inertial, visuals=list(visuals))
 
 
-def convert_osim(osim_path: str | Path, out: str | Path | None = None) -> OsimConversion:
+def convert_osim(osim_path: str | Path, out: str | Path | None = None, *,
+                 markers=None) -> OsimConversion:
     """Convert an ``.osim`` file to a URDF; see the module docstring. ``out``: the URDF path
-    (default: ``<stem>.urdf`` in a new temporary folder). Returns an :class:`OsimConversion`."""
+    (default: ``<stem>.urdf`` in a new temporary folder). ``markers``: a marker trial of the
+    model's subject (``.trc`` path or :class:`~gdimitate.opensim.trc.Markers`, lab floor at
+    z = 0) that places each sole on the floor below the foot's markers
+    (:func:`marker_floor_heights`); without one the soles lie at the bones. Returns an
+    :class:`OsimConversion`."""
     model = read_osim(osim_path)
+    floor = marker_floor_heights(markers) if markers is not None else None
     rj = root_joint(model)
     root = rj.child
     claimed: set[str] = set(c.name for c in rj.coordinates)
     plans = {j.name: plan_joint(j, claimed) for j in model.joints if j is not rj}
     poses = _neutral_poses(model, plans, root)
     chains = _find_legs(model, plans, poses, root)
-    legs, soles, feet = {}, {}, {}
+    legs, soles, feet, notes = {}, {}, {}, {}
     for side, chain in chains.items():
         roles = []
         for k in range(3):
@@ -277,7 +314,7 @@ def convert_osim(osim_path: str | Path, out: str | Path | None = None) -> OsimCo
             roles.append(_lateral_revolute(pl, poses[pl.parent][0], model.name))
         after = chain[2:] if len(chain) > 2 else chain[-1:]
         foot = max(after, key=lambda b: model.body(b).mass)
-        lo, hi = _foot_box(model, poses, foot)
+        lo, hi, notes[side] = _foot_box(model, poses, foot, floor)
         feet[foot] = (lo, hi)
         legs[side] = {"hip": roles[0], "knee": roles[1], "ankle": roles[2],
                       "sole": f"{foot}_sole", "contact": f"{foot}_contact", "foot": foot}
@@ -332,7 +369,7 @@ def convert_osim(osim_path: str | Path, out: str | Path | None = None) -> OsimCo
         str(path))
     approx = tuple(p.approximation for p in plans.values() if p.approximation is not None)
     return OsimConversion(path, model, tuple(plans.values()), approx, root, rj.name, legs,
-                          soles, tuple(m.name for m in model.markers))
+                          soles, tuple(m.name for m in model.markers), notes)
 
 
 def _limits(model: OsimModel, s) -> tuple[float, float]:
