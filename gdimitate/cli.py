@@ -84,15 +84,19 @@ def _add_robot_args(p: argparse.ArgumentParser, flag: str, default: str | None,
 def _add_demonstration_args(p: argparse.ArgumentParser, positional: str, default_note: str
                             ) -> None:
     p.add_argument(positional, nargs="?", default=None,
-                   help="demonstration: OpenSim .mot/.sto, .osim (with --coordinates), .bvh or "
-                        f"a gdimitate .npz (default: {default_note})")
+                   help="demonstration: OpenSim .mot/.sto, .osim (with --coordinates or "
+                        "--markers), markers .trc/.c3d (with --osim), .bvh or a gdimitate .npz "
+                        f"(default: {default_note})")
     p.add_argument("--grf", default=None,
                    help="OpenSim ground-reaction-force .mot/.sto of a .mot/.sto/.osim "
                         "demonstration (its ExternalLoads .xml is used when it lies beside it)")
     p.add_argument("--coordinates", default=None,
                    help="the .mot/.sto joint angles of an .osim demonstration")
+    p.add_argument("--markers", default=None,
+                   help="the .trc/.c3d markers of an .osim demonstration (marker-based IK)")
     p.add_argument("--osim", default=None,
-                   help="the OpenSim model of a full-body .mot/.sto demonstration")
+                   help="the OpenSim model of a full-body .mot/.sto or a .trc/.c3d "
+                        "demonstration")
     p.add_argument("--demonstrator", default=None,
                    help="robot of a .npz that records none (library name or .urdf path)")
     p.add_argument("--treadmill", action="store_true",
@@ -114,7 +118,7 @@ def _demonstration(path: str | None, a: argparse.Namespace):
     elif a.demonstrator is not None:
         robot = Robot.load(a.demonstrator)
     return load_demonstration(path, grf=a.grf, coordinates=a.coordinates, robot=robot,
-                              overground=not a.treadmill)
+                              overground=not a.treadmill, markers=a.markers)
 
 
 def _cmd_demo(a: argparse.Namespace) -> None:
@@ -390,7 +394,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="frame rate of lafan1_csv [Hz] (default: %(default)s)")
     for flag, what in (("--grf", "forces of a .mot/.sto/.osim motion"),
                        ("--coordinates", "joint angles of an .osim motion"),
-                       ("--osim", "OpenSim model of a full-body .mot/.sto"),
+                       ("--markers", ".trc/.c3d markers of an .osim motion"),
+                       ("--osim", "OpenSim model of a full-body .mot/.sto or .trc/.c3d"),
                        ("--demonstrator", "robot of a .npz that records none")):
         ex.add_argument(flag, default=None, help=what)
     ex.set_defaults(func=_cmd_export, treadmill=False)

@@ -13,7 +13,13 @@ One entry point, :func:`load_demonstration`, dispatches on the file's extension:
 - ``.bvh``: :func:`gdimitate.bvh.read_bvh` (skeleton → URDF, contacts from the feet);
 - ``.npz`` (:meth:`Motion.to_npz`): the motion with its robot rebuilt from the metadata the
   file records (library name, URDF / ``.osim`` / ``.bvh`` path, legs, contacts) and checked
-  against the recorded :attr:`Robot.fingerprint` (a mismatch is an error).
+  against the recorded :attr:`Robot.fingerprint` (a mismatch is an error);
+- markers: ``.osim`` + ``markers=`` (a ``.trc`` or a gait-lab ``.c3d``), or the ``.trc`` /
+  ``.c3d`` itself with ``robot=`` from the ``.osim``: marker-based inverse kinematics
+  (:func:`gdimitate.opensim.inverse_kinematics`, per-marker residuals in
+  :attr:`Demonstration.ik`); a ``.c3d``'s force plates are the forces
+  (:meth:`gdimitate.c3d.C3DTrial.contact_forces`: plates to feet by proximity) unless
+  ``grf=`` is given.
 
 Forces: ``grf=`` (an OpenSim ground-reaction-force ``.mot``/``.sto``) is read with
 :func:`gdimitate.opensim.read_grf` on the motion's times, with the OpenSim ExternalLoads XML
@@ -46,6 +52,8 @@ SUPPORTED: dict[str, str] = {
     ".osim": "OpenSim model, with coordinates= (.mot/.sto)",
     ".bvh": "BVH motion capture",
     ".npz": "gdimitate motion (Motion.to_npz / AdaptedMotion.save), robot recorded",
+    ".trc": "markers (+ robot= from the .osim: marker-based IK; + grf=)",
+    ".c3d": "gait-lab C3D, markers and force plates (+ robot= from the .osim: marker-based IK)",
 }
 
 
@@ -56,7 +64,9 @@ class Demonstration:
     ``robot``: the demonstrator; ``motion``: its :class:`Motion` (``q`` ``(T, nq)`` in
     Pinocchio order, ``contact`` ``{side: (T,) bool}``); ``forces``: measured
     :class:`ContactForces` on ``motion.t`` or ``None``; ``source``: the file read;
-    ``note``: what was done (reader, contact source, overground shift, ...).
+    ``note``: what was done (reader, contact source, overground shift, ...); ``ik``: the
+    :class:`~gdimitate.opensim.IKResult` of a marker demonstration (per-marker residuals),
+    else ``None``.
     """
 
     robot: Robot
@@ -64,15 +74,18 @@ class Demonstration:
     forces: ContactForces | None
     source: str
     note: str
+    ik: object = None
 
 
 def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
                        coordinates: str | Path | None = None, robot: Robot | None = None,
-                       overground: bool = True) -> Demonstration:
+                       overground: bool = True, markers: str | Path | None = None
+                       ) -> Demonstration:
     """Read a demonstration file (see the module docstring for each format).
 
-    ``path``: ``.mot``/``.sto``/``.osim``/``.bvh``/``.npz``; ``grf``: OpenSim ground reaction
-    forces (``.mot``/``.sto``); ``coordinates``: the coordinates file of an ``.osim`` model;
+    ``path``: ``.mot``/``.sto``/``.osim``/``.bvh``/``.npz``/``.trc``/``.c3d``; ``grf``:
+    OpenSim ground reaction forces (``.mot``/``.sto``); ``coordinates``: the coordinates file
+    of an ``.osim`` model; ``markers``: the ``.trc``/``.c3d`` markers of an ``.osim`` model;
     ``robot``: the demonstrator for a full-body ``.mot``/``.sto`` (or to check an ``.npz``
     against); ``overground``: turn a treadmill trial with forces overground.
 
@@ -86,19 +99,31 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
         raise DemonstrationFormatError(
             f"{p}: unknown demonstration format {p.suffix or '(no extension)'!r}; supported: "
             + "; ".join(f"{k} ({v})" for k, v in SUPPORTED.items()))
-    if coordinates is not None and suffix != ".osim":
-        raise DemonstrationFormatError(f"coordinates= goes with an .osim model; {p} is "
-                                       f"{suffix}")
+    for name, value in (("coordinates", coordinates), ("markers", markers)):
+        if value is not None and suffix != ".osim":
+            raise DemonstrationFormatError(f"{name}= goes with an .osim model; {p} is {suffix}")
     if suffix == ".osim":
-        if coordinates is None:
+        if (coordinates is None) == (markers is None):
             raise DemonstrationFormatError(
-                f"{p} is an OpenSim model: pass coordinates= (CLI: --coordinates FILE.mot), "
-                "the .mot/.sto of its joint angles")
+                f"{p} is an OpenSim model: pass either coordinates= (CLI: --coordinates "
+                "FILE.mot), the .mot/.sto of its joint angles, or markers= (CLI: --markers "
+                "FILE.trc|FILE.c3d), its measured markers")
         if robot is not None:
             raise DemonstrationFormatError("an .osim demonstration builds its own robot; "
-                                           "robot= is for a .mot/.sto")
+                                           "robot= is for a .mot/.sto/.trc/.c3d")
+        if markers is not None:
+            return _from_markers(Path(markers).expanduser(), Robot.from_osim(p), grf,
+                                 overground, f"{p} (model) + ")
         return _full_body(Path(coordinates).expanduser(), Robot.from_osim(p), grf, overground,
                           f"{p} (model) + ")
+    if suffix in (".trc", ".c3d"):
+        if robot is None:
+            raise DemonstrationFormatError(
+                f"{p} holds markers: give the OpenSim model they were placed on "
+                "(load_demonstration('model.osim', markers=...), or robot=Robot.from_osim("
+                "'model.osim'); CLI: --osim model.osim). Every format: "
+                + "; ".join(f"{k} ({v})" for k, v in SUPPORTED.items()))
+        return _from_markers(p, robot, grf, overground, "")
     if grf is not None and suffix in (".bvh", ".npz"):
         raise DemonstrationFormatError(f"grf= goes with OpenSim coordinates; {p} is {suffix}")
     if suffix in (".mot", ".sto"):
@@ -157,23 +182,62 @@ def _external_loads(grf: Path) -> Path | None:
 
 def _full_body(coords: Path, robot: Robot, grf, overground: bool, prefix: str
                ) -> Demonstration:
-    from .opensim import read_coordinates, read_grf, treadmill_to_overground
+    from .opensim import read_coordinates
 
     if coords.suffix.lower() not in (".mot", ".sto"):
         raise DemonstrationFormatError(f"coordinates must be a .mot/.sto file; got {coords}")
     motion = read_coordinates(coords, robot)
-    source = f"{prefix}{coords}"
-    if grf is None:
+    return _with_forces(robot, motion, grf, None, overground, f"{prefix}{coords}",
+                        "OpenSim full-body coordinates")
+
+
+def _from_markers(path: Path, robot: Robot, grf, overground: bool, prefix: str
+                  ) -> Demonstration:
+    """Marker-based inverse kinematics of a ``.trc``/``.c3d`` on ``robot``, then its forces
+    (``grf``, else a C3D's plates, else the feet's kinematics)."""
+    import numpy as np
+
+    from .opensim import inverse_kinematics, read_trc
+
+    trial = None
+    suffix = path.suffix.lower()
+    if suffix == ".c3d":
+        from .c3d import read_c3d
+
+        trial = read_c3d(path)
+        markers = trial.markers
+    elif suffix == ".trc":
+        markers = read_trc(path)
+    else:
+        raise DemonstrationFormatError(f"markers must be a .trc or .c3d file; got {path}")
+    motion, ik = inverse_kinematics(robot, markers, return_result=True)
+    what = (f"marker-based IK ({len(ik.names)} markers, residual RMS "
+            f"{1000 * float(np.sqrt(np.nanmean(ik.residuals ** 2))):.1f} mm)")
+    plates = trial if trial is not None and trial.plates and grf is None else None
+    demo = _with_forces(robot, motion, grf, plates, overground, f"{prefix}{path}", what)
+    return Demonstration(demo.robot, demo.motion, demo.forces, demo.source, demo.note, ik)
+
+
+def _with_forces(robot: Robot, motion: Motion, grf, trial, overground: bool, source: str,
+                 what: str) -> Demonstration:
+    """The demonstration of ``motion`` with its forces: an OpenSim ``grf`` file, a C3D
+    ``trial``'s plates, or (neither) contacts from the feet's kinematics."""
+    from .opensim import read_grf, treadmill_to_overground
+
+    if grf is None and trial is None:
         contact, how = _kinematic_contact(robot, motion)
         return Demonstration(robot, motion.replace(contact=contact), None, source,
-                             f"OpenSim full-body coordinates; contacts from the sole corners' "
-                             f"{how} (no forces given)")
-    grf = Path(grf).expanduser()
-    xml = _external_loads(grf)
-    forces = read_grf(grf, robot, xml, t=motion.t)
+                             f"{what}; contacts from the sole corners' {how} (no forces given)")
+    if trial is not None:
+        forces = trial.contact_forces(robot, motion)
+        note = f"{what}; forces from {len(trial.plates)} force plate(s) of {Path(source).name}"
+    else:
+        grf = Path(grf).expanduser()
+        xml = _external_loads(grf)
+        forces = read_grf(grf, robot, xml, t=motion.t)
+        note = (f"{what}; forces {grf.name} (ExternalLoads "
+                f"{xml.name if xml else 'none: feet from column names'})")
     motion = motion.replace(contact=forces.contact)
-    note = (f"OpenSim full-body coordinates; forces {grf.name} (ExternalLoads "
-            f"{xml.name if xml else 'none: feet from column names'})")
     if overground:
         motion, forces = treadmill_to_overground(robot, motion, forces)
         note += "; " + forces.frame_note

@@ -21,12 +21,14 @@ Data files (:mod:`.coordinates`, :mod:`.grf`, :mod:`.trc`, :mod:`.treadmill`)::
     motion = read_coordinates("walk_ik.mot", robot)        # -> Motion (rad, m; free-flyer q)
     forces = read_grf("walk_grf.mot", robot, "walk_grf.xml", t=motion.t)  # -> ContactForces
     markers = read_trc("walk.trc")                          # -> Markers (m, our world frame)
+    motion = inverse_kinematics(robot, markers)             # -> Motion (marker-based IK)
     motion, forces = treadmill_to_overground(robot, motion.replace(contact=forces.contact),
                                              forces)        # belt speed added back
 """
 
 from .coordinates import read_coordinates
 from .grf import CONTACT_THRESHOLD, ExternalForceSpec, read_external_loads, read_grf
+from .ik import IKResult, inverse_kinematics
 from .joints import WORLD_FROM_OPENSIM, Approximation, follow_coordinates, pelvis_to_freeflyer
 from .model import OsimModel, read_osim
 from .trc import Markers, read_trc
@@ -48,6 +50,8 @@ __all__ = [
     "read_osim",
     # readers of motion, force and marker files
     "ExternalForceSpec",
+    "IKResult",
+    "inverse_kinematics",
     "Markers",
     "belt_speed",
     "read_coordinates",

@@ -65,8 +65,9 @@ class Markers:
 
     @property
     def rate(self) -> float:
-        """Frame rate [Hz] (median of the time steps)."""
-        return float(1.0 / np.median(np.diff(self.t)))
+        """Frame rate [Hz]: frames per second over the whole clip (time columns are often
+        rounded, e.g. 0.017, 0.033 s at 60 Hz)."""
+        return float((self.t.size - 1) / (self.t[-1] - self.t[0]))
 
     def __getitem__(self, name: str) -> np.ndarray:
         """Trajectory ``(T, 3)`` [m] of one marker."""
