@@ -276,9 +276,10 @@ def _cmd_export(a: argparse.Namespace) -> None:
     wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
     out = Path(a.out) if a.out else Path(a.motion).with_suffix(
         {"csv": ".csv", "npz": ".export.npz", "mujoco": ".mujoco.npz",
-         "lafan1_csv": ".lafan1.csv"}[a.format])
+         "lafan1_csv": ".lafan1.csv", "gmr": ".gmr.pkl", "isaaclab_amp": ".amp.npz"}[a.format])
     with atomic_write(out) as tmp:
-        export_motion(demo.robot, demo.motion, tmp, a.format, wrenches=wrenches, fps=a.fps)
+        export_motion(demo.robot, demo.motion, tmp, a.format, wrenches=wrenches, fps=a.fps,
+                      body_order=a.body_order)
     print(f"wrote {out} ({FORMATS[a.format]}; robot {demo.robot.name}, from {demo.motion.T} "
           "frames)")
 
@@ -381,8 +382,9 @@ def build_parser() -> argparse.ArgumentParser:
     en.set_defaults(func=_cmd_entrain)
     from .export import FORMATS
 
-    ex = sub.add_parser("export", help="write a motion as CSV, NPZ, MuJoCo qpos or the LAFAN1 "
-                        "CSV that motion-tracking pipelines read")
+    ex = sub.add_parser("export", help="write a motion as CSV, NPZ, MuJoCo qpos, or what "
+                        "motion-tracking pipelines read: the LAFAN1 CSV, a GMR pickle, an Isaac "
+                        "Lab AMP NPZ")
     ex.add_argument("motion", help="a motion: gdimitate .npz (e.g. adapt's imitator_motion.npz)"
                     ", or any demonstration file (.mot/.sto/.osim/.bvh)")
     ex.add_argument("--format", default="csv", choices=list(FORMATS),
@@ -391,7 +393,11 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", default=None,
                     help="output file (default: beside the motion, with the format's suffix)")
     ex.add_argument("--fps", type=float, default=30.0,
-                    help="frame rate of lafan1_csv [Hz] (default: %(default)s)")
+                    help="frame rate of lafan1_csv, gmr, isaaclab_amp [Hz] (default: "
+                         "%(default)s)")
+    ex.add_argument("--body-order", default=None, choices=["depth", "breadth"],
+                    help="body order of gmr / isaaclab_amp: depth-first (MuJoCo; gmr's "
+                         "default) or breadth-first (PhysX; isaaclab_amp's default)")
     for flag, what in (("--grf", "forces of a .mot/.sto/.osim motion"),
                        ("--coordinates", "joint angles of an .osim motion"),
                        ("--markers", ".trc/.c3d markers of an .osim motion"),

@@ -27,6 +27,28 @@ call :func:`export_motion`):
   Unitree G1: left leg, right leg, waist, left arm, right arm — Pinocchio's order). Needs a
   free-flyer robot with 1-DoF joints; the motion is resampled onto the fps grid (joints and
   position linearly, the quaternion by slerp). :func:`read_lafan1_csv`.
+- ``"gmr"``: the motion pickle of GMR (General Motion Retargeting, YanjieZe/GMR) that
+  tracking pipelines read: a dict with ``fps``, ``root_pos`` ``(N, 3)`` [m], ``root_rot``
+  ``(N, 4)`` (x, y, z, w), ``dof_pos`` ``(N, D)`` [rad] (the 1-DoF joints in Pinocchio's
+  order, which is the URDF's and MuJoCo's), ``local_body_pos`` ``(N, B, 3)`` [m] (each body's
+  origin in the root body's frame: root at the origin, unrotated) and ``link_body_list``
+  (``B`` names). :func:`read_gmr`.
+- ``"isaaclab_amp"``: the motion NPZ of Isaac Lab's AMP tasks (``humanoid_amp``'s
+  ``MotionLoader``): ``fps`` (int), ``dof_names`` ``(D,)``, ``body_names`` ``(B,)``,
+  ``dof_positions``/``dof_velocities`` ``(N, D)`` [rad, rad/s], ``body_positions``
+  ``(N, B, 3)`` [m] and ``body_rotations`` ``(N, B, 4)`` (w, x, y, z) in the world,
+  ``body_linear_velocities``/``body_angular_velocities`` ``(N, B, 3)`` [m/s, rad/s] in the
+  world (of each body's origin); float64 (the loader casts to float32).
+  :func:`read_isaaclab_amp`.
+
+Both resample onto the ``fps`` grid (as ``"lafan1_csv"``) and need a free-flyer robot with
+1-DoF joints. Bodies are the robot's moving links: the root and the child link of every joint
+(links on fixed joints belong to their parent, as MuJoCo's and Isaac Lab's URDF importers merge
+them). Their ORDER is stated in the file (``"gmr"``: ``body_order`` key; ``"isaaclab_amp"``:
+``body_order`` array) and chosen with ``body_order=``: ``"depth"`` — depth-first, the URDF's
+tree order as MuJoCo numbers bodies (``"gmr"``'s default) — or ``"breadth"`` — breadth-first,
+as PhysX numbers an articulation's links (``"isaaclab_amp"``'s default). Reading a file with
+the other order's index lists has broken training elsewhere: check ``body_names``.
 """
 
 from __future__ import annotations
@@ -43,8 +65,8 @@ from .motion import Motion, check_base_quaternion
 from .robot import PLANAR_BASE, SIDES, Robot
 from .safety import check_array_size, check_positive
 
-__all__ = ["FORMATS", "MujocoMotion", "export_motion", "read_csv", "read_lafan1_csv",
-           "read_mujoco", "read_wrenches"]
+__all__ = ["BODY_ORDERS", "FORMATS", "MujocoMotion", "body_links", "export_motion", "read_csv",
+           "read_gmr", "read_isaaclab_amp", "read_lafan1_csv", "read_mujoco", "read_wrenches"]
 
 #: Export formats and the file each one writes.
 FORMATS: dict[str, str] = {
@@ -53,17 +75,25 @@ FORMATS: dict[str, str] = {
     "mujoco": "NPZ: MuJoCo qpos/qvel for gdimitate.sim's model, with its MJCF",
     "lafan1_csv": "CSV without header at 30 Hz: x, y, z, qx, qy, qz, qw, joints "
                   "(LAFAN1 retargeted; BeyondMimic whole_body_tracking / mjlab)",
+    "gmr": "pickle: fps, root_pos, root_rot (x y z w), dof_pos, local_body_pos, "
+           "link_body_list (GMR; bodies depth-first)",
+    "isaaclab_amp": "NPZ: fps, dof_names, body_names, dof/body positions, rotations (w x y z), "
+                    "velocities (Isaac Lab AMP; bodies breadth-first)",
 }
+#: Body orders of the ``"gmr"``/``"isaaclab_amp"`` exports (see the module docstring).
+BODY_ORDERS = ("depth", "breadth")
 BASE_COLUMNS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
 
 
 def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = "npz", *,
-                  wrenches: Mapping[str, np.ndarray] | None = None, fps: float = 30.0
-                  ) -> Path:
+                  wrenches: Mapping[str, np.ndarray] | None = None, fps: float = 30.0,
+                  body_order: str | None = None) -> Path:
     """Write ``motion`` (of ``robot``) to ``path`` in ``format`` (:data:`FORMATS`).
 
     ``wrenches``: ``{"left": (T, 6), "right": (T, 6)}`` sole-frame contact wrenches [N, N·m]
-    (``"npz"`` stores them); ``fps`` [Hz]: the frame rate of ``"lafan1_csv"``. Returns the
+    (``"npz"`` stores them); ``fps`` [Hz]: the frame rate of ``"lafan1_csv"``, ``"gmr"`` and
+    ``"isaaclab_amp"``; ``body_order``: ``"depth"`` or ``"breadth"`` for the latter two
+    (default: ``"depth"`` for ``"gmr"``, ``"breadth"`` for ``"isaaclab_amp"``). Returns the
     path written. Raises :class:`~gdimitate.errors.ExportError` for an unknown format or a
     robot/motion the format cannot hold, :class:`~gdimitate.errors.ResourceLimitError` for an
     ``fps`` whose frames exceed :data:`~gdimitate.safety.MAX_ARRAY_BYTES`,
@@ -80,10 +110,15 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
     if not path.parent.is_dir():
         raise OutputError(f"cannot write {path}: folder {path.parent} does not exist; create "
                           "it first")
+    if body_order is not None and (format not in ("gmr", "isaaclab_amp")
+                                   or body_order not in BODY_ORDERS):
+        raise ExportError(f"body_order={body_order!r}: 'depth' or 'breadth', for the gmr and "
+                          "isaaclab_amp formats")
     writer = {"csv": _write_csv, "npz": _write_npz, "mujoco": _write_mujoco,
-              "lafan1_csv": _write_lafan1}[format]
+              "lafan1_csv": _write_lafan1, "gmr": _write_gmr,
+              "isaaclab_amp": _write_isaaclab_amp}[format]
     try:
-        writer(robot, motion, path, wrenches=wrenches, fps=fps)
+        writer(robot, motion, path, wrenches=wrenches, fps=fps, body_order=body_order)
     except OSError as e:
         raise OutputError(f"cannot write {path}: {e.strerror or e}") from None
     return path
@@ -278,19 +313,25 @@ def _resample(robot: Robot, motion: Motion, t: np.ndarray) -> np.ndarray:
     return q
 
 
-def _write_lafan1(robot, motion, path, fps=30.0, **_) -> None:
+def _fps_grid(robot: Robot, motion: Motion, fps, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Times ``(N,)`` on the ``fps`` grid over the motion and q ``(N, nq)`` resampled onto
+    them, for a free-flyer robot with 1-DoF joints."""
     if robot.base != "free":
-        raise ExportError(f"lafan1_csv holds a free-floating base; robot {robot.name!r} has a "
+        raise ExportError(f"{what} holds a free-floating base; robot {robot.name!r} has a "
                           f"{robot.base} base")
+    if any(robot.model.joints[j].nq != 1 for j in range(2, robot.model.njoints)):
+        raise ExportError(f"{what} holds 1-DoF joints only")
     fps = check_positive("fps (frames per second)", fps, error=ExportError)
-    n = check_array_size(f"lafan1_csv at {fps:g} frames/s over {motion.t[-1] - motion.t[0]:g} s",
+    n = check_array_size(f"{what} at {fps:g} frames/s over {motion.t[-1] - motion.t[0]:g} s",
                          (np.floor((motion.t[-1] - motion.t[0]) * fps + 1e-9) + 1,
                           motion.q.shape[1]))[0]
     t = motion.t[0] + np.arange(n) / fps
-    q = _resample(robot, motion, t)
+    return t, _resample(robot, motion, t)
+
+
+def _write_lafan1(robot, motion, path, fps=30.0, **_) -> None:
+    t, q = _fps_grid(robot, motion, fps, "lafan1_csv")
     names, cols = _joint_columns(robot, q)
-    if any(robot.model.joints[robot.model.getJointId(j)].nq != 1 for j in names):
-        raise ExportError("lafan1_csv holds 1-DoF joints only")
     np.savetxt(path, np.column_stack([q[:, :7], cols]), delimiter=",", fmt="%.17g")
 
 
@@ -310,3 +351,134 @@ def read_lafan1_csv(path: str | Path, robot: Robot, fps: float = 30.0) -> Motion
     q = _q_from_columns(robot, data[:, :7], data[:, 7:], names, path)
     return Motion(t=np.arange(len(data)) / fps, joint_names=robot.joint_names, q=q, base_nq=7,
                   joint_nq=tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints)))
+
+
+# ---------------------------------------------------------------------- bodies (gmr, amp)
+def body_links(robot: Robot, order: str = "depth") -> list[tuple[str, int]]:
+    """The robot's moving links ``[(link name, Pinocchio frame id), …]``: the root and the
+    child link of every joint, ``"depth"``-first (Pinocchio's joint order: the URDF tree as
+    MuJoCo numbers its bodies) or ``"breadth"``-first (PhysX's articulation order)."""
+    if order not in BODY_ORDERS:
+        raise ExportError(f"body order {order!r}: choose 'depth' or 'breadth'")
+    m = robot.model
+    link = {}
+    for i, f in enumerate(m.frames):
+        if f.type == pin.FrameType.BODY and f.parentJoint not in link and \
+                m.frames[f.parentFrame].type == pin.FrameType.JOINT:
+            link[f.parentJoint] = i
+    joints = list(range(1, m.njoints))
+    if order == "breadth":
+        children = {j: [c for c in joints if m.parents[c] == j] for j in [0, *joints]}
+        joints, queue = [], list(children[0])
+        while queue:
+            j = queue.pop(0)
+            joints.append(j)
+            queue += children[j]
+    return [(m.frames[link[j]].name, link[j]) for j in joints]
+
+
+def _body_kinematics(robot: Robot, q: np.ndarray, v: np.ndarray, ids: list[int]):
+    """World position ``(N, B, 3)``, rotation ``(N, B, 3, 3)``, linear and angular velocity
+    ``(N, B, 3)`` (of each body origin, world axes) of the frames ``ids``."""
+    m, d = robot.model, robot.model.createData()
+    N, B = len(q), len(ids)
+    p, R = np.empty((N, B, 3)), np.empty((N, B, 3, 3))
+    lin, ang = np.empty((N, B, 3)), np.empty((N, B, 3))
+    for k in range(N):
+        pin.forwardKinematics(m, d, q[k], v[k])
+        pin.updateFramePlacements(m, d)
+        for b, i in enumerate(ids):
+            p[k, b], R[k, b] = d.oMf[i].translation, d.oMf[i].rotation
+            nu = pin.getFrameVelocity(m, d, i, pin.LOCAL_WORLD_ALIGNED)
+            lin[k, b], ang[k, b] = nu.linear, nu.angular
+    return p, R, lin, ang
+
+
+def _training_frames(robot, motion, fps, what):
+    """The resampled motion (t, q, v) for the gmr/isaaclab_amp writers."""
+    from .motion import differentiate
+
+    t, q = _fps_grid(robot, motion, fps, what)
+    if len(t) < 2:
+        raise ExportError(f"{what}: the motion spans less than one frame at {fps:g} frames/s")
+    nq = tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints))
+    m = differentiate(robot.model, Motion(t, robot.joint_names, q, base_nq=7, joint_nq=nq))
+    return t, q, m.v
+
+
+def _write_gmr(robot, motion, path, fps=30.0, body_order=None, **_) -> None:
+    import pickle
+
+    order = body_order or "depth"
+    t, q, v = _training_frames(robot, motion, fps, "gmr")
+    links = body_links(robot, order)
+    p, R, _, _ = _body_kinematics(robot, q, v, [i for _, i in links])
+    root = [pin.XYZQUATToSE3(qk[:7]) for qk in q]
+    local = np.array([(p[k] - root[k].translation) @ root[k].rotation for k in range(len(q))])
+    data = {"fps": float(fps), "root_pos": q[:, :3].copy(), "root_rot": q[:, 3:7].copy(),
+            "dof_pos": q[:, 7:].copy(), "local_body_pos": local,
+            "link_body_list": [n for n, _ in links], "body_order": order,
+            "dof_names": list(robot.joint_names[1:])}
+    with open(path, "wb") as f:
+        pickle.dump(data, f, protocol=4)
+
+
+def _write_isaaclab_amp(robot, motion, path, fps=30.0, body_order=None, **_) -> None:
+    order = body_order or "breadth"
+    if abs(fps - round(fps)) > 1e-9:
+        raise ExportError(f"isaaclab_amp stores fps as an integer; got {fps!r}")
+    t, q, v = _training_frames(robot, motion, fps, "isaaclab_amp")
+    links = body_links(robot, order)
+    p, R, lin, ang = _body_kinematics(robot, q, v, [i for _, i in links])
+    wxyz = np.array([[pin.Quaternion(Rb).coeffs()[[3, 0, 1, 2]] for Rb in Rk] for Rk in R])
+    with open(path, "wb") as f:
+        np.savez(f, fps=np.int64(round(fps)), dof_names=np.array(robot.joint_names[1:]),
+                 body_names=np.array([n for n, _ in links]), body_order=np.array(order),
+                 dof_positions=q[:, 7:], dof_velocities=v[:, 6:], body_positions=p,
+                 body_rotations=wxyz, body_linear_velocities=lin, body_angular_velocities=ang)
+
+
+def _free_motion(robot: Robot, t, root_xyzquat, dof, where) -> Motion:
+    names, _ = _joint_columns(robot, np.tile(robot.neutral, (1, 1)))
+    if dof.shape[1] != len(names):
+        raise FileFormatError(f"{where}: {dof.shape[1]} joint columns; robot {robot.name!r} "
+                              f"has {len(names)}")
+    q = _q_from_columns(robot, root_xyzquat, dof, names, where)
+    return Motion(t=t, joint_names=robot.joint_names, q=q, base_nq=7,
+                  joint_nq=tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints)))
+
+
+def read_gmr(path: str | Path, robot: Robot) -> Motion:
+    """Read a ``"gmr"`` pickle onto a free-flyer ``robot`` → :class:`Motion` (``t = k /
+    fps``). Only the arrays are used (``pickle`` runs code from the file: read only files you
+    trust, as GMR itself does)."""
+    import pickle
+
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            d = pickle.load(f)
+        fps, rp, rr, dof = (d["fps"], np.asarray(d["root_pos"], float),
+                            np.asarray(d["root_rot"], float), np.asarray(d["dof_pos"], float))
+    except (OSError, KeyError, TypeError, pickle.UnpicklingError, EOFError) as e:
+        raise FileFormatError(f"{path}: not a GMR motion pickle ({e!r})") from None
+    return _free_motion(robot, np.arange(len(rp)) / float(fps), np.column_stack([rp, rr]), dof,
+                        path)
+
+
+def read_isaaclab_amp(path: str | Path, robot: Robot) -> Motion:
+    """Read an ``"isaaclab_amp"`` NPZ onto a free-flyer ``robot`` → :class:`Motion` (the root
+    body's pose and ``dof_positions`` by ``dof_names``; ``t = k / fps``)."""
+    from .safety import open_npz
+
+    keys = ("fps", "dof_names", "body_names", "dof_positions", "body_positions",
+            "body_rotations")
+    with open_npz(path, keys) as z:
+        fps, names = int(z["fps"]), [str(n) for n in z["dof_names"]]
+        dof, bp, br = z["dof_positions"], z["body_positions"], z["body_rotations"]
+    want = list(robot.joint_names[1:])
+    if sorted(names) != sorted(want):
+        raise FileFormatError(f"{path}: dof_names are not robot {robot.name!r}'s joints")
+    dof = dof[:, [names.index(n) for n in want]]
+    root = np.column_stack([bp[:, 0], br[:, 0][:, [1, 2, 3, 0]]])
+    return _free_motion(robot, np.arange(len(dof)) / fps, root, dof, path)

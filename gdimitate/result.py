@@ -117,15 +117,17 @@ class AdaptedMotion:
     force_model: str = "segment"
     frame_feasible: np.ndarray | None = None
 
-    def save(self, path, format: str = "npz", *, fps: float = 30.0):
+    def save(self, path, format: str = "npz", *, fps: float = 30.0,
+             body_order: str | None = None):
         """Write the motion (and, in ``"npz"``, the contact wrenches and the robot's record)
-        in ``format``: ``"csv"``, ``"npz"``, ``"mujoco"`` or ``"lafan1_csv"``
-        (:func:`gdimitate.export.export_motion` describes each; ``fps`` [Hz] is the
-        ``"lafan1_csv"`` rate). Returns the path written."""
+        in ``format``: ``"csv"``, ``"npz"``, ``"mujoco"``, ``"lafan1_csv"``, ``"gmr"`` or
+        ``"isaaclab_amp"`` (:func:`gdimitate.export.export_motion` describes each; ``fps``
+        [Hz] is the rate of the last three, ``body_order`` ``"depth"``/``"breadth"`` the body
+        order of the last two). Returns the path written."""
         from .export import export_motion
 
         return export_motion(self.robot, self.motion, path, format, wrenches=self.wrenches,
-                             fps=fps)
+                             fps=fps, body_order=body_order)
 
     @property
     def feasible(self) -> bool:

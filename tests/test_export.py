@@ -204,3 +204,133 @@ def test_lafan1_csv_as_beyondmimic_reads_it(tmp_path):
     mid = pin.Quaternion(*r[21, [6, 3, 4, 5]])
     assert mid.angularDistance(qa) == pytest.approx(mid.angularDistance(qb), abs=1e-9)
     assert np.allclose(r[21, 7:], 0.5 * (motion.q[10, 7:] + motion.q[11, 7:]), atol=1e-12)
+
+
+# ---------------------------------------------------------------------- gmr, isaaclab_amp
+def _fk(robot, q, ids):
+    """Pinocchio's world placements of frames ``ids`` at each q: positions (N, B, 3),
+    rotations (N, B, 3, 3)."""
+    m, d = robot.model, robot.model.createData()
+    p = np.empty((len(q), len(ids), 3))
+    R = np.empty((len(q), len(ids), 3, 3))
+    for k, qk in enumerate(q):
+        pin.framesForwardKinematics(m, d, qk)
+        for b, i in enumerate(ids):
+            p[k, b], R[k, b] = d.oMf[i].translation, d.oMf[i].rotation
+    return p, R
+
+
+def test_gmr_pickle_round_trip_and_body_positions(tmp_path):
+    """The GMR pickle read with plain pickle: its keys and shapes; root_rot x y z w; every
+    local_body_pos equals Pinocchio's forward kinematics of the file's own root and dof_pos
+    (1e-9 m), in the root frame; at the motion's own rate the frames are the motion's; bodies
+    depth-first, as MuJoCo numbers the bodies of the model gdimitate.sim builds."""
+    import pickle
+
+    from gdimitate.export import body_links, read_gmr
+
+    g1, motion = _g1_motion()
+    p = export_motion(g1, motion, tmp_path / "walk.pkl", "gmr", fps=60.0)
+    with open(p, "rb") as f:
+        d = pickle.load(f)
+    assert {"fps", "root_pos", "root_rot", "dof_pos", "local_body_pos",
+            "link_body_list"} <= set(d)
+    N, B = motion.T, len(d["link_body_list"])
+    assert d["fps"] == 60.0 and d["root_pos"].shape == (N, 3) and d["dof_pos"].shape == (N, 29)
+    assert d["local_body_pos"].shape == (N, B, 3) and d["body_order"] == "depth"
+    np.testing.assert_allclose(d["root_pos"], motion.q[:, :3], atol=1e-12)
+    np.testing.assert_allclose(np.abs(np.sum(d["root_rot"] * motion.q[:, 3:7], axis=1)), 1.0,
+                               atol=1e-12)  # x y z w, as Pinocchio's q
+    assert list(d["dof_pos"][0]) == [motion.q[0, g1.idx_q(j)] for j in G1_CSV_JOINTS]
+    back = read_gmr(p, g1)
+    np.testing.assert_allclose(back.q, motion.q, atol=1e-12)
+    links = body_links(g1, "depth")
+    assert d["link_body_list"] == [n for n, _ in links]
+    pw, _ = _fk(g1, back.q, [i for _, i in links])
+    for k in range(N):
+        root = pin.XYZQUATToSE3(back.q[k, :7])
+        local = (pw[k] - root.translation) @ root.rotation
+        np.testing.assert_allclose(d["local_body_pos"][k], local, atol=1e-9)
+    sim = build_model(g1)
+    mj_bodies = [mujoco.mj_id2name(sim.mj, mujoco.mjtObj.mjOBJ_BODY, i)
+                 for i in range(1, sim.mj.nbody)]
+    m = g1.model
+    assert [m.names[m.frames[i].parentJoint] for _, i in links] == mj_bodies
+
+
+def test_isaaclab_amp_npz_round_trip_body_order_and_velocities(tmp_path):
+    """Isaac Lab's AMP motion NPZ: its keys; body positions and rotations (w x y z) equal
+    Pinocchio's forward kinematics of the file's own root body pose and dof_positions (1e-9)
+    and MuJoCo's (1e-9); bodies breadth-first by default (each body's depth in the tree never
+    decreases), depth-first on request; velocities equal central differences of the
+    positions (O(h²) at 60 Hz); read back to the motion's q."""
+    from gdimitate.export import body_links, read_isaaclab_amp
+
+    g1, motion = _g1_motion()
+    p = export_motion(g1, motion, tmp_path / "walk.npz", "isaaclab_amp", fps=60)
+    z = np.load(p)
+    keys = {"fps", "dof_names", "body_names", "dof_positions", "dof_velocities",
+            "body_positions", "body_rotations", "body_linear_velocities",
+            "body_angular_velocities"}
+    assert keys <= set(z.files) and z["fps"].dtype == np.int64 and int(z["fps"]) == 60
+    assert str(z["body_order"]) == "breadth"
+    links = body_links(g1, "breadth")
+    assert [str(n) for n in z["body_names"]] == [n for n, _ in links]
+    m = g1.model
+    depth = []
+    for _, i in links:
+        j, n = m.frames[i].parentJoint, 0
+        while j > 0:
+            j, n = m.parents[j], n + 1
+        depth.append(n)
+    assert depth == sorted(depth) and depth[0] == 1
+    back = read_isaaclab_amp(p, g1)
+    np.testing.assert_allclose(back.q, motion.q, atol=1e-12)
+    pw, Rw = _fk(g1, back.q, [i for _, i in links])
+    np.testing.assert_allclose(z["body_positions"], pw, atol=1e-9)
+    R_file = np.array([[pin.Quaternion(w[0], w[1], w[2], w[3]).matrix() for w in wk]
+                       for wk in z["body_rotations"]])  # Quaternion(w, x, y, z)
+    np.testing.assert_allclose(R_file, Rw, atol=1e-9)
+    # MuJoCo's own kinematics of the same poses (an independent forward kinematics)
+    sim = build_model(g1)
+    data = mujoco.MjData(sim.mj)
+    ids = [mujoco.mj_name2id(sim.mj, mujoco.mjtObj.mjOBJ_BODY, m.names[m.frames[i].parentJoint])
+           for _, i in links]
+    for k in range(0, motion.T, 10):
+        data.qpos[:] = sim.qpos_from_q(back.q[k])
+        mujoco.mj_kinematics(sim.mj, data)
+        np.testing.assert_allclose(data.xpos[ids], z["body_positions"][k], atol=1e-9)
+    # velocities: central differences of positions (interior frames)
+    h = 1 / 60
+    fd = (z["body_positions"][2:] - z["body_positions"][:-2]) / (2 * h)
+    err = np.abs(fd - z["body_linear_velocities"][1:-1]).max()
+    assert err < 0.02 * np.abs(fd).max(), err
+    dof = [str(n) for n in z["dof_names"]]
+    assert dof == list(g1.joint_names[1:])
+    fdq = (z["dof_positions"][2:] - z["dof_positions"][:-2]) / (2 * h)
+    np.testing.assert_allclose(z["dof_velocities"][1:-1], fdq, atol=1e-9)
+    # the other order on request: same bodies, depth-first
+    p2 = export_motion(g1, motion, tmp_path / "walk_d.npz", "isaaclab_amp", fps=60,
+                       body_order="depth")
+    z2 = np.load(p2)
+    assert [str(n) for n in z2["body_names"]] == [n for n, _ in body_links(g1, "depth")]
+    assert sorted(z2["body_names"]) == sorted(z["body_names"])
+    with pytest.raises(ExportError, match="body_order"):
+        export_motion(g1, motion, tmp_path / "x.npz", "isaaclab_amp", body_order="random")
+    with pytest.raises(ExportError, match="integer"):
+        export_motion(g1, motion, tmp_path / "x.npz", "isaaclab_amp", fps=29.97)
+
+
+def test_cli_exports_gmr_and_isaaclab_amp(tmp_path):
+    from gdimitate.cli import main
+    from gdimitate.export import read_gmr
+
+    g1, motion = _g1_motion()
+    npz = tmp_path / "g1.npz"
+    export_motion(g1, motion, npz, "npz")
+    assert main(["export", str(npz), "--format", "gmr", "--fps", "60"]) == 0
+    back = read_gmr(tmp_path / "g1.gmr.pkl", g1)
+    np.testing.assert_allclose(back.q, motion.q, atol=1e-12)
+    assert main(["export", str(npz), "--format", "isaaclab_amp", "--body-order", "depth",
+                 "--out", str(tmp_path / "a.npz")]) == 0
+    assert str(np.load(tmp_path / "a.npz")["body_order"]) == "depth"
