@@ -9,6 +9,8 @@ The pipeline (docs/design.md §2)::
     result = gdimitate.sim.simulate(robot, adapted, demo_forces=forces)   # MuJoCo
     cpg = gdimitate.entrain(robot, adapted.motion)           # Matsuoka network, free replay
 
+Gait-lab data: ``gdimitate.load_demonstration("model.osim", markers="trial.c3d")`` (marker
+inverse kinematics, force plates to feet; :mod:`gdimitate.c3d`, imported on first use).
 The paper's planar case: ``gdimitate.adapt(demo, robot_m, imitator, "analytic")`` (Eq. 1).
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
@@ -57,6 +59,16 @@ from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
 __version__ = "0.1.0"
 
+
+def __getattr__(name: str):
+    """``gdimitate.c3d`` (gait-lab C3D files) is imported on first use."""
+    if name == "c3d":
+        import importlib
+
+        return importlib.import_module(".c3d", __name__)
+    raise AttributeError(f"module 'gdimitate' has no attribute {name!r}")
+
+
 __all__ = [
     "AdaptationReport",
     "AdaptedMotion",
@@ -93,6 +105,7 @@ __all__ = [
     "adapt",
     "audit",
     "bvh",
+    "c3d",
     "contact",
     "entrain",
     "export_motion",
