@@ -16,7 +16,6 @@ with z up by a constant base rotation :attr:`Robot.base_rotation`.
 from __future__ import annotations
 
 import math
-import re
 import tempfile
 import warnings
 import xml.etree.ElementTree as ET
@@ -38,6 +37,7 @@ from .errors import (
     UnlimitedJointWarning,
     URDFError,
 )
+from .legs import SIDES, resolve_leg_names
 from .library import LIBRARY, library_entry, list_robots
 from .meshes import confine_meshes
 from .safety import MAX_URDF_BYTES, check_urdf_bounds, parse_xml, read_text_bounded
@@ -45,7 +45,6 @@ from .urdfgen import PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
 
 __all__ = ["Leg", "Robot", "PLANAR_BASE"]
 
-SIDES = ("left", "right")
 #: Joint names of our planar floating base (x, z, pitch), in q order.
 PLANAR_BASE = ("base_x", "base_z", "base_pitch")
 
@@ -93,26 +92,6 @@ class Leg:
     def length(self) -> float:
         """Thigh + shank [m]."""
         return self.thigh + self.shank
-
-
-def _side_of(name: str) -> str | None:
-    n = name
-    if re.search(r"(^|[_\W])left([_\W]|$)", n, re.I) or re.match(r"^(l_|L(?=[A-Z])|FL_)", n):
-        return "left"
-    if re.search(r"(^|[_\W])right([_\W]|$)", n, re.I) or re.match(r"^(r_|R(?=[A-Z])|FR_)", n):
-        return "right"
-    return None
-
-
-_ROLE_PATTERNS = {
-    "hip": r"hip|hfe",
-    "knee": r"knee|kfe",
-    "ankle": r"ankle",
-}
-
-
-#: Frame names that say "sensor" (an IMU, a force-torque sensor, a camera…): never a sole.
-_SENSOR_NAME = re.compile(r"imu|sensor|camera|lidar|(^|[_\W])ft([_\W]|$)|force_?torque", re.I)
 
 
 #: Joints of library robots whose subtrees are massless on purpose (Romeo's hands: every
@@ -517,91 +496,13 @@ class Robot:
 
     # ------------------------------------------------------------------ leg detection
     def _resolve_leg_names(self, legs) -> dict[str, dict[str, str | None]]:
-        model = self.model
-        joints = list(model.names)[1:]
-        frames = [f.name for f in model.frames]
-        if legs is not None:
-            out = {}
-            for s in SIDES:
-                if s not in legs:
-                    raise LegDetectionError(f"legs= must give 'left' and 'right'; got {list(legs)}")
-                d = dict(legs[s])
-                for role in ("hip", "knee", "ankle"):
-                    j = d.get(role)
-                    if j is None and role == "ankle":
-                        continue
-                    if j not in joints:
-                        raise UnknownNameError("joint", j, joints)
-                if d.get("sole") not in frames:
-                    raise UnknownNameError("frame", d.get("sole"), frames)
-                out[s] = {k: d.get(k) for k in ("hip", "knee", "ankle", "sole")}
-            return out
-        # Auto-detection: side from name tokens, role from 'hip'/'knee'/'ankle' (or HFE/KFE),
-        # the pitch joint among candidates chosen geometrically later (axis ⟂ sagittal plane).
-        out = {}
-        for s in SIDES:
-            d: dict[str, str | None] = {}
-            for role, pat in _ROLE_PATTERNS.items():
-                cands = [j for j in joints if _side_of(j) == s and re.search(pat, j, re.I)
-                         and model.joints[model.getJointId(j)].nv == 1]
-                if not cands:
-                    if role == "ankle":
-                        d[role] = None
-                        continue
-                    raise LegDetectionError(
-                        f"cannot find the {s} {role} joint of {self.name!r}: no 1-DoF joint name "
-                        f"has a {s}-side token (left/l_/L…/FL_) and matches /{pat}/i. Joints: "
-                        f"{joints}. Pass legs={{'left': {{'hip': …, 'knee': …, 'ankle': …, "
-                        f"'sole': …}}, 'right': {{…}}}} explicitly."
-                    )
-                d[role] = self._pick_pitch(cands) if len(cands) > 1 else cands[0]
-            bodies = [f.name for f in model.frames if f.type == pin.FrameType.BODY
-                      and not _SENSOR_NAME.search(f.name)]
-            soles = []
-            for pat in (r"sole", r"foot", r"toe", r"ankle"):  # first that matches, lowest of it
-                soles = soles or [f for f in bodies if _side_of(f) == s and re.search(pat, f, re.I)]
-            if not soles:
-                raise LegDetectionError(
-                    f"cannot find the {s} sole frame of {self.name!r}: no body frame name with a "
-                    f"{s}-side token matches /sole/, /foot/, /toe/ or /ankle/. Pass legs= "
-                    "explicitly."
-                )
-            d["sole"] = self._lowest_frame(soles)
-            out[s] = d
-        return out
+        return resolve_leg_names(self, legs)
 
     def _joint_axis_world(self, joint: str, q: np.ndarray) -> np.ndarray:
         jid = self.model.getJointId(joint)
         pin.computeJointJacobians(self.model, self.data, q)
         J = pin.getJointJacobian(self.model, self.data, jid, pin.LOCAL_WORLD_ALIGNED)
         return J[3:, self.model.joints[jid].idx_v]
-
-    def _pick_pitch(self, cands: list[str]) -> str:
-        """Among same-side candidates, the joint whose axis is closest to the lateral axis."""
-        q0 = pin.neutral(self.model)
-        axes = [self._joint_axis_world(c, q0) for c in cands]
-        lat = self._lateral_guess()
-        score = [abs(float(a @ lat)) for a in axes]
-        return cands[int(np.argmax(score))]
-
-    def _lateral_guess(self) -> np.ndarray:
-        q0 = pin.neutral(self.model)
-        pin.forwardKinematics(self.model, self.data, q0)
-        left = [self.data.oMi[i].translation for i, n in enumerate(self.model.names)
-                if i > 0 and _side_of(n) == "left"]
-        right = [self.data.oMi[i].translation for i, n in enumerate(self.model.names)
-                 if i > 0 and _side_of(n) == "right"]
-        if not left or not right:
-            return np.array([0.0, 1.0, 0.0])
-        v = np.mean(left, axis=0) - np.mean(right, axis=0)
-        return v / (np.linalg.norm(v) or 1.0)
-
-    def _lowest_frame(self, frames: list[str]) -> str:
-        q0 = pin.neutral(self.model)
-        pin.framesForwardKinematics(self.model, self.data, q0)
-        # "lowest" along the leg direction: farthest from the root
-        d = [np.linalg.norm(self.data.oMf[self.model.getFrameId(f)].translation) for f in frames]
-        return frames[int(np.argmax(d))]
 
     # ------------------------------------------------------------------ measurements
     def _pos(self, joint: str | None = None, frame: str | None = None) -> np.ndarray:
