@@ -112,8 +112,8 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
             raise DemonstrationFormatError("an .osim demonstration builds its own robot; "
                                            "robot= is for a .mot/.sto/.trc/.c3d")
         if markers is not None:
-            return _from_markers(Path(markers).expanduser(), Robot.from_osim(p), grf,
-                                 overground, f"{p} (model) + ")
+            return _from_markers(Path(markers).expanduser(), p, grf, overground,
+                                 f"{p} (model) + ")
         return _full_body(Path(coordinates).expanduser(), Robot.from_osim(p), grf, overground,
                           f"{p} (model) + ")
     if suffix in (".trc", ".c3d"):
@@ -191,10 +191,11 @@ def _full_body(coords: Path, robot: Robot, grf, overground: bool, prefix: str
                         "OpenSim full-body coordinates")
 
 
-def _from_markers(path: Path, robot: Robot, grf, overground: bool, prefix: str
+def _from_markers(path: Path, robot: Robot | Path, grf, overground: bool, prefix: str
                   ) -> Demonstration:
-    """Marker-based inverse kinematics of a ``.trc``/``.c3d`` on ``robot``, then its forces
-    (``grf``, else a C3D's plates, else the feet's kinematics)."""
+    """Marker-based inverse kinematics of a ``.trc``/``.c3d`` on ``robot`` (or on the
+    ``.osim`` path's model, its soles put on the lab floor below the trial's foot markers),
+    then its forces (``grf``, else a C3D's plates, else the feet's kinematics)."""
     import numpy as np
 
     from .opensim import inverse_kinematics, read_trc
@@ -210,6 +211,8 @@ def _from_markers(path: Path, robot: Robot, grf, overground: bool, prefix: str
         markers = read_trc(path)
     else:
         raise DemonstrationFormatError(f"markers must be a .trc or .c3d file; got {path}")
+    if not isinstance(robot, Robot):
+        robot = Robot.from_osim(robot, markers=markers)
     motion, ik = inverse_kinematics(robot, markers, return_result=True)
     what = (f"marker-based IK ({len(ik.names)} markers, residual RMS "
             f"{1000 * float(np.sqrt(np.nanmean(ik.residuals ** 2))):.1f} mm)")
