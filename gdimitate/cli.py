@@ -2,10 +2,20 @@
 ``export``,
 ``batch``.
 
+Without a demonstration file, ``adapt``, ``entrain`` and ``view`` use the default story of
+``demo``: one stride of the shipped real 3-D walk (with its measured forces) and the G1
+imitator (:func:`gdimitate.demo.default_demonstration`).
+
 Ctrl-C (SIGINT) and SIGTERM stop a command cleanly: every meshcat server it started is
 stopped, temporary files are removed, output files are written under a temporary name and
-renamed when complete (``demo`` removes what it wrote), and the exit status is 130 (SIGINT) or
-143 (SIGTERM). Errors exit with status 2 and a message.
+renamed when complete (a failed or interrupted command removes what it wrote, and the output
+folder if it made it).
+
+Exit status (:data:`EXIT_STATUS`): 0 done; 1 ``batch`` finished with failed files; 2 an
+error (message on stderr); 3 the result was written but is not feasible (the audit's verdict;
+Eq. (1)'s reachability and the position limits for the kinematic methods), a goal is unmet
+(the optimiser's least-infeasible fallback), the CPG replay check failed, or the simulated
+robot fell; 130 after Ctrl-C, 143 after SIGTERM.
 """
 
 from __future__ import annotations
@@ -16,10 +26,22 @@ import signal
 import sys
 from pathlib import Path
 
-from .errors import GdimitateError
+from .errors import GdimitateError, LegDetectionError
 from .safety import atomic_write, prepare_output_dir, removed_on_failure
+from .verdict import EXIT_NOT_FEASIBLE
 
-__all__ = ["main"]
+__all__ = ["EXIT_STATUS", "main"]
+
+#: The command's exit statuses and what each means (also in ``gdimitate --help``).
+EXIT_STATUS = {
+    0: "done",
+    1: "batch: some files failed (listed in its summary)",
+    2: "error (the message on stderr says what to fix)",
+    EXIT_NOT_FEASIBLE: "written, but not feasible, a goal unmet, the CPG replay check failed "
+                       "or the simulated robot fell",
+    130: "interrupted (Ctrl-C)",
+    143: "terminated (SIGTERM)",
+}
 
 
 class _Terminated(BaseException):
@@ -35,6 +57,17 @@ def _port(text: str) -> int:
     if not 1 <= p <= 65535:
         raise argparse.ArgumentTypeError(f"port must be in 1-65535, got {p}")
     return p
+
+
+def _seconds(text: str) -> float:
+    """argparse type of a finite duration > 0 [s]."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not (v > 0 and v < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds > 0, got {text}")
+    return v
 
 
 def _json_file(path: str | None, what: str):
@@ -121,12 +154,18 @@ def _demonstration(path: str | None, a: argparse.Namespace):
                               overground=not a.treadmill, markers=a.markers)
 
 
-def _cmd_demo(a: argparse.Namespace) -> None:
+def _cmd_demo(a: argparse.Namespace) -> int:
     from .demo import run_demo
 
     imitator = _robot(a.imitator, a)
     with removed_on_failure(a.out):  # interrupted or failed: no half-written folder
-        run_demo(prepare_output_dir(a.out), imitator=imitator, method=a.method)
+        s = run_demo(prepare_output_dir(a.out), imitator=imitator, method=a.method)
+    fell = s["simulation"]["fell"]
+    if s["verdict"]["ok"] and not fell:
+        return 0
+    why = "the simulated robot fell" if fell else "it is not feasible or a goal is unmet"
+    print(f"result written, but {why}: exit status {EXIT_NOT_FEASIBLE}")
+    return EXIT_NOT_FEASIBLE
 
 
 def _cmd_paper(a: argparse.Namespace) -> None:
@@ -135,45 +174,72 @@ def _cmd_paper(a: argparse.Namespace) -> None:
     run_paper(a.out)
 
 
-def _cmd_adapt(a: argparse.Namespace) -> None:
-    from .adapt import adapt
-    from .gait import human_walk
+def _default_story(imitator: str | None, a: argparse.Namespace):
+    """The default demonstration and imitator (:func:`gdimitate.demo.default_demonstration`,
+    G1 unless ``imitator`` names another), announced."""
+    from .demo import DEFAULT_IMITATOR, default_demonstration
 
-    out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
-    demo = _demonstration(a.demonstration, a)
+    robot, motion, forces = default_demonstration()
+    print(f"no demonstration given: one stride of the shipped real 3-D walk ({motion.T} frames, "
+          f"{motion.t[-1] - motion.t[0]:.2f} s, measured forces)", flush=True)
+    return robot, motion, forces, _robot(imitator or DEFAULT_IMITATOR, a)
+
+
+def _adapted(a: argparse.Namespace, demonstration: str | None):
+    """``(demonstrator, demonstration, forces, result)`` of the command's adaptation."""
+    from .adapt import adapt
+
+    demo = _demonstration(demonstration, a)
     if demo is None:
-        robot, motion = human_walk()
-        forces = None
+        robot, motion, forces, imitator = _default_story(a.imitator, a)
     else:
         robot, motion, forces = demo.robot, demo.motion, demo.forces
         print(f"read {demo.source}: {demo.note}", flush=True)
-    imitator = _robot(a.imitator, a)
+        imitator = _robot(a.imitator, a)
+    force = getattr(a, "force", "segment")
     print(f"adapting {motion.T} frames of {robot.name} → {imitator.name} "
-          f"(method={a.method}, force={a.force}) …", flush=True)
+          f"(method={a.method}, force={force}) …", flush=True)
     options = {"forces": forces} if a.method == "optimal" and forces is not None else {}
-    result = adapt(motion, robot, imitator, a.method, force=a.force, **options)
-    with atomic_write(out / "imitator_joints.csv") as tmp:
-        result.save(tmp, "csv")
-    with atomic_write(out / "imitator_motion.npz") as tmp:
-        result.save(tmp, "npz")
-    with atomic_write(out / "report.json") as tmp:
-        tmp.write_text(json.dumps(result.report.to_dict(), indent=2))
+    return robot, motion, forces, adapt(motion, robot, imitator, a.method, force=force,
+                                        **options)
+
+
+def _cmd_adapt(a: argparse.Namespace) -> int:
+    from .verdict import solver_record, verdict
+
+    with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
+        out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
+        _, _, _, result = _adapted(a, a.demonstration)
+        v = verdict(result)
+        with atomic_write(out / "imitator_joints.csv") as tmp:
+            result.save(tmp, "csv")
+        with atomic_write(out / "imitator_motion.npz") as tmp:
+            result.save(tmp, "npz")
+        report = {**result.report.to_dict(), "verdict": v.to_dict(),
+                  "audit": result.audit.to_dict() if result.audit is not None else None,
+                  "solver": solver_record(result.solver)}
+        with atomic_write(out / "report.json") as tmp:
+            tmp.write_text(json.dumps(report, indent=2, default=str))
     r = result.report
-    print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json\n"
-          f"  infeasible frames {r.infeasible_frames}, force-direction error max "
-          f"{r.force_direction_error_max:.3g} rad, joint-limit violation max "
-          f"{r.joint_limit_violation_max:.3g} rad")
+    print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json")
+    for line in v.lines():
+        print(f"  {line}")
+    print(f"  force-direction error max {r.force_direction_error_max:.3g} rad, joint-limit "
+          f"violation max {r.joint_limit_violation_max:.3g} rad")
+    return v.exit_status
 
 
-def _cmd_view(a: argparse.Namespace) -> None:
+def _cmd_view(a: argparse.Namespace) -> int:
     import time
 
     from .examples import example
     from .metrics import force_direction
+    from .verdict import verdict
     from .viz import Viewer, compare
 
     live = a.html is None
     v = None
+    status = 0
     try:
         if a.motion is not None:
             demo = _demonstration(a.motion, a)
@@ -185,14 +251,23 @@ def _cmd_view(a: argparse.Namespace) -> None:
             if a.html:
                 v.save_html(a.html)
         else:
-            print(f"building example {a.example!r} (method={a.method}) …", flush=True)
-            ex = example(a.example, a.method)
+            if a.example is not None:
+                print(f"building example {a.example!r} (method={a.method}) …", flush=True)
+                ex = example(a.example, a.method)
+                demonstrator, demonstration, adapted = ex.demonstrator, ex.demonstration, \
+                    ex.adapted
+            else:
+                demonstrator, demonstration, _, adapted = _adapted(a, None)
+            verdict_ = verdict(adapted)
+            for line in verdict_.lines():
+                print(f"  {line}", flush=True)
+            status = verdict_.exit_status
             # a file only: the server is gone when the command ends, so no URL is printed
             v = Viewer.start(a.port, a.open and live, quiet=not live)
-            compare(ex.demonstrator, ex.demonstration, ex.imitator, ex.adapted,
+            compare(demonstrator, demonstration, adapted.robot, adapted,
                     layout=a.layout, html=a.html, viewer=v,
-                    demo_force=force_direction(ex.demonstrator, ex.demonstration),
-                    imitator_force=force_direction(ex.imitator, ex.adapted.motion))
+                    demo_force=force_direction(demonstrator, demonstration),
+                    imitator_force=force_direction(adapted.robot, adapted.motion))
         if a.html:
             print(f"wrote {a.html} (self-contained; open it in a browser, no network needed)")
         if live:
@@ -207,43 +282,51 @@ def _cmd_view(a: argparse.Namespace) -> None:
     finally:
         if v is not None:
             v.close()
+    return status
 
 
-def _cmd_entrain(a: argparse.Namespace) -> None:
-    from .adapt import adapt
+def _cmd_entrain(a: argparse.Namespace) -> int:
     from .cpg import entrain
-    from .gait import human_walk
 
-    out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
-    if a.motion is not None:
-        demo = _demonstration(a.motion, a)
-        robot, motion = demo.robot, demo.motion
-    else:
-        robot = _robot(a.robot or "hoap2", a)
-        print(f"no motion given: adapting the shipped real walk to {robot.name} "
-              f"(method={a.method}) …", flush=True)
-        human, walk = human_walk()
-        motion = adapt(walk, human, robot, a.method).motion
-    print(f"entraining a Matsuoka network to {robot.name}'s joints and base "
-          f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
-          flush=True)
-    cpg = entrain(robot, motion, duration=a.duration)
-    with atomic_write(out / "oscillator_params.json") as tmp:
-        tmp.write_text(cpg.result.to_json())
-    with atomic_write(out / "replay_joints.csv") as tmp:
-        cpg.replay.to_csv(tmp)
-    with atomic_write(out / "replay_motion.npz") as tmp:
-        cpg.replay.to_npz(tmp, robot=robot)
-    with atomic_write(out / "report.json") as tmp:
-        tmp.write_text(json.dumps(
-            {"robot": robot.name, "learned_frequency_hz": float(cpg.result.frequency),
-             "constant_angles_rad": cpg.constant, "per_joint": cpg.report}, indent=2,
-            default=float))
+    with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
+        out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
+        options = {}
+        if a.motion is not None:
+            demo = _demonstration(a.motion, a)
+            robot, motion = demo.robot, demo.motion
+        else:
+            a.imitator = a.robot
+            _, stride, _, result = _adapted(a, None)
+            robot, motion = result.robot, result.motion
+            # the clip is one stride (heel strike to heel strike): its span is the period
+            options["frequency"] = 1.0 / float(stride.t[-1] - stride.t[0])
+        print(f"entraining a Matsuoka network to {robot.name}'s joints and base "
+              f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
+              flush=True)
+        cpg = entrain(robot, motion, duration=a.duration, **options)
+        with atomic_write(out / "oscillator_params.json") as tmp:
+            tmp.write_text(cpg.result.to_json())
+        with atomic_write(out / "replay_joints.csv") as tmp:
+            cpg.replay.to_csv(tmp)
+        with atomic_write(out / "replay_motion.npz") as tmp:
+            cpg.replay.to_npz(tmp, robot=robot)
+        with atomic_write(out / "report.json") as tmp:
+            tmp.write_text(json.dumps(
+                {"robot": robot.name, "learned_frequency_hz": float(cpg.result.frequency),
+                 "replay_check": cpg.check.to_dict(), "constant_angles_rad": cpg.constant,
+                 "per_joint": cpg.report}, indent=2, default=float))
     print(f"wrote {out}/oscillator_params.json, replay_joints.csv, replay_motion.npz, "
           f"report.json\n  learned frequency {cpg.result.frequency:.4f} Hz")
     for j, r in cpg.report.items():
-        print(f"  {j:<12} nRMSE entrained {r['nrmse_entrained'] * 100:5.2f} %   "
-              f"frequency error after stop {r['freq_error_after'] * 100:5.2f} %")
+        c = cpg.check.signals[j]
+        print(f"  {j:<12} nRMSE entrained {r['nrmse_entrained'] * 100:5.2f} %   teacher fit "
+              f"{r['teacher_fit_nrmse'] * 100:5.2f} %   free-running frequency "
+              f"{c['frequency_hz']:.3f} Hz   amplitude ratio {c['amplitude_ratio']:.2f}")
+    print(f"  {cpg.check.line()}")
+    if not cpg.check.passed:
+        print(f"  result written, but the replay check failed: exit status {EXIT_NOT_FEASIBLE}")
+        return EXIT_NOT_FEASIBLE
+    return 0
 
 
 def _cmd_batch(a: argparse.Namespace) -> int:
@@ -258,15 +341,17 @@ def _cmd_batch(a: argparse.Namespace) -> int:
           f"{where}) …", flush=True)
     res = run_batch(a.input_dir, a.out, options, workers=a.workers, executor=a.executor,
                     address=a.address, pattern=a.pattern, progress=not a.quiet)
-    print(f"{'file':<32} {'status':<8} {'feasible':<8} {'seconds':>8}  error")
-    for r in res.rows:
-        feas = "" if r.feasible is None else ("yes" if r.feasible else "no")
-        secs = "" if r.seconds is None else f"{r.seconds:.2f}"
-        print(f"{r.file:<32} {r.status:<8} {feas:<8} {secs:>8}  {r.error[:100]}")
+    from .batch.table import console_table
+
+    print(console_table(res.rows))
     counts = ", ".join(f"{len(res.by_status(s))} {s}" for s in ("done", "skipped", "failed"))
-    print(f"{counts}; {res.wall_s:.1f} s on {res.workers} worker(s), "
-          f"{res.files_per_second:.2f} files/s\nwrote {res.summary_csv}, {res.summary_json}")
-    return 1 if res.by_status("failed") else 0
+    bad = [r.file for r in res.rows if r.status != "failed" and not r.ok]
+    print(f"{counts}; {len(bad)} not feasible, with a goal unmet or fallen; {res.wall_s:.1f} s "
+          f"on {res.workers} worker(s), {res.files_per_second:.2f} files/s\nwrote "
+          f"{res.summary_csv}, {res.summary_json}")
+    if res.by_status("failed"):
+        return 1
+    return EXIT_NOT_FEASIBLE if bad else 0
 
 
 def _cmd_export(a: argparse.Namespace) -> None:
@@ -284,12 +369,8 @@ def _cmd_export(a: argparse.Namespace) -> None:
           "frames)")
 
 
-def _cmd_simulate(a: argparse.Namespace) -> None:
+def _cmd_simulate(a: argparse.Namespace) -> int:
     from .export import read_wrenches
-    from .sim import plots as sim_plots
-    from .sim import simulate
-    from .sim.animation import show_simulation
-    from .sim.reference import Plan
 
     demo = _demonstration(a.motion, a)
     wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
@@ -298,6 +379,16 @@ def _cmd_simulate(a: argparse.Namespace) -> None:
                              "plan written by `gdimitate adapt` (the optimal method) or "
                              "AdaptedMotion.save(..., format='npz')")
     forces = _demonstration(a.reference, a).forces if a.reference else None
+    with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
+        return _simulate(a, demo, wrenches, forces)
+
+
+def _simulate(a: argparse.Namespace, demo, wrenches, forces) -> int:
+    from .sim import plots as sim_plots
+    from .sim import simulate
+    from .sim.animation import show_simulation
+    from .sim.reference import Plan
+
     robot = demo.robot
     out = prepare_output_dir(a.out)
     print(f"simulating {robot.name}'s plan ({demo.motion.T} knots, "
@@ -321,14 +412,24 @@ def _cmd_simulate(a: argparse.Namespace) -> None:
           "walked the whole plan", f"; stance slip max {100 * m.slip_max:.2f} cm; "
           f"torque saturation {100 * m.torque_saturation:.1f} %; wrote {out}/sim.json, "
           "simulation.png" + (", simulation.html" if a.html else ""))
+    if m.fell:
+        print(f"result written, but the robot fell: exit status {EXIT_NOT_FEASIBLE}")
+        return EXIT_NOT_FEASIBLE
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
+    from .demo import DEFAULT_IMITATOR
+
     p = argparse.ArgumentParser(
         prog="gdimitate",
         description="Goal-directed imitation of rhythmic motion between robots of different "
-                    "bodies (force-direction-preserving retargeting, CPG replay, meshcat).")
+                    "bodies (force-direction-preserving retargeting, CPG replay, meshcat). "
+                    "Without a demonstration file, adapt, entrain and view use demo's story: "
+                    "one stride of the shipped real 3-D walk, imitated by G1.",
+        epilog="exit status: " + "; ".join(f"{k} {v}" for k, v in EXIT_STATUS.items()),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
     methods = ["optimal", "analytic", "copy"]
     method_help = ("adaptor: optimal (whole-body, contact-consistent, within the imitator's "
@@ -337,15 +438,17 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="the main job: the real 3-D walk → G1 (whole-body adaptor, "
                                     "MuJoCo physics check, oscillator replay)")
     d.add_argument("--out", default="gdimitate-demo", help="output folder (default: %(default)s)")
-    _add_robot_args(d, "--imitator", "g1", "imitator robot (e.g. hoap2, talos)")
+    _add_robot_args(d, "--imitator", DEFAULT_IMITATOR, "imitator robot (e.g. hoap2, talos)")
     d.add_argument("--method", default="optimal", choices=methods, help=method_help)
     d.set_defaults(func=_cmd_demo)
     pp = sub.add_parser("paper", help="the paper's Figs. 4–13 (in spirit) + summary.json")
     pp.add_argument("--out", default="paper-out", help="output folder (default: %(default)s)")
     pp.set_defaults(func=_cmd_paper)
-    ad = sub.add_parser("adapt", help="adapt a demonstration file for an imitator")
-    _add_demonstration_args(ad, "demonstration", "the shipped real walk, sagittal")
-    _add_robot_args(ad, "--imitator", "hoap2", "imitator robot")
+    ad = sub.add_parser("adapt", help="adapt a demonstration file for an imitator",
+                        epilog=f"exit status {EXIT_NOT_FEASIBLE}: {EXIT_STATUS[3]}")
+    _add_demonstration_args(ad, "demonstration",
+                            "one stride of the shipped real 3-D walk, as demo")
+    _add_robot_args(ad, "--imitator", DEFAULT_IMITATOR, "imitator robot")
     ad.add_argument("--method", default="optimal", choices=methods, help=method_help)
     ad.add_argument("--force", default="segment", choices=["segment", "com", "dynamics",
                                                             "measured"],
@@ -356,10 +459,16 @@ def build_parser() -> argparse.ArgumentParser:
     ad.set_defaults(func=_cmd_adapt)
     from .examples import EXAMPLES
 
-    vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE")
-    _add_demonstration_args(vw, "motion", "a built-in --example")
-    vw.add_argument("--example", default="human-walk", choices=EXAMPLES,
-                    help="built-in example when no motion file is given (default: %(default)s)")
+    vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE",
+                        epilog=f"exit status {EXIT_NOT_FEASIBLE}: the adaptation shown is not "
+                               "feasible or leaves a goal unmet")
+    _add_demonstration_args(vw, "motion", "one stride of the shipped real 3-D walk adapted to "
+                                          "--imitator, as demo")
+    _add_robot_args(vw, "--imitator", DEFAULT_IMITATOR,
+                    "imitator the default walk is adapted to when no motion is given")
+    vw.add_argument("--example", default=None, choices=EXAMPLES,
+                    help="a built-in example instead of the default walk (human-walk: the "
+                         "sagittal walk on HOAP-2; case-I, case-II, humanoid: the paper's)")
     vw.add_argument("--method", default="optimal", choices=methods, help=method_help)
     vw.add_argument("--layout", default="side", choices=["side", "ghost"],
                     help="example: robots side by side or overlaid (default: %(default)s)")
@@ -367,15 +476,18 @@ def build_parser() -> argparse.ArgumentParser:
     vw.add_argument("--port", type=_port, default=None,
                     help="web port of the live viewer (1-65535; default: a free one)")
     vw.add_argument("--open", action="store_true", help="open the live viewer in a browser")
-    vw.add_argument("--seconds", type=float, default=None,
+    vw.add_argument("--seconds", type=_seconds, default=None,
                     help="stop the live viewer after this many seconds (default: Ctrl-C)")
     vw.set_defaults(func=_cmd_view)
-    en = sub.add_parser("entrain", help="tune a Matsuoka network to a motion and replay it")
-    _add_demonstration_args(en, "motion", "the real walk adapted to --robot")
-    _add_robot_args(en, "--robot", None, "robot the shipped walk is adapted to when no motion "
-                    "is given (default: hoap2)")
+    en = sub.add_parser("entrain", help="tune a Matsuoka network to a motion and replay it",
+                        epilog=f"exit status {EXIT_NOT_FEASIBLE}: the free-running replay "
+                               "misses the stride frequency or amplitude (the replay check)")
+    _add_demonstration_args(en, "motion", "one stride of the shipped real 3-D walk adapted "
+                                          "to --robot, as demo")
+    _add_robot_args(en, "--robot", DEFAULT_IMITATOR, "robot the shipped walk is adapted to "
+                    "when no motion is given")
     en.add_argument("--method", default="optimal", choices=methods, help=method_help)
-    en.add_argument("--duration", type=float, default=None,
+    en.add_argument("--duration", type=_seconds, default=None,
                     help="seconds of free-running replay (default: the motion's duration)")
     en.add_argument("--out", default="gdimitate-entrain",
                     help="output folder (default: %(default)s)")
@@ -420,7 +532,7 @@ def build_parser() -> argparse.ArgumentParser:
                        ("--osim", "OpenSim model of a full-body .mot/.sto --reference"),
                        ("--demonstrator", "robot of a .npz that records none")):
         si.add_argument(flag, default=None, help=what)
-    si.set_defaults(func=_cmd_simulate, treadmill=False)
+    si.set_defaults(func=_cmd_simulate, treadmill=False, markers=None)
     ba = sub.add_parser("batch", help="adapt every demonstration file in a folder, in parallel "
                         "(process pool or a Dask cluster), resumable, with a summary table")
     ba.add_argument("input_dir", help="folder of demonstration files (.mot, .sto, .bvh, .npz)")
@@ -457,10 +569,25 @@ def _on_signal(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+def _for_the_command_line(e: GdimitateError) -> str:
+    """The error's message, with Python-only advice turned into the command's options (a
+    ``legs={...}`` dict is ``--legs FILE.json`` here)."""
+    text = str(e)
+    if isinstance(e, LegDetectionError):
+        i = text.lower().find("pass legs=")
+        if i >= 0:
+            text = (text[:i] + "Pass --legs FILE.json (for the robot given by --imitator or "
+                    '--robot) holding {"left": {"hip": JOINT, "knee": JOINT, "ankle": JOINT, '
+                    '"sole": FRAME}, "right": {...}} with the names above; a BVH '
+                    "demonstration's legs are named in Python: gdimitate.bvh.read_bvh(path, "
+                    "legs=...)")
+    return text
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``gdimitate`` command: 0 on success, 1 when ``batch`` finished with
-    failed files (listed in its summary), 2 on an error (message on stderr), 130 after
-    Ctrl-C, 143 after SIGTERM."""
+    """Entry point of the ``gdimitate`` command; the exit statuses are :data:`EXIT_STATUS`
+    (0 done, 1 ``batch`` with failed files, 2 an error, 3 written but not feasible or a goal
+    unmet, 130 Ctrl-C, 143 SIGTERM)."""
     args = build_parser().parse_args(argv)
     previous = {}
     try:
@@ -469,9 +596,9 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:  # not the main thread: leave signals alone
         pass
     try:
-        status = args.func(args)  # batch: 1 when some files failed
+        status = args.func(args)  # batch: 1 when some files failed; 3: not feasible
     except GdimitateError as e:
-        print(f"gdimitate {args.command}: error: {e}", file=sys.stderr)
+        print(f"gdimitate {args.command}: error: {_for_the_command_line(e)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"gdimitate {args.command}: interrupted", file=sys.stderr)

@@ -7,10 +7,19 @@ orientation as a rotation vector about the first frame's) — and lets it run fr
 teaching input stops. The replay is a new :class:`~gdimitate.motion.Motion` of the same robot
 in the same joint order: the base advances at the taught mean velocity plus the network's
 periodic part; stance is read from the replayed feet (the lower sole is in stance).
+
+The frequency taught is the stride's: 1 / the mean interval between successive touchdowns of
+the same foot in the motion's contact schedule (:func:`stride_frequency`) — so a
+demonstration and its adaptation (which keeps the schedule) give the same answer; without
+two touchdowns of a foot, the teaching signal's own estimate. A poor teacher fit (nRMSE above
+:data:`TEACHER_FIT_WARN`) is an :class:`~gdimitate.oscillator.OscillatorWarning` naming the
+signal. The free-running replay is checked against the target (:class:`ReplayCheck`: every
+signal's cycle rate and amplitude over :data:`CHECK_STRIDES` strides).
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,7 +27,7 @@ import numpy as np
 
 from .errors import InvalidInputError, ResourceLimitError
 from .motion import Motion
-from .oscillator import SelfAdjustResult, self_adjust
+from .oscillator import OscillatorWarning, SelfAdjustResult, self_adjust
 from .robot import PLANAR_BASE, Robot
 from .safety import (
     MAX_MOTION_DURATION_S,
@@ -28,7 +37,105 @@ from .safety import (
 )
 from .sagittal import kinematic_contact, robot_motion
 
-__all__ = ["CPGReplay", "entrain", "BodySignals", "body_signals"]
+__all__ = ["CPGReplay", "ReplayCheck", "entrain", "BodySignals", "body_signals",
+           "stride_frequency"]
+
+#: A teaching signal whose Fourier fit leaves an nRMSE above this on some signal is a poor
+#: one (the clip is not periodic at the stride frequency): warned, with the number.
+TEACHER_FIT_WARN = 0.10
+#: The replay check: every signal's cycle rate within this fraction of the target's …
+REPLAY_FREQUENCY_TOL = 0.05
+#: … and its amplitude (half the peak-to-peak) within this fraction of the target's.
+REPLAY_AMPLITUDE_TOL = 0.25
+#: Strides of free running the replay check measures.
+CHECK_STRIDES = 4
+
+
+def stride_frequency(motion: Motion) -> float | None:
+    """The stride frequency [Hz] of ``motion``: 1 / the mean interval between successive
+    touchdowns (stance starts) of the same foot in ``motion.contact``, over both feet; None
+    when no foot touches down twice."""
+    gaps: list[float] = []
+    for c in motion.contact.values():
+        c = np.asarray(c, bool)
+        down = np.flatnonzero(~c[:-1] & c[1:]) + 1
+        gaps += list(np.diff(motion.t[down]))
+    return 1.0 / float(np.mean(gaps)) if gaps else None
+
+
+@dataclass(frozen=True)
+class ReplayCheck:
+    """The free-running replay against its target, over :data:`CHECK_STRIDES` strides from
+    the end of teaching.
+
+    ``target_frequency_hz``: the stride frequency taught; ``learned_frequency_hz``: the
+    network's; per signal (``signals``): ``frequency_error`` — |its oscillator's frequency
+    while running free (zero crossings of its output) / the target − 1| — and
+    ``amplitude_ratio`` — the replay's peak-to-peak / the teaching signal's (the periodic
+    signal taught; how well that fits the motion is the teacher fit, warned about
+    separately); ``worst_frequency``/``worst_amplitude``: the signal furthest off;
+    ``passed``: every frequency error ≤ :data:`REPLAY_FREQUENCY_TOL` and every ratio within
+    1 ± :data:`REPLAY_AMPLITUDE_TOL`."""
+
+    target_frequency_hz: float
+    learned_frequency_hz: float
+    signals: dict[str, dict[str, float]]
+
+    @property
+    def worst_frequency(self) -> tuple[str, float]:
+        """``(signal, frequency error)`` of the signal furthest off (NaN counts as worst)."""
+        return max(((n, v["frequency_error"]) for n, v in self.signals.items()),
+                   key=lambda kv: np.inf if not np.isfinite(kv[1]) else kv[1])
+
+    @property
+    def worst_amplitude(self) -> tuple[str, float]:
+        """``(signal, amplitude ratio)`` of the signal furthest from 1."""
+        return max(((n, v["amplitude_ratio"]) for n, v in self.signals.items()),
+                   key=lambda kv: abs(np.log(max(kv[1], 1e-12))))
+
+    @property
+    def passed(self) -> bool:
+        """Every signal within both tolerances."""
+        f = self.worst_frequency[1]
+        a = self.worst_amplitude[1]
+        return bool(np.isfinite(f) and f <= REPLAY_FREQUENCY_TOL
+                    and abs(a - 1) <= REPLAY_AMPLITUDE_TOL)
+
+    def line(self) -> str:
+        """One console line."""
+        (fn, fe), (an, ar) = self.worst_frequency, self.worst_amplitude
+        return (f"replay check ({CHECK_STRIDES} strides free-running): learned "
+                f"{self.learned_frequency_hz:.3f} Hz for a {self.target_frequency_hz:.3f} Hz "
+                f"stride; free-running frequency off by at most {100 * fe:.1f} % ({fn}); "
+                f"amplitude ratio "
+                f"{ar:.2f} at worst ({an}) → {'passed' if self.passed else 'FAILED'} "
+                f"(tolerances {100 * REPLAY_FREQUENCY_TOL:g} %, "
+                f"{100 * REPLAY_AMPLITUDE_TOL:g} %)")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"target_frequency_hz": self.target_frequency_hz,
+                "learned_frequency_hz": self.learned_frequency_hz, "passed": self.passed,
+                "worst_frequency": list(self.worst_frequency),
+                "worst_amplitude": list(self.worst_amplitude), "signals": self.signals}
+
+
+def replay_check(result: SelfAdjustResult) -> ReplayCheck:
+    """Run ``result``'s network free for :data:`CHECK_STRIDES` strides from the end of
+    teaching and compare every signal with the teaching signal (:class:`ReplayCheck`)."""
+    from .oscillator import measured_frequency
+
+    fT = float(result.teacher.frequency)
+    t = np.arange(0.0, CHECK_STRIDES / fT, 1e-3)
+    osc = result.bank().simulate(t, None, result.x0, record="y").y
+    f_free = measured_frequency(t, osc, start=0.5 / fT)
+    grid = t[::10]
+    free, taught = result.replay(grid), result.teacher(grid)
+    sig = {n: {"frequency_error": float(abs(f_free[j] / fT - 1)),
+               "frequency_hz": float(f_free[j]),
+               "amplitude_ratio": float(np.ptp(free[:, j]) / np.ptp(taught[:, j]))}
+           for j, n in enumerate(result.joint_names)}
+    return ReplayCheck(fT, float(result.frequency), sig)
 
 
 @dataclass(frozen=True)
@@ -42,6 +149,7 @@ class CPGReplay:
     names: tuple[str, ...]
     constant: dict[str, float]
     replay: Motion
+    check: ReplayCheck | None = None
 
     @property
     def report(self) -> dict[str, dict[str, Any]]:
@@ -140,7 +248,10 @@ def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: f
     actuated joint and the base, one shared frequency) and replay it free-running.
 
     ``duration`` [s] of the replay (default: the motion's), sampled at ``rate`` [Hz]
-    (default: the motion's). ``options`` go to :func:`gdimitate.oscillator.self_adjust`.
+    (default: the motion's). ``options`` go to :func:`gdimitate.oscillator.self_adjust`;
+    its ``frequency`` defaults to the stride's (:func:`stride_frequency`) when the contact
+    schedule has one. The replay is checked (``.check``, :class:`ReplayCheck`); a teacher fit
+    worse than :data:`TEACHER_FIT_WARN` warns.
 
     Raises:
         InvalidInputError: a motion of another robot (joint names differ, or are reordered),
@@ -167,7 +278,17 @@ def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: f
                                 "coordinates changes; nothing to entrain")
     constant = {n: float(X[0, j]) for j, n in enumerate(names) if not moving[j]}
     learn = [n for j, n in enumerate(names) if moving[j]]
+    if options.get("frequency") is None:
+        options["frequency"] = stride_frequency(motion)
     result = self_adjust(motion.t, X[:, moving], joint_names=learn, **options)
+    fit = result.teacher.fit_nrmse
+    if np.max(fit) > TEACHER_FIT_WARN:
+        j = int(np.argmax(fit))
+        warnings.warn(f"the periodic teaching signal fits {learn[j]} with nRMSE "
+                      f"{100 * fit[j]:.1f} % (> {100 * TEACHER_FIT_WARN:g} %; "
+                      f"{int(np.sum(fit > TEACHER_FIT_WARN))} signals over): the motion is "
+                      f"not periodic at {result.teacher.frequency:.3f} Hz, so the network "
+                      "learns a different motion", OscillatorWarning, stacklevel=2)
     t = np.arange(0.0, duration + 0.5 / rate, 1.0 / rate)
     Y = np.empty((t.size, len(names)))
     Y[:, moving] = result.replay(t)
@@ -176,4 +297,5 @@ def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: f
             Y[:, j] = constant[n]
     q = _compose(robot, sig, t, Y)
     return CPGReplay(result, tuple(learn), constant,
-                     robot_motion(robot, t, q, kinematic_contact(robot, q)))
+                     robot_motion(robot, t, q, kinematic_contact(robot, q)),
+                     replay_check(result))

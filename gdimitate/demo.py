@@ -22,11 +22,26 @@ import numpy as np
 from .motion import Motion
 from .robot import Robot
 
-__all__ = ["run_demo"]
+__all__ = ["DEFAULT_IMITATOR", "default_demonstration", "run_demo"]
 
 #: Knots per second of the demo's optimal solve (the library default is 50 Hz; 30 Hz keeps
 #: the demo under two minutes on two cores).
 DEMO_RATE = 30.0
+#: The imitator of the default story (``demo``, and ``adapt``/``entrain``/``view`` without a
+#: demonstration).
+DEFAULT_IMITATOR = "g1"
+
+
+def default_demonstration():
+    """The default story's demonstration → ``(robot, motion, forces)``: one stride (heel
+    strike to heel strike of the right foot) of the shipped real 3-D walk (OpenSim subject01:
+    its own model, IK angles, measured ground reaction forces, turned overground); what
+    ``gdimitate demo`` adapts, and ``adapt``/``entrain``/``view`` when given no file."""
+    from . import gait
+
+    robot, walk, forces = gait.human_walk_3d()
+    motion, forces = gait.one_stride(walk, forces)
+    return robot, motion, forces
 
 
 def _table(rows: list[tuple[str, str]]) -> str:
@@ -52,27 +67,27 @@ def _write_html(path: Path, demo_robot: Robot, demo: Motion, imit: Robot, sim, L
     return str(path)
 
 
-def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
+def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT_IMITATOR,
              method: str = "optimal", log=print, rate: float = DEMO_RATE) -> dict[str, Any]:
     """Run the main job and write its files into ``out``; return the summary dict.
 
     ``imitator``: a library name or a :class:`Robot` (``"hoap2"`` for the planar HOAP-2-sized
     model); ``method``: the adaptor whose result is simulated, entrained and shown (default
     the whole-body optimal adaptor); ``rate`` [knots/s] of the optimal solve."""
-    from . import gait, sim
+    from . import sim
     from .adapt import adapt
     from .baselines import joint_copy, kinematic_plan
     from .cpg import entrain
     from .plots import plot_force_directions
     from .safety import prepare_output_dir
     from .sim import plots as sim_plots
+    from .verdict import solver_record, verdict
 
     t0 = time.perf_counter()
     out = prepare_output_dir(out)
     log("[1/7] loading the shipped 3-D walk (OpenSim subject01: model, IK angles, measured "
         "forces) …")
-    demo_robot, walk, walk_forces = gait.human_walk_3d()
-    demo, forces = gait.one_stride(walk, walk_forces)
+    demo_robot, demo, forces = default_demonstration()
     imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
     L = imit.legs["left"].length
     log(f"[2/7] adapting one stride ({demo.t[0]:.2f}–{demo.t[-1]:.2f} s) → {imit.name} "
@@ -118,6 +133,8 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = "g1",
         "knots": adapted.motion.T,
         "audit": aud.to_dict() if aud is not None else None,
         "feasible": bool(adapted.feasible),
+        "verdict": verdict(adapted).to_dict(),
+        "solver": solver_record(adapted.solver),
         "simulation": plan_sim.metrics.to_dict(),
         "joint_copy_simulation": copy_sim.metrics.to_dict() if copy_sim else None,
         "cpg": {"learned_frequency_hz": float(cpg.result.frequency),
@@ -166,12 +183,15 @@ def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str
     rows = [("demonstration", f"{summary['frames']} frames, {summary['duration_s']:.2f} s "
                               "(one stride of the 3-D walk)"),
             ("imitator", f"{summary['imitator']} ({adapted.motion.T} knots, {summary['method']})")]
+    from .verdict import verdict
+
+    lines = verdict(adapted).lines()
+    rows.append(("verdict", lines[0]))
+    rows += [("", line) for line in lines[1:]]
     if aud is not None:
         worst_tau = max((j.torque_ratio for j in aud.joints if np.isfinite(j.torque_ratio)),
                         default=float("nan"))
-        rows += [("audit (Pinocchio)", "feasible" if aud.feasible else
-                  "INFEASIBLE: " + ", ".join(aud.binding[:3])),
-                 ("  worst |torque|/limit", f"{worst_tau:.2f}"),
+        rows += [("  worst |torque|/limit", f"{worst_tau:.2f}"),
                  ("  min normal force [N]", ", ".join(
                      f"{s} {f.normal.value:.0f}" for s, f in aud.feet.items()))]
     rows.append(("simulation, plan", simline(plan_sim)))

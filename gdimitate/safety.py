@@ -347,10 +347,14 @@ def _snapshot(folder: Path) -> dict[Path, tuple[int, int]]:
 def removed_on_failure(folder: str | os.PathLike) -> Iterator[Path]:
     """Undo a multi-file job's output if it fails or is interrupted: on any exception
     (``KeyboardInterrupt`` included) every file under ``folder`` that the block created or
-    changed is deleted (and ``folder`` too if the block created it and it is left empty),
-    then the exception propagates. Files that were there before and are unchanged stay."""
+    changed is deleted (and ``folder`` too if the block created it and it is left empty, and
+    the parent folders created on the way when left empty), then the exception propagates.
+    Files that were there before and are unchanged stay."""
     p = Path(folder).expanduser()
     existed = p.is_dir()
+    made = [p]  # p and the parents the block may create (mkdir(parents=True))
+    while not made[-1].parent.exists() and made[-1].parent != made[-1]:
+        made.append(made[-1].parent)
     before = _snapshot(p)
     try:
         yield p
@@ -362,8 +366,9 @@ def removed_on_failure(folder: str | os.PathLike) -> Iterator[Path]:
             for d in sorted((d for d in p.rglob("*") if d.is_dir()), reverse=True):
                 with contextlib.suppress(OSError):
                     d.rmdir()
-            with contextlib.suppress(OSError):
-                p.rmdir()
+            for d in made:  # deepest first; a folder that is not empty stays
+                with contextlib.suppress(OSError):
+                    d.rmdir()
         raise
 
 

@@ -290,8 +290,10 @@ def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
     good.mkdir()
     for name in ("walk0.mot", "walk1.mot", "walk2.mot"):
         (good / name).write_bytes((inputs / name).read_bytes())
-    assert main([*args[:1], str(good), *args[2:]]) == 0
-    assert main([*args[:1], str(good), *args[2:]]) == 0  # all skipped now
+    # exit 3 (issue 22): every file done, but Eq. (1) results exceed HOAP-2's knee limit
+    assert main([*args[:1], str(good), *args[2:]]) == 3
+    assert "3 not feasible" in capsys.readouterr().out
+    assert main([*args[:1], str(good), *args[2:]]) == 3  # all skipped now
     assert "0 done, 3 skipped, 0 failed" in capsys.readouterr().out
     assert main(["batch", str(good), "--imitator", "nobody", "--out", str(out)]) == 2
     assert "unknown robot 'nobody'" in capsys.readouterr().err

@@ -70,7 +70,12 @@ def test_paper_summary_matches_eq1_on_the_same_inputs(tmp_path):
 
 
 def test_adapt_command_and_errors(tmp_path, capsys):
-    assert main(["adapt", "--out", str(tmp_path), "--method", "copy"]) == 0
+    from gdimitate.gait import human_walk_path
+
+    sag = human_walk_path()  # the default demonstration is the 3-D walk now: name this one
+    # exit 3: written, but HOAP-2's knee limit (0 rad) is exceeded by the copied knee angles
+    assert main(["adapt", str(sag), "--grf", str(sag.parent / "walk_gait1018_subject01_grf.mot"),
+                 "--imitator", "hoap2", "--out", str(tmp_path), "--method", "copy"]) == 3
     rep = json.loads((tmp_path / "report.json").read_text())
     assert rep["method"] == "copy"
     data = np.loadtxt(tmp_path / "imitator_joints.csv", delimiter=",", skiprows=1)
@@ -87,10 +92,15 @@ def test_console_script_help():
 
 
 def test_entrain_command(tmp_path, capsys):
+    import gdimitate as gd
     from gdimitate import Motion
 
-    # Eq. (1) input: fast (the command's default is the optimal adaptor)
-    assert main(["entrain", "--out", str(tmp_path), "--duration", "3", "--method", "analytic"]
+    # Eq. (1) input: fast (the command's default is the optimal adaptor on G1); written as a
+    # file since the default demonstration is the 3-D walk now
+    human, walk = gd.gait.human_walk()
+    hoap2 = gd.Robot.from_library("hoap2")
+    gd.adapt(walk, human, hoap2, "analytic").motion.to_npz(tmp_path / "in.npz", robot=hoap2)
+    assert main(["entrain", str(tmp_path / "in.npz"), "--out", str(tmp_path), "--duration", "3"]
                 ) == 0
     rep = json.loads((tmp_path / "report.json").read_text())
     assert rep["robot"] == "hoap2" and 0.75 < rep["learned_frequency_hz"] < 0.87
@@ -99,10 +109,6 @@ def test_entrain_command(tmp_path, capsys):
     assert "left_knee" in capsys.readouterr().out
     # the free-running replay stays in the taught range: the knee's span of the adapted walk
     # (Eq. (1), the input asked for above), ±10 % of that span
-    import gdimitate as gd
-
-    human, walk = gd.gait.human_walk()
-    hoap2 = gd.Robot.from_library("hoap2")
     taught = gd.adapt(walk, human, hoap2, "analytic").motion.column("left_knee")
     replay = m.column("left_knee")
     margin = 0.1 * np.ptp(taught)

@@ -60,7 +60,7 @@ def test_urdf_imitator_with_legs_and_contacts_json(tmp_path):
     assert main(["adapt", str(SAG), "--grf", str(SAG_GRF), "--imitator", str(urdf),
                  "--package-dir", str(urdf.parent), "--legs", str(tmp_path / "legs.json"),
                  "--contacts", str(tmp_path / "contacts.json"), "--method", "analytic",
-                 "--out", str(out)]) == 0
+                 "--out", str(out)]) == 3  # written; HOAP-2's knee limit (0 rad) is exceeded
     rec = RobotRecord.from_npz(out / "imitator_motion.npz")
     assert rec.kind == "urdf" and rec.source == str(urdf.resolve())
     assert json.loads(rec.contacts) == contacts and json.loads(rec.legs) == legs
@@ -84,16 +84,19 @@ def test_urdf_imitator_with_legs_and_contacts_json(tmp_path):
 ], ids=["mot-sagittal+grf", "osim+coordinates+grf", "mot-full-body+osim", "bvh"])
 def test_each_demonstration_format(tmp_path, capsys, args, frames):
     out = tmp_path / "out"
-    assert main(["adapt", *args, "--method", "copy", "--out", str(out)]) == 0
+    status = main(["adapt", *args, "--method", "copy", "--out", str(out)])
     rep = json.loads((out / "report.json").read_text())
+    assert status == (0 if rep["verdict"]["ok"] else 3)  # exit 3: written, not feasible
     n = frames or len(load_demonstration(BVH).motion.t)
     assert rep["frames"] == n
     assert np.loadtxt(out / "imitator_joints.csv", delimiter=",", skiprows=1).shape[0] == n
     assert "read " in capsys.readouterr().out  # what was read, and how, is said
     # the result is itself a demonstration: its NPZ is read back without naming hoap2
     again = tmp_path / "again"
-    assert main(["adapt", str(out / "imitator_motion.npz"), "--imitator",
-                 "case1_demonstrator", "--method", "copy", "--out", str(again)]) == 0
+    status = main(["adapt", str(out / "imitator_motion.npz"), "--imitator",
+                   "case1_demonstrator", "--method", "copy", "--out", str(again)])
+    assert status == (0 if json.loads((again / "report.json").read_text())["verdict"]["ok"]
+                      else 3)
 
 
 def test_errors_name_what_to_fix(tmp_path, capsys):
@@ -110,8 +113,8 @@ def test_errors_name_what_to_fix(tmp_path, capsys):
 def test_export_command_and_changed_robot(tmp_path, capsys):
     urdf = _hoap_urdf(tmp_path)
     out = tmp_path / "a"
-    assert main(["adapt", "--imitator", str(urdf), "--method", "analytic",
-                 "--out", str(out)]) == 0
+    assert main(["adapt", str(SAG), "--grf", str(SAG_GRF), "--imitator", str(urdf),
+                 "--method", "analytic", "--out", str(out)]) == 3  # HOAP-2's knee limit
     npz = out / "imitator_motion.npz"
     for fmt, name in (("csv", "imitator_motion.csv"), ("mujoco", "imitator_motion.mujoco.npz"),
                       ("npz", "imitator_motion.export.npz")):

@@ -91,6 +91,9 @@ class BatchRow:
     - kinematic report (every method): ``infeasible_frames`` (both legs),
       ``force_direction_error_max_rad``, ``joint_limit_violation_max_rad``,
       ``ground_penetration_max_m``;
+    - ``goals_unmet`` (optimal method): the goals the optimiser's least-infeasible fallback
+      leaves unmet, ``name violation@knot``, ``;``-separated (``""``: all met; see
+      :mod:`gdimitate.verdict`);
     - the audit's main margins (optimal method): ``audit_binding`` (failed checks, most
       violated first, ``;``-separated), ``torque_ratio_max`` (worst |τ|/limit),
       ``base_residual_max`` [N, N·m], ``penetration_max_m`` (deepest sole corner; negative:
@@ -114,6 +117,7 @@ class BatchRow:
     force_direction_error_max_rad: float | None = None
     joint_limit_violation_max_rad: float | None = None
     ground_penetration_max_m: float | None = None
+    goals_unmet: str | None = None
     audit_binding: str | None = None
     torque_ratio_max: float | None = None
     base_residual_max: float | None = None
@@ -130,6 +134,12 @@ class BatchRow:
     seconds: float | None = None
     worker: str = ""
     error: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """Done (or skipped), feasible, every goal met, and not fallen in the simulation."""
+        return (self.status != "failed" and self.feasible is not False
+                and not self.goals_unmet and not self.sim_fell)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON values (NaN/inf become ``None``)."""
@@ -251,6 +261,7 @@ def _save(adapted, path: Path) -> None:
 
 def _adapt_one(path: Path, options: BatchOptions) -> tuple[Any, dict[str, Any]]:
     from ..adapt import adapt
+    from ..verdict import verdict
 
     demonstrator, motion, forces = _load(path, options)
     imitator = load_robot(options.imitator)
@@ -273,6 +284,8 @@ def _adapt_one(path: Path, options: BatchOptions) -> tuple[Any, dict[str, Any]]:
         ground_penetration_max_m=_finite(r.ground_penetration_max))
     if adapted.audit is not None:
         cols.update(_audit_margins(adapted.audit))
+    if adapted.solver is not None:
+        cols["goals_unmet"] = "; ".join(f"{n} {v:.3g}@{k}" for n, v, k in verdict(adapted).unmet)
     if options.simulate:
         from ..sim import simulate
 

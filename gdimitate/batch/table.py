@@ -12,7 +12,25 @@ from typing import TextIO
 
 from .job import BatchRow
 
-__all__ = ["Progress", "write_summary"]
+__all__ = ["Progress", "console_table", "write_summary"]
+
+
+def console_table(rows: Sequence[BatchRow]) -> str:
+    """The console's table: per file its status, the judge's verdict (``feasible``), whether
+    every goal was met, the physics check's outcome (``walked`` / ``FELL at … s``), the wall
+    time and the unmet goals or the error."""
+    lines = [f"{'file':<32} {'status':<8} {'feasible':<8} {'goals':<8} {'simulation':<16} "
+             f"{'seconds':>8}  unmet / error"]
+    for r in rows:
+        feas = "" if r.feasible is None else ("yes" if r.feasible else "NO")
+        goals = "" if r.goals_unmet is None else ("UNMET" if r.goals_unmet else "met")
+        sim = "" if r.sim_fell is None else (
+            f"FELL at {r.sim_fall_time_s:.2f} s" if r.sim_fell and r.sim_fall_time_s is not None
+            else "FELL" if r.sim_fell else "walked")
+        secs = "" if r.seconds is None else f"{r.seconds:.2f}"
+        lines.append(f"{r.file:<32} {r.status:<8} {feas:<8} {goals:<8} {sim:<16} {secs:>8}  "
+                     f"{(r.error or r.goals_unmet or '')[:100]}")
+    return "\n".join(lines)
 
 
 def write_summary(rows: Sequence[BatchRow], out_dir: str | Path,

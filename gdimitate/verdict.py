@@ -1,0 +1,114 @@
+"""What an adaptation's result may claim, in words: the verdict every output prints.
+
+docs/design.md §12: "feasible" only where the judge says so — the independent audit
+(:func:`gdimitate.audit.audit`, Pinocchio recomputation) for the optimal adaptor; Eq. (1)'s
+reachability and the imitator's position limits for the kinematic methods — and a goal the
+optimiser could not keep (an ``unmet`` row of its least-infeasible fallback,
+:class:`gdimitate.retarget.Unmet`) is part of the verdict, not a footnote. The command line
+exits with :data:`EXIT_NOT_FEASIBLE` when it wrote a result that is not feasible or leaves a
+goal unmet (distinct from 2, an error).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, is_dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["EXIT_NOT_FEASIBLE", "Verdict", "solver_record", "verdict"]
+
+#: Exit status of a command whose result was written but is not feasible, or whose goal (an
+#: optimiser row, a replay check, a simulation that fell) is unmet.
+EXIT_NOT_FEASIBLE = 3
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``feasible``: the judge's verdict; ``judge``: who judged; ``failed``: the checks that
+    failed, most violated first (the audit's ``binding``; for the kinematic methods the
+    unreachable frames and violated limits); ``unmet``: ``(name, violation, knot)`` of each
+    goal the optimiser's least-infeasible fallback leaves unmet (violation in the row's own
+    scaled units); ``solver``: the solver's record (:func:`solver_record`) or None."""
+
+    feasible: bool
+    judge: str
+    failed: tuple[str, ...]
+    unmet: tuple[tuple[str, float, int], ...]
+    solver: dict[str, Any] | None
+
+    @property
+    def ok(self) -> bool:
+        """Feasible and no goal unmet."""
+        return self.feasible and not self.unmet
+
+    @property
+    def exit_status(self) -> int:
+        """0 when :attr:`ok`, else :data:`EXIT_NOT_FEASIBLE`."""
+        return 0 if self.ok else EXIT_NOT_FEASIBLE
+
+    def lines(self) -> list[str]:
+        """The verdict as console lines (no leading indentation)."""
+        out = [f"{self.judge}: " + ("feasible" if self.feasible else
+                                    "NOT feasible; failed: " + ", ".join(self.failed[:6])
+                                    + (f" (and {len(self.failed) - 6} more)"
+                                       if len(self.failed) > 6 else ""))]
+        s = self.solver
+        if s is not None:
+            out.append(f"solver: {s['status']}, {s['iterations']} iterations, "
+                       f"{s['time_s']:.1f} s" + ("; the hard problem failed: this is the "
+                                                 "least-infeasible motion" if s["elastic"]
+                                                 else ""))
+        if self.unmet:
+            out.append("goals unmet: " + "; ".join(
+                f"{n} off by {v:.3g}{_unit(n, v)} at knot {k}" for n, v, k in self.unmet[:6]))
+        if not self.ok:
+            why = "a goal is unmet" if self.feasible else "it is not feasible"
+            out.append(f"result written, but {why}: exit status {EXIT_NOT_FEASIBLE}")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: ``feasible``, ``ok``, ``judge``, ``failed``, ``unmet`` (list of
+        ``{name, violation, knot}``)."""
+        return {"feasible": self.feasible, "ok": self.ok, "judge": self.judge,
+                "failed": list(self.failed),
+                "unmet": [{"name": n, "violation": v, "knot": k} for n, v, k in self.unmet]}
+
+
+def _unit(name: str, v: float) -> str:
+    """A reading of a scaled violation where its unit is known (directions: radians)."""
+    low = name.lower()
+    if "direction" in low or "angle" in low or "orient" in low:
+        return f" rad ({np.degrees(v):.1f}°)"
+    return " (scaled)"
+
+
+def solver_record(solver: Any) -> dict[str, Any] | None:
+    """The optimiser's record (:class:`gdimitate.retarget.SolverInfo`: status, success,
+    iterations, time, elastic, knots, variables, constraints, unmet) as plain JSON types."""
+    if solver is None:
+        return None
+    d = asdict(solver) if is_dataclass(solver) else dict(solver)
+    d["unmet"] = [{"name": u["name"] if isinstance(u, dict) else u.name,
+                   "violation": float(u["violation"] if isinstance(u, dict) else u.violation),
+                   "knot": int(u["knot"] if isinstance(u, dict) else u.knot)}
+                  for u in d.get("unmet", ())]
+    return {k: (v.item() if isinstance(v, np.generic) else v) for k, v in d.items()}
+
+
+def verdict(result: Any) -> Verdict:
+    """The verdict of an :class:`~gdimitate.adapt.AdaptedMotion`: the audit's for the optimal
+    method (plus the solver's unmet goals), Eq. (1)'s reachability and the position limits
+    for the kinematic ones."""
+    solver = solver_record(getattr(result, "solver", None))
+    unmet = tuple((u["name"], u["violation"], u["knot"]) for u in (solver or {}).get("unmet", ()))
+    aud = getattr(result, "audit", None)
+    if aud is not None:
+        return Verdict(bool(aud.feasible), "audit (Pinocchio)",
+                       tuple(aud.binding), unmet, solver)
+    r = result.report
+    failed = [f"{s}: {n} frames unreachable" for s, n in r.infeasible_frames.items() if n]
+    failed += [f"position:{j} exceeded by {v:.3g} rad" for j, v in
+               sorted(r.joint_limit_violation.items(), key=lambda kv: -kv[1])]
+    return Verdict(bool(r.all_feasible), f"{r.method} method (reachability and position "
+                   "limits; no dynamics checked)", tuple(failed), unmet, solver)
