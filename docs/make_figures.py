@@ -55,7 +55,90 @@ def adaptor_g1() -> Path:
     return path
 
 
-FIGURES = {"force_direction_3d": force_direction_3d, "adaptor_g1": adaptor_g1}
+def subject01_c3d(path: Path) -> Path:
+    """The shipped subject01 trial written as a gait-lab C3D: its 41 markers (60 Hz) and one
+    force plate per foot (the measured ground reaction, 600 Hz; plate = the rectangle around
+    that foot's centres of pressure)."""
+    import warnings
+
+    import gdimitate as gd
+    from gdimitate.c3d import ForcePlate, write_c3d
+
+    folder = gd.gait.human_walk_3d_folder()
+    robot = gd.Robot.from_osim(folder / "subject01.osim")
+    forces = gd.opensim.read_grf(folder / "subject01_walk1_grf.mot", robot,
+                                 folder / "subject01_walk1_grf.xml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        markers = gd.opensim.read_trc(folder / "subject01_walk1.trc")
+    plates = []
+    for k, side in enumerate(("right", "left"), start=1):
+        f = forces[side]
+        c = f.cop[f.contact]
+        lo, hi, z = c.min(0) - 0.1, c.max(0) + 0.1, float(c[:, 2].mean())
+        corners = np.array([[lo[0], lo[1], z], [hi[0], lo[1], z], [hi[0], hi[1], z],
+                            [lo[0], hi[1], z]])
+        plates.append(ForcePlate(forces.t, f.force, f.cop, f.torque, corners, k))
+    return write_c3d(path, markers, plates)
+
+
+def gait_lab() -> Path:
+    """From the gait lab to G1: the subject01 trial as a C3D → marker-based inverse
+    kinematics (vs OpenSim's own IK .mot), the plates' forces on the feet, and for one stride
+    (right heel strike to the next) G1's planned push vs the measured one (whole-body optimal
+    adaptor, audited)."""
+    import tempfile
+
+    import matplotlib.pyplot as plt
+
+    import gdimitate as gd
+    from gdimitate.metrics import ForceDirection, force_direction, frame_rotations
+
+    folder = gd.gait.human_walk_3d_folder()
+    with tempfile.TemporaryDirectory() as tmp:
+        c3d = subject01_c3d(Path(tmp) / "subject01_walk1.c3d")
+        demo = gd.load_demonstration(folder / "subject01.osim", markers=c3d)
+    human, walk, forces = demo.robot, demo.motion, demo.forces
+    ref = gd.opensim.read_coordinates(folder / "subject01_walk1_ik.mot", human)
+    g1 = gd.Robot.from_library("g1")
+    stride, stride_forces = gd.gait.one_stride(walk, forces, "right")  # heel strike to strike
+    r = gd.adapt(stride, human, g1, "optimal", force="measured", forces=stride_forces,
+                 verbose=False)
+    push = {s: -np.einsum("tij,tj->ti", frame_rotations(g1, r.motion.q, r.contacts[s].frame),
+                          r.wrenches[s][:, :3]) for s in ("left", "right")}
+    measured = force_direction(human, stride, "measured", forces=stride_forces)
+    fig, ax = plt.subplots(2, 2, figsize=(11, 7))
+    for j, style in (("hip_flexion_r", "C0"), ("knee_angle_r", "C1"), ("ankle_angle_r", "C2")):
+        i = human.idx_q(j)
+        ax[0, 0].plot(walk.t, np.degrees(walk.q[:, i]), style, label=f"{j}: our IK (C3D)")
+        ax[0, 0].plot(ref.t, np.degrees(ref.q[:, i]), style + "--", label="OpenSim's IK")
+    ax[0, 0].set(xlim=(walk.t[0], walk.t[-1]), ylabel="angle [deg]",
+                 title=f"marker IK, {len(demo.ik.names)} markers")
+    ax[0, 0].legend(fontsize=7, ncol=2)
+    for s, style in (("left", "C0"), ("right", "C3")):
+        ax[0, 1].plot(walk.t, forces[s].force[:, 2], style, label=f"{s} foot")
+    ax[0, 1].set(ylabel="vertical force [N]", title="C3D force plates, assigned by proximity")
+    ax[0, 1].legend(fontsize=8)
+    for k, s in enumerate(("left", "right")):
+        mine = ForceDirection.from_vectors(push[s], r.motion.contact[s], "G1")
+        a = ax[1, k]
+        a.plot(stride.t, np.degrees(measured[s].sagittal), "k", label="measured (human)")
+        a.plot(r.motion.t, np.degrees(mine.sagittal), "C1--", label="G1 plan")
+        a.set(xlabel="t [s]", ylabel="sagittal push [deg]",
+              title=f"{s} foot: push direction, one stride")
+        a.legend(fontsize=8)
+    verdict = "feasible" if r.audit.feasible else "NOT feasible"
+    fig.suptitle(f"gait-lab C3D → marker IK → G1, one stride (audit: {verdict})")
+    fig.tight_layout()
+    path = IMG / "gait_lab_g1.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    print(r.audit.summary() if hasattr(r.audit, "summary") else r.audit)
+    return path
+
+
+FIGURES = {"force_direction_3d": force_direction_3d, "adaptor_g1": adaptor_g1,
+           "gait_lab": gait_lab}
 
 if __name__ == "__main__":
     names = sys.argv[1:] or list(FIGURES)
