@@ -73,3 +73,114 @@ def test_unknown_names_are_listed(robot):
         body_map(d, i, {"segments": {"nope": "torso"}})
     with pytest.raises(InvalidInputError):
         BodyMap.from_dict({"bones": {}})
+
+
+# ------------------------------------------------------------------ arms (issue 20)
+_ELBOW = {"g1": "{s}_elbow_joint", "talos": "arm_{s}_4_joint", "icub": "{s}_elbow",
+          "romeo": "{s}ElbowYaw"}
+_SIDE = {"g1": {"left": "left", "right": "right"}, "talos": {"left": "left", "right": "right"},
+         "icub": {"left": "l", "right": "r"}, "romeo": {"left": "L", "right": "R"}}
+
+
+@pytest.fixture(scope="module")
+def armed():
+    """The synthetic full-body OpenSim model (subject01 with Rajagopal-style arms)."""
+    import sys
+    import tempfile
+    import warnings
+    from pathlib import Path
+
+    import gdimitate as gd
+
+    sys.path.insert(0, str(Path(__file__).parent / "opensim_ref"))
+    from with_arms import write_model
+
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = write_model(gd.gait.human_walk_3d_folder() / "subject01.osim",
+                        Path(tmp) / "armed.osim")
+        return gd.Robot.from_osim(p)
+
+
+@pytest.fixture(scope="module")
+def cmu():
+    from gdimitate.bvh.reader import read_bvh
+    from gdimitate.gait import human_walk_path
+
+    return read_bvh(human_walk_path().parents[1] / "cmu_02_01" / "cmu_02_01.bvh")[0]
+
+
+def _elbow_shift(robot, q, frame: str, joint: str, dq: float) -> np.ndarray:
+    """World displacement of ``frame``'s origin when ``joint`` turns by ``dq`` from ``q``."""
+    m, d = robot.model, robot.model.createData()
+    fid = m.getFrameId(frame)
+    pin.framesForwardKinematics(m, d, q)
+    p0 = d.oMf[fid].translation.copy()
+    q2 = q.copy()
+    q2[robot.idx_q(joint)] += dq
+    pin.framesForwardKinematics(m, d, q2)
+    return d.oMf[fid].translation - p0
+
+
+@pytest.mark.parametrize("name", ["g1", "talos", "icub", "romeo"])
+@pytest.mark.parametrize("demo", ["opensim", "bvh"])
+def test_arm_presets_move_the_elbows_alike(robot, armed, cmu, name, demo):
+    """Issue 20: the arm presets (OpenSim ``arm_flex/arm_add/arm_rot/elbow_flex``, BVH
+    ``Arm``/``ForeArm`` rotations) onto each humanoid. Independent of the axes the presets
+    compare: from both robots' arms-down poses, a mapped shoulder joint turned by 0.2 rad
+    (the imitator's by ``scale``·0.2) moves the demonstrator's elbow and the imitator's the
+    same way (cosine of the two displacements > 0.5), or, for the upper arm's twist, leaves
+    both nearly in place. The arms-down pose of each imitator is
+    its zero pose (Romeo: shoulder pitch +90°), which the offsets map the demonstrator's onto.
+    OpenSim's arm flexion is forward: the imitator's elbow moves forward (+x)."""
+    from gdimitate.retarget.bodymap import arms_down
+
+    d = armed if demo == "opensim" else cmu
+    i = robot(name)
+    bm = body_map(d, i)
+    qd, qi = arms_down(d), arms_down(i)
+    shoulders = {k: v for k, v in bm.joints.items() if "shoulder" in v[0].lower()
+                 or v[0].startswith(("arm_left_1", "arm_left_2", "arm_left_3", "arm_right_1",
+                                     "arm_right_2", "arm_right_3"))}
+    expect = {"g1": 6, "talos": 4, "icub": 6, "romeo": 4}[name]
+    assert len(shoulders) >= expect, shoulders
+    for dn, (iname, scale, offset) in shoulders.items():
+        side = "left" if dn.lower().startswith("left") or dn.endswith("_l") else "right"
+        df = (f"elbow_flex_{side[0]}" if demo == "opensim" else f"{side.capitalize()}ForeArm")
+        fi = _ELBOW[name].format(s=_SIDE[name][side])
+        assert scale * qd[d.idx_q(dn)] + offset == pytest.approx(qi[i.idx_q(iname)])
+        a = _elbow_shift(d, qd, df, dn, 0.2)
+        b = _elbow_shift(i, qi, fi, iname, scale * 0.2)
+        if np.linalg.norm(a) < 1e-3:  # the upper arm's own twist: the elbow stays put
+            assert np.linalg.norm(b) < 0.2 * 0.2 * 0.1, (dn, iname, b)
+            continue
+        assert a @ b > 0.5 * np.linalg.norm(a) * np.linalg.norm(b), (dn, iname, a, b)
+        if demo == "opensim" and dn.startswith("arm_flex"):
+            assert a[0] > 0 and b[0] > 0
+    elbows = [v[0] for k, v in bm.joints.items() if "ForeArm" in k or "elbow_flex" in k]
+    assert len(elbows) == (0 if name == "romeo" else 2)
+
+
+def test_following_report(armed):
+    """``following``: per mapped joint, the correlation of the two angle histories and the
+    ranges (the demonstrator's mapped and clipped to the imitator's limits), against NumPy on
+    a synthetic pair of motions."""
+    import gdimitate as gd
+    from gdimitate.retarget.bodymap import following
+    from gdimitate.sagittal import robot_motion
+
+    g1 = gd.Robot.from_library("g1")
+    bm = body_map(armed, g1)
+    t = np.linspace(0, 1, 41)
+    qd = np.tile(armed.neutral, (t.size, 1))
+    qd[:, armed.idx_q("arm_flex_r")] = 0.4 * np.sin(2 * np.pi * t)
+    qi = np.tile(g1.neutral, (t.size, 1))
+    qi[:, g1.idx_q("right_shoulder_pitch_joint")] = -0.1 * np.sin(2 * np.pi * t) + 0.01 * t
+    rep = following(bm, robot_motion(armed, t, qd, {}), armed, robot_motion(g1, t, qi, {}), g1)
+    f = rep["right_shoulder_pitch_joint"]
+    assert f.demonstrator == "arm_flex_r"
+    assert f.r == pytest.approx(np.corrcoef(qd[:, armed.idx_q("arm_flex_r")],
+                                            qi[:, g1.idx_q("right_shoulder_pitch_joint")])[0, 1])
+    assert f.r < -0.99 and f.demonstrator_range == pytest.approx(0.8, abs=1e-3)
+    assert f.ratio == pytest.approx(f.imitator_range / 0.8, rel=1e-3)
+    assert np.isnan(rep["left_shoulder_pitch_joint"].r)  # constant: no correlation

@@ -8,14 +8,19 @@ A :class:`BodyMap` pairs
   imitator should copy (pelvis, torso).
 
 Presets (:func:`body_map`) cover the demonstrators this package ships or reads — the 3-D
-OpenSim human (``hip_flexion_r``, ``knee_angle_r``, ``ankle_angle_r``, ``lumbar_extension`` …;
-bodies ``pelvis``, ``femur_r`` … ``torso``), BVH skeletons (``Hips``, ``LeftUpLeg``, ``LeftLeg``,
-``LeftFoot``, ``LeftToeBase``, ``Spine`` …) and the planar models (``left_hip``,
-``left_knee``, ``left_ankle``) — and the imitators Talos, G1, iCub, Romeo and the planar
-HOAP-2-sized model. Joints are paired by *role* (hip pitch/roll/yaw, knee, ankle pitch/roll,
-torso pitch/roll/yaw); each pair's ``scale`` is ±1, the sign of the dot product of the two
-joint axes in the world frame at the robots' neutral poses (a pair whose axes are not within
-60° of each other is dropped). A user's own map is a dict or a JSON file
+OpenSim human (``hip_flexion_r``, ``knee_angle_r``, ``ankle_angle_r``, ``lumbar_extension``,
+``arm_flex_r``, ``arm_add_r``, ``arm_rot_r``, ``elbow_flex_r`` …; bodies ``pelvis``,
+``femur_r`` … ``torso``), BVH skeletons (``Hips``, ``LeftUpLeg``, ``LeftLeg``, ``LeftFoot``,
+``LeftToeBase``, ``Spine``, ``LeftArm``, ``LeftForeArm`` …) and the planar models
+(``left_hip``, ``left_knee``, ``left_ankle``) — and the imitators Talos, G1, iCub, Romeo and
+the planar HOAP-2-sized model. Joints are paired by *role* (hip pitch/roll/yaw, knee, ankle
+pitch/roll, torso pitch/roll/yaw, shoulder pitch/roll/yaw, elbow); each pair's ``scale`` is
+±1, the sign of the dot product of the two joint axes in the world frame (a pair whose axes
+are not within 60° of each other is dropped) — legs and torso at the robots' neutral poses,
+arms at their arms-down poses (:func:`arms_down`: a BVH T-pose's upper arms rolled down,
+Romeo's forward-pointing arms pitched down), the ``offset`` mapping the one onto the other.
+A demonstrator without arms (gait2354's subject01) maps none: the imitator's arms are then
+unmapped and held (:data:`HOLD_RANGE`). A user's own map is a dict or a JSON file
 (:meth:`BodyMap.from_dict`, :meth:`BodyMap.from_json`); names are checked against the robots.
 """
 
@@ -34,10 +39,16 @@ import pinocchio as pin
 from ..errors import InvalidInputError, UnknownNameError
 from ..robot import Robot
 
-__all__ = ["BodyMap", "body_map", "ROLES", "UnmappedJointsWarning"]
+__all__ = ["BodyMap", "body_map", "ROLES", "UnmappedJointsWarning", "HOLD_RANGE", "arms_down",
+           "following", "JointFollowing"]
+
+#: How far [rad] an imitator joint the body map leaves out may move from its neutral pose
+#: (a hard bound of the adaptor, :class:`~gdimitate.retarget.parts.posture_range.PostureRange`).
+HOLD_RANGE = 0.1
 
 ROLES = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll",
-         "torso_pitch", "torso_roll", "torso_yaw")
+         "torso_pitch", "torso_roll", "torso_yaw", "shoulder_pitch", "shoulder_roll",
+         "shoulder_yaw", "elbow")
 """Joint roles the presets pair (per side for the legs)."""
 
 
@@ -54,26 +65,36 @@ _FAMILIES: dict[str, tuple[dict[str, str], dict[str, str]]] = {
         "hip_yaw": "hip_rotation_{s}", "knee": "knee_angle_{s}",
         "ankle_pitch": "ankle_angle_{s}", "ankle_roll": "subtalar_angle_{s}",
         "torso_pitch": "lumbar_extension", "torso_roll": "lumbar_bending",
-        "torso_yaw": "lumbar_rotation"}),
+        "torso_yaw": "lumbar_rotation", "shoulder_pitch": "arm_flex_{s}",
+        "shoulder_roll": "arm_add_{s}", "shoulder_yaw": "arm_rot_{s}",
+        "elbow": "elbow_flex_{s}"}),
     "talos": ({"left": "left", "right": "right"}, {
         "hip_yaw": "leg_{s}_1_joint", "hip_roll": "leg_{s}_2_joint",
         "hip_pitch": "leg_{s}_3_joint", "knee": "leg_{s}_4_joint",
         "ankle_pitch": "leg_{s}_5_joint", "ankle_roll": "leg_{s}_6_joint",
-        "torso_yaw": "torso_1_joint", "torso_pitch": "torso_2_joint"}),
+        "torso_yaw": "torso_1_joint", "torso_pitch": "torso_2_joint",
+        "shoulder_pitch": "arm_{s}_1_joint", "shoulder_roll": "arm_{s}_2_joint",
+        "shoulder_yaw": "arm_{s}_3_joint", "elbow": "arm_{s}_4_joint"}),
     "g1": ({"left": "left", "right": "right"}, {
         "hip_pitch": "{s}_hip_pitch_joint", "hip_roll": "{s}_hip_roll_joint",
         "hip_yaw": "{s}_hip_yaw_joint", "knee": "{s}_knee_joint",
         "ankle_pitch": "{s}_ankle_pitch_joint", "ankle_roll": "{s}_ankle_roll_joint",
         "torso_yaw": "waist_yaw_joint", "torso_roll": "waist_roll_joint",
-        "torso_pitch": "waist_pitch_joint"}),
+        "torso_pitch": "waist_pitch_joint", "shoulder_pitch": "{s}_shoulder_pitch_joint",
+        "shoulder_roll": "{s}_shoulder_roll_joint", "shoulder_yaw": "{s}_shoulder_yaw_joint",
+        "elbow": "{s}_elbow_joint"}),
     "icub": ({"left": "l", "right": "r"}, {
         "hip_pitch": "{s}_hip_pitch", "hip_roll": "{s}_hip_roll", "hip_yaw": "{s}_hip_yaw",
         "knee": "{s}_knee", "ankle_pitch": "{s}_ankle_pitch", "ankle_roll": "{s}_ankle_roll",
-        "torso_pitch": "torso_pitch", "torso_roll": "torso_roll", "torso_yaw": "torso_yaw"}),
+        "torso_pitch": "torso_pitch", "torso_roll": "torso_roll", "torso_yaw": "torso_yaw",
+        "shoulder_pitch": "{s}_shoulder_pitch", "shoulder_roll": "{s}_shoulder_roll",
+        "shoulder_yaw": "{s}_shoulder_yaw", "elbow": "{s}_elbow"}),
     "romeo": ({"left": "L", "right": "R"}, {
         "hip_pitch": "{s}HipPitch", "hip_roll": "{s}HipRoll", "hip_yaw": "{s}HipYaw",
         "knee": "{s}KneePitch", "ankle_pitch": "{s}AnklePitch", "ankle_roll": "{s}AnkleRoll",
-        "torso_yaw": "TrunkYaw"}),
+        "torso_yaw": "TrunkYaw", "shoulder_pitch": "{s}ShoulderPitch",
+        "shoulder_roll": "{s}ShoulderYaw", "shoulder_yaw": "{s}ElbowYaw",
+        "elbow": "{s}ElbowRoll"}),
     "planar": ({"left": "left", "right": "right"}, {
         "hip_pitch": "{s}_hip", "knee": "{s}_knee", "ankle_pitch": "{s}_ankle"}),
     "bvh": ({"left": "Left", "right": "Right"}, {
@@ -81,8 +102,21 @@ _FAMILIES: dict[str, tuple[dict[str, str], dict[str, str]]] = {
         "hip_yaw": "{s}UpLeg_Yrotation", "knee": "{s}Leg_Xrotation",
         "ankle_pitch": "{s}Foot_Xrotation", "ankle_roll": "{s}Foot_Zrotation",
         "torso_pitch": "Spine_Xrotation", "torso_roll": "Spine_Zrotation",
-        "torso_yaw": "Spine_Yrotation"}),
+        "torso_yaw": "Spine_Yrotation", "shoulder_pitch": "{s}Arm_Yrotation",
+        "shoulder_roll": "{s}Arm_Zrotation", "shoulder_yaw": "{s}Arm_Xrotation",
+        "elbow": "{s}ForeArm_Yrotation"}),
 }
+
+#: Each family's "arms down" reference pose (joint → value [rad]) where its zero pose holds
+#: the arms otherwise: BVH skeletons rest in a T-pose (the upper arm rolled ∓90° about the
+#: forward axis hangs it), Romeo's arms point forward at zero (its shoulder pitch at +90°
+#: hangs them). Arm roles are paired — axes compared, offsets set — at these poses; the
+#: other families' zero poses already hang the arms.
+_ARMS_DOWN: dict[str, dict[str, float]] = {
+    "bvh": {"LeftArm_Zrotation": -np.pi / 2, "RightArm_Zrotation": np.pi / 2},
+    "romeo": {"LShoulderPitch": np.pi / 2, "RShoulderPitch": np.pi / 2},
+}
+_ARM_ROLES = ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow")
 
 # segment presets: family -> (pelvis body, torso body)
 _SEGMENTS = {
@@ -115,15 +149,16 @@ def _role_names(fam: str) -> dict[str, str]:
     return out
 
 
-def _axis(robot: Robot, joint: str) -> np.ndarray | None:
-    """World axis of a 1-DoF joint at the robot's neutral pose (None for other joints)."""
+def _axis(robot: Robot, joint: str, q: np.ndarray | None = None) -> np.ndarray | None:
+    """World axis of a 1-DoF joint at ``q`` (default: the robot's neutral pose; None for other
+    joints)."""
     m = robot.model
     if not m.existJointName(joint):
         return None
     jid = m.getJointId(joint)
     if m.joints[jid].nv != 1:
         return None
-    pin.computeJointJacobians(m, robot.data, robot.neutral)
+    pin.computeJointJacobians(m, robot.data, robot.neutral if q is None else q)
     J = pin.getJointJacobian(m, robot.data, jid, pin.LOCAL_WORLD_ALIGNED)
     col = J[:, m.joints[jid].idx_v]
     return col[3:] if np.linalg.norm(col[3:]) > 1e-9 else col[:3]
@@ -225,19 +260,7 @@ def body_map(demonstrator: Robot, imitator: Robot, user: BodyMap | Mapping | str
             BodyMap.from_dict(user) if isinstance(user, Mapping) else BodyMap.from_json(user))
         return bm.validate(demonstrator, imitator)
     fd, fi = _family(demonstrator), _family(imitator)
-    joints: dict[str, tuple[str, float, float]] = {}
-    if fd and fi:
-        rd, ri = _role_names(fd), _role_names(fi)
-        for role, dn in rd.items():
-            iname = ri.get(role)
-            if iname is None:
-                continue
-            ad, ai = _axis(demonstrator, dn), _axis(imitator, iname)
-            if ad is None or ai is None:
-                continue
-            c = float(ad @ ai) / (np.linalg.norm(ad) * np.linalg.norm(ai))
-            if abs(c) >= 0.5:
-                joints[dn] = (iname, float(np.sign(c)), 0.0)
+    joints = _preset_joints(demonstrator, imitator, fd, fi) if fd and fi else {}
     segs = {}
     if fd in _SEGMENTS and fi in _SEGMENTS:
         for a, b in zip(_SEGMENTS[fd], _SEGMENTS[fi]):
@@ -250,6 +273,79 @@ def body_map(demonstrator: Robot, imitator: Robot, user: BodyMap | Mapping | str
             f"families {fd!r}, {fi!r}; presets: {', '.join(_FAMILIES)}): pass body_map= as a "
             "dict {'joints': {...}, 'segments': {...}} or a JSON file")
     return BodyMap(joints, segs, name).validate(demonstrator, imitator)
+
+
+def arms_down(robot: Robot, family: str | None = None) -> np.ndarray:
+    """The robot's configuration with its arms hanging (:data:`_ARMS_DOWN`; the neutral pose
+    for families whose zero pose hangs them) — where arm roles are paired and what the
+    imitator's unmapped arm joints are held to."""
+    q = robot.neutral.copy()
+    for j, v in _ARMS_DOWN.get(family or _family(robot) or "", {}).items():
+        if robot.model.existJointName(j):
+            q[robot.idx_q(j)] = v
+    return q
+
+
+def _preset_joints(demonstrator: Robot, imitator: Robot, fd: str, fi: str
+                   ) -> dict[str, tuple[str, float, float]]:
+    """Role-paired joints: ``scale`` = the sign of the two world axes' dot product (pairs
+    more than 60° apart dropped); legs and torso compared at the neutral poses (offset 0),
+    arms at the arms-down poses, the offset mapping one onto the other."""
+    rd, ri = _role_names(fd), _role_names(fi)
+    qd = {False: demonstrator.neutral, True: arms_down(demonstrator, fd)}
+    qi = {False: imitator.neutral, True: arms_down(imitator, fi)}
+    joints = {}
+    for role, dn in rd.items():
+        iname = ri.get(role)
+        if iname is None:
+            continue
+        arm = role.split("_", 1)[-1] in _ARM_ROLES
+        ad, ai = _axis(demonstrator, dn, qd[arm]), _axis(imitator, iname, qi[arm])
+        if ad is None or ai is None:
+            continue
+        c = float(ad @ ai) / (np.linalg.norm(ad) * np.linalg.norm(ai))
+        if abs(c) >= 0.5:
+            sign = float(np.sign(c))
+            offset = (float(qi[arm][imitator.idx_q(iname)])
+                      - sign * float(qd[arm][demonstrator.idx_q(dn)])) if arm else 0.0
+            joints[dn] = (iname, sign, offset)
+    return joints
+
+
+@dataclass(frozen=True)
+class JointFollowing:
+    """How one mapped imitator joint follows its demonstrator joint over a motion: ``r``, the
+    correlation of the two angle histories (NaN where either is constant);
+    ``demonstrator_range`` [rad]: the range (max − min) of the demonstrator's angle mapped
+    and clipped to the imitator's limits (``scale · q + offset``); ``imitator_range`` [rad];
+    ``ratio``: imitator range / that (NaN where it is 0)."""
+
+    demonstrator: str
+    imitator: str
+    r: float
+    demonstrator_range: float
+    imitator_range: float
+    ratio: float
+
+
+def following(bmap: BodyMap, demo, demonstrator: Robot, imitated, imitator: Robot
+              ) -> dict[str, JointFollowing]:
+    """``{imitator joint: JointFollowing}`` for every joint ``bmap`` maps: the demonstration
+    ``demo`` (a :class:`~gdimitate.Motion` of ``demonstrator``, resampled linearly onto
+    ``imitated.t``) against the imitator's motion ``imitated``."""
+    t = imitated.t
+    out = {}
+    for dn, (iname, scale, offset) in bmap.joints.items():
+        qd = np.interp(t, demo.t, demo.q[:, demonstrator.idx_q(dn)])
+        i = imitator.idx_q(iname)
+        lo, hi = imitator.model.lowerPositionLimit[i], imitator.model.upperPositionLimit[i]
+        target = np.clip(scale * qd + offset, lo, hi)
+        qi = imitated.q[:, i]
+        r = (float(np.corrcoef(qd, qi)[0, 1]) if np.ptp(qd) > 1e-12 and np.ptp(qi) > 1e-12
+             else float("nan"))
+        dr, ir = float(np.ptp(target)), float(np.ptp(qi))
+        out[iname] = JointFollowing(dn, iname, r, dr, ir, ir / dr if dr > 0 else float("nan"))
+    return out
 
 
 def _tokens(name: str) -> set[str]:  # pragma: no cover - helper for users' maps
