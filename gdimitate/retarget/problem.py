@@ -120,6 +120,24 @@ class Formulation:
     compiled: bool
 
     @property
+    def relax_rows(self) -> np.ndarray:
+        """``(n_slack,)``: the per-knot row each elastic slack pair relaxes."""
+        return np.concatenate([np.arange(s.start, s.stop) for c, s in
+                               zip(self.cons, self.slices) if c.relaxable] or [np.zeros(0)]
+                              ).astype(int)
+
+    def slack_bounds(self, lbg: np.ndarray, ubg: np.ndarray, T: int
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """Upper bounds ``(n_slack, T)`` of ``s⁺`` and ``s⁻`` in the least-infeasible solve: a
+        slack is free (∞) only where its row has the bound it relaxes (``s⁺`` a lower bound,
+        ``s⁻`` an upper one) at that knot, else fixed at 0 (so it leaves the problem)."""
+        n = self.ngk
+        rr = self.relax_rows
+        lo = lbg[: n * T].reshape(T, n)[:, rr].T
+        hi = ubg[: n * T].reshape(T, n)[:, rr].T
+        return (np.where(np.isfinite(lo), np.inf, 0.0), np.where(np.isfinite(hi), np.inf, 0.0))
+
+    @property
     def nx(self) -> int:
         return self.knot.var.size
 

@@ -23,6 +23,7 @@ from .interrupt import guard
 from .knot import Flags, base_dofs
 from .params import DEFAULT_RATE, Contact, Limits, Weights
 from .parts import default_parts, liftoff_knots
+from .parts.body import body_parts
 from .polish import make_consistent
 from .stopping import PLATEAU, Plateau
 from .targets import Targets, demonstration_targets, direction_frame, resample
@@ -37,6 +38,14 @@ STOPS = ("settled", "converged")
 """``stop=``: ``"settled"`` (default) — the best feasible iterate once the cost has settled
 (:mod:`.stopping`); ``"converged"`` — IPOPT's own convergence test (``tol`` 1e-8; often
 several times slower, the same motion to within the audit's tolerances)."""
+
+MAX_ITERATIONS = 150
+"""Iterations of one adaptation, the hard solve and the least-infeasible one together (the
+latter gets at least :data:`MIN_ELASTIC`)."""
+MIN_ELASTIC = 30
+STALLED = "Infeasible_Stalled"
+"""``SolverInfo.status`` of a hard solve whose constraint violation stopped falling."""
+BUDGET = "Iteration_Budget_Spent"
 
 OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
            "tol", "ipopt", "verbose", "contacts", "stop")
@@ -268,16 +277,23 @@ def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unme
 
 
 def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verbose: bool,
-               label: str, stop: str = "settled") -> tuple[np.ndarray, dict]:
-    """One IPOPT solve from ``x0`` ``(n_x, T)``; returns ``(z, stats)``. ``stop``: one of
-    :data:`STOPS`."""
+               label: str, stop: str = "settled", budget: int = MAX_ITERATIONS
+               ) -> tuple[np.ndarray, dict]:
+    """One IPOPT solve from ``x0`` ``(n_x, T)`` of at most ``budget`` iterations; returns
+    ``(z, stats)``. ``stop``: one of :data:`STOPS`. The hard solve (``elastic`` False) also
+    ends when its constraint violation stalls (:class:`~.stopping.Plateau`), returning the
+    least-violating iterate with status :data:`STALLED`; the least-infeasible solve
+    (``elastic``: the relaxable rows' slacks free where their bound applies) never stalls."""
     lbx, ubx = num.lbx.copy(), num.ubx.copy()
     if elastic:
-        for name in ("s_plus", "s_minus"):
-            ubx[c.knot.var[name]] = np.inf
+        sp, sm = c.form.slack_bounds(num.lbg, num.ubg, c.T)
+        ubx[c.knot.var["s_plus"]], ubx[c.knot.var["s_minus"]] = sp, sm
     c.progress.reset()
     lbg, ubg = num.lbg[num.keep], num.ubg[num.keep]
-    stopper = Plateau(lbg, ubg, num.row_scale[num.keep]) if stop == "settled" else None
+    stopper = Plateau(lbg, ubg, num.row_scale[num.keep], settle=stop == "settled",
+                      budget=max(int(budget), 1))
+    if elastic:
+        stopper.stall_after = 10**9
     with guard(verbose, lbg, ubg, label, stopper), single_thread():
         try:
             sol = c.solver(x0=x0.T.ravel(), p=num.P.T.ravel(), lbx=lbx.T.ravel(),
@@ -286,10 +302,17 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
             raise SolverError(f"IPOPT could not run the optimal adaptor's NLP: {e}") from None
     st = dict(c.solver.stats())
     z = np.asarray(sol["x"]).ravel()
-    if not st.get("success") and stopper is not None and stopper.best_x is not None and \
-            st.get("return_status") == "User_Requested_Stop":
-        z = stopper.best_x
-        st.update(success=True, return_status=PLATEAU)
+    if st.get("return_status") == "User_Requested_Stop" and stopper.reason:
+        if stopper.reason == "settled":
+            z = stopper.best_x
+            st.update(success=True, return_status=PLATEAU)
+        elif stopper.reason == "stalled":
+            z = stopper.least_x
+            st.update(success=False, return_status=STALLED)
+        else:
+            if stopper.best_x is not None:
+                z = stopper.best_x
+            st.update(success=stopper.best_x is not None, return_status=BUDGET)
     return z, st
 
 
@@ -372,14 +395,15 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     build_s = 0.0 if cached else time.perf_counter() - t0
     t1 = time.perf_counter()
     z, st = run_solver(c, num, num.x0, False, verbose, f"{imitator.name} ({tg.T} knots)",
-                       stop)
+                       stop, budget=MAX_ITERATIONS - MIN_ELASTIC)
     bad = unmet(c, num, z, tol)
     elastic = False
     iters = int(st.get("iter_count", 0))
-    if bad or not st.get("success"):
+    if bad or not st.get("success"):  # the least-infeasible solve, in the same budget
         elastic = True
         x_start = z.reshape(tg.T, -1).T
-        z2, st2 = run_solver(c, num, x_start, True, verbose, "least-infeasible", stop)
+        z2, st2 = run_solver(c, num, x_start, True, verbose, "least-infeasible", stop,
+                             budget=max(MAX_ITERATIONS - iters, MIN_ELASTIC))
         iters += int(st2.get("iter_count", 0))
         bad2 = unmet(c, num, _zero_slacks(c, z2, tg.T), tol)
         z, st, bad = _zero_slacks(c, z2, tg.T), st2, bad2
@@ -401,7 +425,8 @@ def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, pa
                   cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
     q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
     if parts is None:
-        parts = default_parts(tuple(bmap.segments.values()), q_index)
+        parts = (default_parts(tuple(bmap.segments.values()), q_index)
+                 + body_parts(imitator, bmap, act_names))
     return pb.formulation(imitator, flags, tuple(parts))
 
 

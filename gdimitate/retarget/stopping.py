@@ -38,6 +38,15 @@ class Plateau:
     best_f: float = np.inf
     best_x: np.ndarray | None = None
     trace: list = field(default_factory=list)
+    settle: bool = True
+    budget: int = 10**9
+    stall_after: int = 40
+    stall_window: int = 20
+    stall_ratio: float = 0.9
+    least_viol: float = np.inf
+    least_x: np.ndarray | None = None
+    viol_trace: list = field(default_factory=list)
+    reason: str = ""
 
     def violation(self, g: np.ndarray) -> float:
         """Largest scaled row violation of the row values ``g``."""
@@ -47,12 +56,37 @@ class Plateau:
         return float(np.max(v))
 
     def update(self, f: float, x: np.ndarray, g: np.ndarray) -> bool:
-        """Record one iterate; True when the solve should stop."""
-        if self.violation(g) <= self.viol_tol and f < self.best_f:
+        """Record one iterate; True when the solve should stop (:attr:`reason` says why:
+        ``"settled"``, ``"stalled"`` or ``"budget"``)."""
+        viol = self.violation(g)
+        if viol <= self.viol_tol and f < self.best_f:
             self.best_f, self.best_x = f, np.array(x, dtype=float).ravel()
+        if viol < self.least_viol:
+            self.least_viol, self.least_x = viol, np.array(x, dtype=float).ravel()
         self.trace.append(self.best_f)
+        self.viol_trace.append(viol)
+        if len(self.trace) >= self.budget:
+            self.reason = "budget"
+            return True
+        if self._stalled():
+            self.reason = "stalled"
+            return True
+        if not self.settle:
+            return False
         n = self.window
         if len(self.trace) <= n or not np.isfinite(self.trace[-1 - n]):
             return False
         old, new = self.trace[-1 - n], self.trace[-1]
-        return bool(old - new <= self.rel_tol * max(1.0, abs(new)))
+        if old - new <= self.rel_tol * max(1.0, abs(new)):
+            self.reason = "settled"
+            return True
+        return False
+
+    def _stalled(self) -> bool:
+        """No feasible iterate yet and the least violation of the last ``stall_window``
+        iterations is no better than ``stall_ratio`` × the least before them (after at least
+        ``stall_after`` iterations): the rows cannot all be met from here."""
+        v, n = self.viol_trace, self.stall_window
+        if self.best_x is not None or len(v) < max(self.stall_after, n + 1):
+            return False
+        return min(v[-n:]) > self.stall_ratio * min(v[:-n])
