@@ -164,3 +164,29 @@ def test_load_demonstration_with_markers():
         load_demonstration(D3 / "subject01_walk1.trc")
     with pytest.raises(DemonstrationFormatError, match="either coordinates= .* or markers="):
         load_demonstration(D3 / "subject01.osim")
+
+
+def test_walker_knee_followers_follow_their_coordinate():
+    """A converted walker knee (spline-driven joints ``knee_angle_r__*``) is fitted with its
+    followers set from the knee angle after every step (gdimitate.opensim.follow_coordinates):
+    markers made by Pinocchio of a knee sweep are fitted (residual < 0.1 mm) and every
+    follower equals its spline of the fitted knee angle."""
+    from gdimitate.opensim import follow_coordinates
+
+    robot = Robot.from_osim(Path(__file__).parent / "data/osim/rajagopal_like.osim")
+    names = list(robot.osim.markers)
+    T = 12
+    t = np.arange(T) / 60
+    Q = np.tile(robot.neutral, (T, 1))
+    i = robot.idx_q("knee_angle_r")
+    m = robot.model
+    Q[:, i] = np.linspace(m.lowerPositionLimit[i] + 0.1, m.upperPositionLimit[i] - 0.1, T)
+    Q = follow_coordinates(robot.osim.plans, Q, robot.idx_q)
+    X = _fk_markers(robot, Q, names)
+    motion, res = inverse_kinematics(robot, Markers(t, tuple(names), X), return_result=True,
+                                     iterations=40)
+    assert np.nanmax(res.residuals) < 1e-4
+    again = follow_coordinates(robot.osim.plans, motion.q.copy(), robot.idx_q)
+    np.testing.assert_allclose(motion.q, again, atol=1e-12)
+    followers = [j for j in robot.joint_names if j.startswith("knee_angle_r__")]
+    assert followers and np.ptp(motion.q[:, robot.idx_q(followers[0])]) > 1e-3

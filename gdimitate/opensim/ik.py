@@ -15,12 +15,15 @@ root placed by a rigid fit (Kabsch) of the markers on the root body, and takes m
 Markers missing in a frame (NaN) drop out of that frame's fit; markers the model lacks are
 left out with a :class:`~gdimitate.errors.MarkerGapWarning` (and listed in
 ``IKResult.unused``). Spline-driven joints of a converted OpenSim model (e.g. a walker knee's
-coupled axes, :func:`~gdimitate.opensim.follow_coordinates`) are set from their coordinate
-after every step (a projection: their derivative does not enter the step).
+coupled axes, :func:`~gdimitate.opensim.follow_coordinates`) are not free: each marker task's
+Jacobian carries them into their coordinate's column by the chain rule (the spline's slope,
+central differences), their own columns are zero, and they are set from their coordinate
+after every step.
 """
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
 
@@ -106,6 +109,45 @@ def _initial(robot, ids, X) -> np.ndarray:
     return q
 
 
+def _coupling(robot, plans):
+    """``C(q)`` ``(nv, nv)``: identity but for each spline-driven joint, whose velocity is
+    its spline's slope times its coordinate's (``v = C(q) v_free``)."""
+    steps = [(robot.idx_v(st.coordinate), robot.idx_v(st.follows[0]),
+              robot.idx_q(st.follows[0]), st.follows[1])
+             for pl in plans for st in pl.steps if st.follows is not None]
+
+    def C(q: np.ndarray) -> np.ndarray:
+        M = np.eye(robot.model.nv)
+        for vf, vd, qd, f in steps:
+            h = 1e-6
+            M[vf, vf] = 0.0
+            M[vf, vd] = float((f(q[qd] + h) - f(q[qd] - h)) / (2 * h))
+        return M
+
+    return C
+
+
+@functools.cache
+def _task_class():
+    """Pink's position task whose Jacobian is ``J·C(q)`` where a ``coupling`` is set."""
+    from pink.tasks import FrameTask
+
+    class CoupledFrameTask(FrameTask):
+        coupling = None
+
+        def compute_jacobian(self, configuration):
+            J = super().compute_jacobian(configuration)
+            return J if self.coupling is None else J @ self.coupling(configuration.q)
+
+    return CoupledFrameTask
+
+
+def _marker_task(name: str, cost: float, coupling):
+    task = _task_class()(name, position_cost=cost, orientation_cost=0.0)
+    task.coupling = coupling
+    return task
+
+
 def inverse_kinematics(robot, markers: Markers, weights: dict[str, float] | None = None, *,
                        iterations: int = 8, first_iterations: int = 60, tol: float = 1e-7,
                        return_result: bool = False):
@@ -124,7 +166,6 @@ def inverse_kinematics(robot, markers: Markers, weights: dict[str, float] | None
     and :class:`~gdimitate.errors.SolverError` if the QP solver fails."""
     import pink
     from pink.limits import ConfigurationLimit
-    from pink.tasks import FrameTask
 
     frames = marker_frames(robot)
     names = [n for n in markers.names if n in frames]
@@ -142,11 +183,11 @@ def inverse_kinematics(robot, markers: Markers, weights: dict[str, float] | None
     X = markers.xyz[:, cols]  # (T, n, 3)
     ids = [frames[n] for n in names]
     m = robot.model
-    tasks = [FrameTask(n, position_cost=float(np.sqrt(wi)), orientation_cost=0.0)
-             for n, wi in zip(names, w)]
-    limits = [ConfigurationLimit(m, config_limit_gain=0.9)]
     plans = [p for p in getattr(getattr(robot, "osim", None), "plans", ())
              if any(st.follows is not None for st in p.steps)]
+    coupling = _coupling(robot, plans) if plans else None
+    tasks = [_marker_task(n, float(np.sqrt(wi)), coupling) for n, wi in zip(names, w)]
+    limits = [ConfigurationLimit(m, config_limit_gain=0.9)]
     config = pink.Configuration(m, m.createData(), _initial(robot, ids, X[0]))
     T = markers.t.size
     Q = np.empty((T, m.nq))
