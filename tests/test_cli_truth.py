@@ -233,3 +233,15 @@ def test_entrain_command_prints_the_replay_check(tmp_path, walks, capsys):
     rep = json.loads((tmp_path / "o" / "report.json").read_text())
     assert rep["replay_check"]["passed"] is True
     assert rep["learned_frequency_hz"] == pytest.approx(_stride_from_forces(), rel=0.025)
+
+
+def test_view_without_a_file_shows_the_default_story_with_its_verdict(tmp_path, capsys):
+    """`gdimitate view` without a file built the sagittal walk on HOAP-2 and said nothing of
+    feasibility; now it adapts demo's stride to G1, prints the verdict and exits by it."""
+    page = tmp_path / "walk.html"
+    status = main(["view", "--method", "copy", "--html", str(page)])
+    printed = capsys.readouterr().out
+    assert "one stride of the shipped real 3-D walk" in printed and "→ g1" in printed
+    verdict_line = next(line for line in printed.splitlines() if "copy method" in line)
+    assert status == (0 if ": feasible" in verdict_line else 3)
+    assert 100_000 < page.stat().st_size < 5e6

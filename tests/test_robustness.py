@@ -523,3 +523,37 @@ def test_body_map_sections_of_the_wrong_kind_are_named(d, says):
         BodyMap.from_dict(d)
     good = BodyMap.from_dict({"joints": {"a": ["b", -1, 0.25], "c": "d"}})
     assert good.joints == {"a": ("b", -1.0, 0.25), "c": ("d", 1.0, 0.0)}
+
+
+def test_every_shipped_data_file_loads():
+    """On a fresh install every shipped file loads through the public readers: the sagittal
+    walk with its forces, the 3-D walk (model, IK angles, forces with their ExternalLoads,
+    markers, OpenSim's inverse dynamics table), the CMU BVH clip."""
+    from pathlib import Path
+
+    from gdimitate.gait import human_walk_3d_folder
+    from gdimitate.opensim._table import read_table
+    from gdimitate.opensim.trc import read_trc
+
+    d3 = human_walk_3d_folder()
+    sag = Path(human_walk_path())
+    data = sag.parents[1]
+    files = sorted(p for p in data.rglob("*") if p.suffix.lower() in
+                   (".mot", ".sto", ".osim", ".trc", ".bvh", ".xml"))
+    seen = set()
+    d = gd.load_demonstration(sag, grf=sag.parent / "walk_gait1018_subject01_grf.mot")
+    assert d.motion.T == 151 and d.motion.contact["left"].any()  # contacts from the plates
+    seen |= {sag, sag.parent / "walk_gait1018_subject01_grf.mot"}
+    d = gd.load_demonstration(d3 / "subject01.osim", coordinates=d3 / "subject01_walk1_ik.mot",
+                              grf=d3 / "subject01_walk1_grf.mot")
+    assert d.motion.T == 211 and d.forces is not None
+    seen |= {d3 / f for f in ("subject01.osim", "subject01_walk1_ik.mot",
+                              "subject01_walk1_grf.mot", "subject01_walk1_grf.xml")}
+    assert read_trc(d3 / "subject01_walk1.trc").xyz.shape[1] == 41
+    assert read_table(d3 / "std_subject01_InverseDynamics.sto").data.shape[0] > 50
+    seen |= {d3 / "subject01_walk1.trc", d3 / "std_subject01_InverseDynamics.sto",
+             d3 / "subject01_Setup_InverseDynamics.xml"}  # the tool's setup: read by OpenSim
+    bvh = data / "cmu_02_01" / "cmu_02_01.bvh"
+    assert gd.load_demonstration(bvh).motion.T > 60
+    seen.add(bvh)
+    assert set(files) <= seen, sorted(set(files) - seen)
