@@ -187,13 +187,16 @@ def test_entrain_learns_the_stride_frequency(walks, which):
         cpg = gd.entrain(robot, motion, duration=5.0)
     stride = _stride_from_forces()
     assert cpg.result.frequency == pytest.approx(stride, rel=0.025)
-    # the replay check, and an independent look at the replay: the hip's period over 5 s
+    # the replay check, and an independent look at the replay: over 5 s the hip repeats
+    # itself after one measured stride (RMS of hip(t + P) − hip(t) below 15 % of its range)
+    # and swings as far as the motion's (±25 %)
     assert cpg.check.passed, cpg.check.line()
     assert cpg.check.target_frequency_hz == pytest.approx(stride, rel=0.025)
     joint = robot.legs["left"].hip
-    hip = cpg.replay.column(joint)
-    f_hip = gd.oscillator.measured_frequency(cpg.replay.t, hip[:, None])[0]
-    assert f_hip == pytest.approx(stride, rel=0.03)
+    t, hip = cpg.replay.t, cpg.replay.column(joint)
+    inside = t + 1 / stride <= t[-1]
+    shifted = np.interp(t[inside] + 1 / stride, t, hip)
+    assert np.sqrt(np.mean((shifted - hip[inside]) ** 2)) < 0.15 * np.ptp(hip)
     assert np.ptp(hip) == pytest.approx(np.ptp(motion.column(joint)), rel=0.25)
 
 
