@@ -248,3 +248,19 @@ def test_view_without_a_file_shows_the_default_story_with_its_verdict(tmp_path, 
     verdict_line = next(line for line in printed.splitlines() if "copy method" in line)
     assert status == (0 if ": feasible" in verdict_line else 3)
     assert 100_000 < page.stat().st_size < 5e6
+
+
+def test_entrain_without_a_file_learns_demos_stride(tmp_path, capsys):
+    """`entrain` without a file: demo's stride adapted to --robot (here HOAP-2 by Eq. (1), to
+    be quick), taught at that stride's frequency (heel strike to heel strike)."""
+    from gdimitate.demo import default_demonstration
+
+    _, stride, _ = default_demonstration()
+    out = tmp_path / "e"
+    status = main(["entrain", "--robot", "hoap2", "--method", "analytic", "--out", str(out)])
+    rep = json.loads((out / "report.json").read_text())
+    assert status == (0 if rep["replay_check"]["passed"] else 3)
+    assert rep["robot"] == "hoap2"
+    assert rep["replay_check"]["target_frequency_hz"] == pytest.approx(
+        1 / (stride.t[-1] - stride.t[0]), rel=1e-9)
+    assert "one stride of the shipped real 3-D walk" in capsys.readouterr().out
