@@ -105,7 +105,8 @@ class Formulation:
     the per-knot rows; ``fun``: the functions by name — ``kg (x, p) -> g``,
     ``kjac (x, p) -> ∂g/∂x``, ``kf (x, p) -> f`` (the knot's cost, not divided by T),
     ``kgrad``, ``kh (x, p, σ, λ) -> triu ∇²(σf + λᵀg)``, ``pg (x₀, x₁, p₁) -> rows``,
-    ``pjac``, ``ph (x₀, x₁, p₁, μ)``, ``kres (x, p) -> weighted residuals``,
+    ``pjac``, ``ph (x₀, x₁, p₁, μ)``, ``kres (x, p) -> weighted residuals`` and
+    ``kresjac`` (their Jacobian: the streaming mode's Gauss-Newton model),
     ``tau (x, p) -> τ (nv,)``; ``compiled``: whether they run as compiled C."""
 
     knot: Knot
@@ -212,6 +213,7 @@ def _functions(k: Knot, g_rows, costs, prow, x0) -> list[ca.Function]:
             ca.Function("pjac", [x0, x, p], [ca.jacobian(gs, xx)]),
             ca.Function("ph", [x0, x, p, mu], [ca.hessian(ca.dot(mu, gs), xx)[0]]),
             ca.Function("kres", [x, p], [res]),
+            ca.Function("kresjac", [x, p], [ca.jacobian(res, x)]),
             ca.Function("tau", [x, p], [k.torques()])]
 
 

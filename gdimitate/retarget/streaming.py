@@ -34,6 +34,7 @@ from .bodymap import BodyMap, body_map
 from .knot import base_dofs
 from .params import Contact, Limits, Weights
 from .parts import FlatContact
+from .receding import SOLVED, qp_step, wrench_qp
 from .solve import (
     SolverInfo,
     Unmet,
@@ -45,6 +46,7 @@ from .solve import (
     wrenches_of,
 )
 from .targets import demonstration_targets
+from .threads import single_thread
 
 __all__ = ["StreamingAdaptor", "FrameResult", "adapt_per_frame", "STREAMING_FORCE_MODELS"]
 
@@ -73,14 +75,17 @@ class StreamingAdaptor:
     ``demonstrator``, ``imitator``: robots; ``force``: one of
     :data:`STREAMING_FORCE_MODELS`; ``weights``, ``limits``, ``contact``: as for
     :func:`~.solve.adapt_optimal` (the ``"all"`` contact rule only); ``contacts``: sole
-    overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``: extra IPOPT options.
+    overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``: extra IPOPT options
+    (the first frame's solve); ``audit``: audit each frame's window in :meth:`step`
+    (``FrameResult.previous_feasible``; False keeps the audit off the hot path: audit the
+    assembled motion afterwards, as :func:`adapt_per_frame` does).
     """
 
     def __init__(self, demonstrator: Robot, imitator: Robot, force: str = "segment", *,
                  weights: Weights | None = None, limits: Limits | None = None,
                  contact: Contact | None = None, contacts: dict | None = None,
                  body_map: BodyMap | dict | str | None = None, dt: float = 1 / 60,
-                 ipopt: dict | None = None):
+                 ipopt: dict | None = None, audit: bool = True):
         if force not in STREAMING_FORCE_MODELS:
             raise UnknownNameError("streaming force model", force, STREAMING_FORCE_MODELS)
         if not (np.isfinite(dt) and dt > 0):
@@ -92,6 +97,7 @@ class StreamingAdaptor:
         self.demonstrator, self.imitator, self.force, self.dt = (demonstrator, imitator, force,
                                                                  float(dt))
         self.weights, self.limits = weights or Weights(), limits or Limits()
+        self.audit = bool(audit)
         self.contacts: dict[str, SoleContact] = resolve_contacts(imitator, self.contact,
                                                                  contacts)
         bm = body_map if isinstance(body_map, BodyMap) else None
@@ -165,39 +171,96 @@ class StreamingAdaptor:
             rows = fc.start + FlatContact().start_velocity_rows(num.spec)
             num.lbg[rows], num.ubg[rows] = -np.inf, np.inf
         t0 = time.perf_counter()
-        z, st = run_solver(c, num, num.x0, False, verbose, "frame", "converged")
-        Z = z.reshape(2, -1).T
-        if not st.get("success"):
-            z2, st2 = run_solver(c, num, Z, True, verbose, "frame, least-infeasible",
-                                  "converged")
-            Z = z2.reshape(2, -1).T.copy()
-            for name in ("s_plus", "s_minus"):
-                Z[var[name]] = 0.0
-            st = st2
+        if self._x is None:  # the first frame: the window's NLP from the warm start
+            Z, status, iters = self._nlp(c, num, verbose)
+        else:  # every later frame: one linearised QP (:mod:`.receding`)
+            with single_thread():
+                Z, flag = qp_step(self._form, num.x0, num.P, num.lbx, num.ubx, num.lbg,
+                                  num.ubg)
+                status, iters = "QP", 1
+                if flag in SOLVED:
+                    Z = self._polish(Z, tg, num.P, dt)
+            if flag not in SOLVED:  # no step from here: the window's NLP
+                Z, status, iters = self._nlp(c, num, verbose)
         elapsed = time.perf_counter() - t0
         prev_a = prev_w = prev_ok = None
         if self._x is not None:
             prev_a = Z[var["a"], 0].copy()
             W = _wrenches(c, Z)
             prev_w = {s: W[s][0] for s in SIDES}
-            prev_ok = self._audit_window(tg, Z, W)
+            prev_ok = self._audit_window(tg, Z, W) if self.audit else None
         self._prev = (t1, q_demo, {s: bool(contact[s]) for s in SIDES}, forces)
         self._x = Z[:, 1].copy() if self._x is not None else Z[:, 0].copy()
-        self._last = (tg, Z)
+        self._last = (tg, Z, num.P)
         self._n += 1
         return FrameResult(self._x[var["q"]].copy(), self._x[var["v"]].copy(), prev_a, prev_w,
-                           prev_ok, str(st.get("return_status")), int(st.get("iter_count", 0)),
-                           elapsed)
+                           prev_ok, status, iters, elapsed)
 
-    def final(self) -> tuple[np.ndarray, dict, bool]:
-        """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
-        window (call after the last :meth:`step`)."""
-        tg, Z = self._last
-        var = self._c.knot.var
+    def _nlp(self, c, num, verbose: bool) -> tuple[np.ndarray, str, int]:
+        """The window's NLP with IPOPT (the first frame, or a frame whose QP failed)."""
+        var = c.knot.var
+        z, st = run_solver(c, num, num.x0, False, verbose, "frame", "converged")
+        Z = z.reshape(2, -1).T
+        iters = int(st.get("iter_count", 0))
+        if not st.get("success"):
+            z2, st2 = run_solver(c, num, Z, True, verbose, "frame, least-infeasible",
+                                 "converged")
+            Z = z2.reshape(2, -1).T.copy()
+            for name in ("s_plus", "s_minus"):
+                Z[var[name]] = 0.0
+            st = st2
+            iters += int(st2.get("iter_count", 0))
+        return Z, str(st.get("return_status")), iters
+
+    def _polish(self, Z: np.ndarray, tg, P: np.ndarray, dt: float) -> np.ndarray:
+        """The window's equalities exact on the step's numbers (:mod:`.receding`): ``q_k``'s
+        quaternion, ``v_k`` and ``a_{k−1}`` by the integration rule, knot k − 1's wrenches by
+        :func:`~.receding.wrench_qp`."""
+        import pinocchio as pin
+
+        Z = Z.copy()
+        var, m = self._form.knot.var, self.imitator.model
+        q0, q1 = Z[var["q"], 0], Z[var["q"], 1].copy()
+        if self.imitator.base == "free":
+            q1[3:7] /= np.linalg.norm(q1[3:7])
+        h = tg.t[1] - tg.t[0]
+        v1 = pin.difference(m, q0, q1) / h
+        Z[var["q"], 1], Z[var["v"], 1] = q1, v1
+        Z[var["a"], 0] = (v1 - Z[var["v"], 0]) / h
+        self._wrench_fix(Z, 0, tg, P)
+        return Z
+
+    def _wrench_fix(self, Z: np.ndarray, col: int, tg, P: np.ndarray) -> None:
+        k, var = self._form.knot, self._form.knot.var
         W = _wrenches(self._c, Z)
+        Wk = {s: W[s][col] for s in SIDES}
+        stance = {s: bool(tg.stance[s][col]) for s in SIDES}
+        goal = None
+        if self.force == "measured":
+            goal = {s: ((P[k.par[f"e1_{s}"], col],) if k.planar else
+                        (P[k.par[f"e1_{s}"], col], P[k.par[f"e2_{s}"], col]))
+                    if np.all(np.isfinite(tg.push[s][col])) else None for s in SIDES}
+        out, _ = wrench_qp(self.imitator, Z[var["q"], col], Z[var["v"], col],
+                           Z[var["a"], col], Wk, stance, self.contacts, k.base_idx, k.act_idx,
+                           P[k.par["inv_effort"], col], self.contact.f_min,
+                           self.contact.cop_margin, goal)
+        cols = [0, 2, 4] if k.planar else list(range(6))
+        for s in SIDES:
+            Z[var[f"w_{s}"], col] = out[s][cols] / k.mg
+
+    def final(self) -> tuple[np.ndarray, dict, bool | None]:
+        """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
+        window (call after the last :meth:`step`); ``feasible`` None without the per-frame
+        audit."""
+        tg, Z, P = self._last
+        var = self._c.knot.var
         col = 0 if self._n == 1 else 1
-        return Z[var["a"], col].copy(), {s: W[s][col] for s in SIDES}, self._audit_window(
-            tg, Z, W, col)
+        Z = Z.copy()
+        if col == 1:
+            self._wrench_fix(Z, 1, tg, P)
+        W = _wrenches(self._c, Z)
+        ok = self._audit_window(tg, Z, W, col) if self.audit else None
+        return Z[var["a"], col].copy(), {s: W[s][col] for s in SIDES}, ok
 
     def _integrate(self, x: np.ndarray, dt: float) -> np.ndarray:
         import pinocchio as pin
@@ -234,20 +297,20 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     method="optimal", mode="per_frame")`` runs). Returns an
     :class:`~gdimitate.adapt.AdaptedMotion` whose ``motion`` has the frames' ``q``, ``v``,
     ``a``, whose ``solver`` is a :class:`~.solve.SolverInfo` (frames per second in
-    ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags (also
-    in ``solver``'s ``unmet`` when some frames fail); ``audit`` is the whole motion's."""
+    ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags —
+    the audit of the assembled motion, knot by knot, run once after the frames (also in
+    ``solver``'s ``unmet`` when some frames fail); ``audit`` is that whole motion's."""
     from ..audit import audit
 
     if demo.base_nq and demo.q.shape[1] != demonstrator.model.nq:
         raise InvalidInputError("the demonstration does not match the demonstrator")
     ad = StreamingAdaptor(demonstrator, imitator, force, weights=weights, limits=limits,
                           contact=contact, contacts=contacts, body_map=body_map, dt=demo.dt,
-                          ipopt=ipopt)
+                          ipopt=ipopt, audit=False)
     T = demo.T
     nq, nv = imitator.model.nq, imitator.model.nv
     q, v, a = np.zeros((T, nq)), np.zeros((T, nv)), np.zeros((T, nv))
     W = {s: np.zeros((T, 6)) for s in SIDES}
-    ok = np.zeros(T, bool)
     iters, statuses = 0, []
     t0 = time.perf_counter()
     for k in range(T):
@@ -262,19 +325,19 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
             a[k - 1] = r.previous_a
             for s in SIDES:
                 W[s][k - 1] = r.previous_wrenches[s]
-            ok[k - 1] = r.previous_feasible
         iters += r.iterations
         statuses.append(r.status)
-    a[-1], wl, ok[-1] = ad.final()
+    a[-1], wl, _ = ad.final()
     for s in SIDES:
         W[s][-1] = wl[s]
     elapsed = time.perf_counter() - t0
     contact_used = {s: np.asarray(demo.contact[s], bool) for s in SIDES}
     motion = robot_motion(imitator, demo.t, q, contact_used).replace(v=v, a=a)
-    report = compare(demonstrator, demo, imitator, motion, "optimal",
-                     {s: ok.copy() for s in SIDES}, force if force != "measured" else "segment")
     aud = audit(ad._audit_robot, motion, W, ad.contacts,
                 cone_half_angle=ad.contact.cone_half_angle)
+    ok = np.asarray(aud.knot_feasible, bool)  # every frame's verdict, off the hot path
+    report = compare(demonstrator, demo, imitator, motion, "optimal",
+                     {s: ok.copy() for s in SIDES}, force if force != "measured" else "segment")
     bad = tuple(Unmet(f"frame {k}", 1.0, int(k)) for k in np.flatnonzero(~ok))
     info = SolverInfo(status=max(set(statuses), key=statuses.count), success=bool(ok.all()),
                       iterations=iters, time_s=elapsed, build_s=0.0, cached=True,

@@ -1,9 +1,11 @@
 """One thread for the linear algebra during a solve.
 
 IPOPT's MUMPS in the CasADi wheel calls the wheel's own OpenBLAS (``libcasadi-tp-openblas``)
-and OpenMP (``libgomp``). On a busy machine their spinning worker threads double the wall time
-of a solve (docs/design.md §6, "the solver"); the knot-sized dense blocks gain nothing from
-them. :func:`single_thread` sets both to one thread for the duration of a ``with`` block and
+and OpenMP (``libgomp``); NumPy and SciPy carry OpenBLAS builds of their own. On a busy
+machine their spinning worker threads double the wall time of a solve, and make NumPy's
+products of the streaming mode's small matrices ten times slower (12.8 → 1.4 ms per frame
+QP on HOAP-2; docs/design.md §6, "the solver"); the knot-sized dense blocks gain nothing from
+them. :func:`single_thread` sets each to one thread for the duration of a ``with`` block and
 restores the previous counts after; a library it cannot find is left alone.
 """
 
@@ -19,18 +21,30 @@ __all__ = ["single_thread"]
 _LIBS: list | None = None
 
 
+_TARGETS = (
+    # (package whose folder holds the library, glob, get, set)
+    ("casadi", "libcasadi-tp-openblas.so*", "openblas_get_num_threads",
+     "openblas_set_num_threads"),
+    ("casadi", "libgomp*.so*", "omp_get_max_threads", "omp_set_num_threads"),
+    ("numpy", "../numpy.libs/libscipy_openblas*.so*", "scipy_openblas_get_num_threads64_",
+     "scipy_openblas_set_num_threads64_"),
+    ("scipy", "../scipy.libs/libscipy_openblas*.so*", "scipy_openblas_get_num_threads",
+     "scipy_openblas_set_num_threads"),
+)
+
+
 def _libs() -> list:
-    """``[(get, set)]`` thread-count functions of the wheel's OpenBLAS and OpenMP."""
+    """``[(get, set)]`` thread-count functions of the BLAS and OpenMP libraries found."""
     global _LIBS
     if _LIBS is None:
-        import casadi
+        import importlib
 
-        root = os.path.dirname(casadi.__file__)
         _LIBS = []
-        for pattern, get, set_ in (("libcasadi-tp-openblas.so*", "openblas_get_num_threads",
-                                    "openblas_set_num_threads"),
-                                   ("libgomp*.so*", "omp_get_max_threads",
-                                    "omp_set_num_threads")):
+        for pkg, pattern, get, set_ in _TARGETS:
+            try:
+                root = os.path.dirname(importlib.import_module(pkg).__file__)
+            except ImportError:
+                continue
             for path in sorted(glob.glob(os.path.join(root, pattern)))[:1]:
                 try:
                     lib = ctypes.CDLL(path)
