@@ -30,7 +30,7 @@ __all__ = ["cache_dir", "compiled_functions", "SlowDerivativesWarning", "source_
            "COMPILE_COUNT"]
 
 ENV = "GDIMITATE_CACHE_DIR"
-CFLAGS = ("-O1", "-shared", "-fPIC", "-fno-math-errno")
+CFLAGS = ("-O1", "-fPIC", "-fno-math-errno")
 COMPILE_COUNT = 0
 """How many libraries this process has compiled (a disk-cache hit leaves it unchanged)."""
 _WARNED = False
@@ -73,16 +73,29 @@ def _warn(why: str) -> None:
 
 
 def _build(funcs: list[ca.Function], lib: Path, cc: str) -> None:
+    """One C file per function, compiled in parallel (one compiler per core: the Hessian's
+    file dominates; separate files also bound the compiler's memory), linked into ``lib``."""
     global COMPILE_COUNT
     lib.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp:
-        cg = ca.CodeGenerator("knot.c", {"with_header": False})
-        for f in funcs:
+        objs, procs = [], []
+        for f in sorted(funcs, key=lambda f: -f.n_instructions()):
+            cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
             cg.add(f)
-        cg.generate(tmp + os.sep)
+            cg.generate(tmp + os.sep)
+            obj = Path(tmp) / f"{f.name()}.o"
+            objs.append(str(obj))
+            while len([p for p in procs if p.poll() is None]) >= (os.cpu_count() or 1):
+                procs[[p.poll() is None for p in procs].index(True)].wait()
+            procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(Path(tmp) / f"{f.name()}.c"),
+                                           "-o", str(obj)], stderr=subprocess.PIPE, text=True))
+        for p in procs:
+            _, err = p.communicate()
+            if p.returncode:
+                raise subprocess.CalledProcessError(p.returncode, p.args, stderr=err)
         out = Path(tmp) / lib.name
-        subprocess.run([cc, *CFLAGS, str(Path(tmp) / "knot.c"), "-o", str(out), "-lm"],
-                       check=True, capture_output=True, text=True)
+        subprocess.run([cc, "-shared", *objs, "-o", str(out), "-lm"], check=True,
+                       capture_output=True, text=True)
         os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
     COMPILE_COUNT += 1
 
@@ -107,10 +120,11 @@ def compiled_functions(key: str, make: Callable[[], list[ca.Function]]
         _warn("no C compiler found (set CC or install gcc)")
         return {f.name(): f for f in funcs}, False
     try:
+        names_file.parent.mkdir(parents=True, exist_ok=True)
+        names_file.write_text("\n".join(f.name() for f in funcs))
         _build(funcs, lib, cc)
     except (OSError, subprocess.CalledProcessError) as e:
         detail = getattr(e, "stderr", "") or str(e)
         _warn(f"compiling the derivatives failed ({detail.strip()[:200]})")
         return {f.name(): f for f in funcs}, False
-    names_file.write_text("\n".join(f.name() for f in funcs))
     return {f.name(): ca.external(f.name(), str(lib)) for f in funcs}, True

@@ -1,0 +1,131 @@
+"""Streaming adaptor: frames per second and audited feasibility (issue 17).
+
+Run: ``python benchmarks/streaming.py [--robot talos] [--frames 200] [--force measured]
+[--baseline-rev 7b16d65] [--baseline-frames 20]``.
+
+The shipped real 3-D walk (with its measured forces) is streamed frame by frame into
+``gdimitate.retarget.StreamingAdaptor`` for ``--robot``. Frames per second are counted after a
+warm-up (the first frame, which solves the window's NLP, and the next four); every frame is
+then judged by :func:`gdimitate.audit.audit` on the assembled motion (knot by knot, the same
+verdict ``adapt(..., mode="per_frame").frame_feasible`` reports). The same-run baseline is the
+streaming of ``--baseline-rev`` (a git revision of this repository, extracted with
+``git archive`` into a temporary folder and run in its own process: by default the revision
+before issue 17, an IPOPT solve of the two-knot window per frame with its audit in the loop)
+over ``--baseline-frames`` frames.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tarfile
+import tempfile
+import textwrap
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_CHILD = textwrap.dedent("""
+    import inspect, json, sys, time, warnings
+    import numpy as np
+    warnings.simplefilter("ignore")
+    import gdimitate as gd
+    from gdimitate.audit import audit
+    from gdimitate.sagittal import robot_motion
+    name, frames, force, warm = sys.argv[1], int(sys.argv[2]), sys.argv[3], 5
+    h, m, f = gd.gait.human_walk_3d()
+    robot = gd.Robot.from_library(name)
+    kw = {"audit": False} if "audit" in inspect.signature(
+        gd.retarget.StreamingAdaptor).parameters else {}
+    sa = gd.retarget.StreamingAdaptor(h, robot, force, dt=m.dt, **kw)
+    T = min(frames + warm, m.T)
+    sides = ("left", "right")
+    q, v = np.zeros((T, robot.model.nq)), np.zeros((T, robot.model.nv))
+    a, W = np.zeros((T, robot.model.nv)), {s: np.zeros((T, 6)) for s in sides}
+    def fk(k):
+        if force != "measured":
+            return None
+        return {s: np.array([np.interp(m.t[k], f.t, f[s].force[:, i]) for i in range(3)])
+                for s in sides}
+    statuses = []
+    for k in range(T):
+        if k == warm:
+            t0 = time.perf_counter()
+        r = sa.step(m.q[k], {s: bool(m.contact[s][k]) for s in sides}, forces=fk(k))
+        q[k], v[k] = r.q, r.v
+        statuses.append(r.status)
+        if k:
+            a[k - 1] = r.previous_a
+            for s in sides:
+                W[s][k - 1] = r.previous_wrenches[s]
+    elapsed = time.perf_counter() - t0
+    a[-1], wl, _ = sa.final()
+    for s in sides:
+        W[s][-1] = wl[s]
+    c = {s: np.asarray(m.contact[s][:T], bool) for s in sides}
+    motion = robot_motion(robot, m.t[:T], q, c).replace(v=v, a=a)
+    rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    ok = np.asarray(rep.knot_feasible, bool)
+    print("RESULT " + json.dumps({
+        "frames_per_s": (T - warm) / elapsed, "frames": T, "feasible": int(ok.sum()),
+        "binding": list(rep.binding[:3]),
+        "statuses": {s: statuses.count(s) for s in set(statuses)}}))
+""")
+
+
+def run(root: Path, robot: str, frames: int, force: str) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    p = subprocess.run([sys.executable, "-c", _CHILD, robot, str(frames), force],
+                       capture_output=True, text=True, env=env, cwd=tempfile.gettempdir())
+    for line in p.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    return {"error": (p.stderr or p.stdout)[-400:]}
+
+
+def checkout(rev: str, into: str) -> Path:
+    """The tree of ``rev`` extracted into ``into`` (``git archive``; nothing in the working
+    folder changes)."""
+    tar = Path(into) / "tree.tar"
+    with open(tar, "wb") as fh:
+        subprocess.run(["git", "-C", str(ROOT), "archive", rev], stdout=fh, check=True)
+    with tarfile.open(tar) as t:
+        t.extractall(Path(into) / "tree", filter="data")
+    return Path(into) / "tree"
+
+
+def row(label: str, r: dict) -> str:
+    if "error" in r:
+        return f"| {label} | error: {r['error']!r} | | |"
+    pct = 100 * r["feasible"] / r["frames"]
+    return (f"| {label} | {r['frames_per_s']:.1f} | {r['feasible']}/{r['frames']} "
+            f"({pct:.0f} %) | {r['statuses']} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--robot", default="talos")
+    ap.add_argument("--frames", type=int, default=200)
+    ap.add_argument("--force", default="measured")
+    ap.add_argument("--baseline-rev", default="7b16d65",
+                    help="git revision streamed as the same-run baseline ('' for none)")
+    ap.add_argument("--baseline-frames", type=int, default=20)
+    a = ap.parse_args()
+    rows = [f"streaming the shipped 3-D walk → {a.robot} (force={a.force}); goal ≥ 200 "
+            "frames/s after warm-up, ≥ 95 % of frames audited feasible", "",
+            "| streaming | frames/s | audited feasible frames | frame solves |",
+            "|---|---|---|---|"]
+    rows.append(row("this tree: one QP per frame", run(ROOT, a.robot, a.frames, a.force)))
+    if a.baseline_rev:
+        with tempfile.TemporaryDirectory() as tmp:
+            base = checkout(a.baseline_rev, tmp)
+            rows.append(row(f"baseline {a.baseline_rev}: IPOPT per frame",
+                            run(base, a.robot, a.baseline_frames, a.force)))
+    print("\n".join(rows))
+
+
+if __name__ == "__main__":
+    main()
