@@ -2,8 +2,9 @@
 audited (``gdimitate.audit.audit``) and simulated (``gdimitate.sim.simulate``) alike.
 
 Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]
-[--save-plans DIR | --plans DIR]`` (``--plans``: audit and simulate the optimal plans a
-``--save-plans`` run wrote, with the adaptation time it measured, instead of adapting anew).
+[--save-plans DIR | --plans DIR] [--holosoma-python PYTHON]`` (``--plans``: audit and
+simulate the optimal plans a ``--save-plans`` run wrote, with the adaptation time it
+measured, instead of adapting anew).
 Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``).
 
 The demonstration is the shipped 3-D walk (OpenSim subject01, 211 frames at 60 Hz, measured
@@ -16,6 +17,12 @@ ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
 - ``diff IK`` — a per-frame kinematic retargeter of the kind today's humanoid tools use:
   differential IK on leg-length-scaled keypoints with joint limits, on Pink
   (``gdimitate.baselines.diff_ik``); free-flyer robots;
+- ``OmniRetarget (holosoma)`` — a real peer: OmniRetarget's retargeter as published on PyPI
+  (``holosoma-retargeting`` 0.1.0: an interaction-mesh SQP with foot sticking, joint limits
+  and its own G1 model), fed the demonstrator's global joint positions in its ``smplx``
+  layout (:func:`smplx_joints`) and run with its defaults in its own Python
+  (``--holosoma-python``, ``benchmarks/holosoma_run.py``); its G1 motion is put on our G1 by
+  joint name. G1 only (its model);
 - ``optimal`` — gdimitate's whole-body adaptor (``adapt(method="optimal", force="measured")``).
 
 Kinematic methods get the wrenches their motion implicitly asks of the floor
@@ -182,11 +189,132 @@ def _saved_optimal(folder: Path, robot, demo, forces, rows) -> None:
     _optimal_row(robot, plan, demo, forces, sec, rows, f" (plan of {path.name}, re-simulated)")
 
 
+#: holosoma-retargeting's ``smplx`` joint layout (its ``SMPLX_DEMO_JOINTS``), in order.
+SMPLX_JOINTS = ("Pelvis", "L_Hip", "R_Hip", "Spine1", "L_Knee", "R_Knee", "Spine2", "L_Ankle",
+                "R_Ankle", "Spine3", "L_Foot", "R_Foot", "Neck", "L_Collar", "R_Collar",
+                "Head", "L_Shoulder", "R_Shoulder", "L_Elbow", "R_Elbow", "L_Wrist", "R_Wrist")
+#: The CMU BVH joints whose mean is each SMPL-X joint (the BVH robot's links of those names;
+#: CMU's LowerBack, Neck and shoulder joints sit where their parents end: averaged with the
+#: next joint so that no two points coincide in holosoma's interaction mesh).
+_BVH_SMPLX = {"Pelvis": ("Hips",), "L_Hip": ("LeftUpLeg",), "R_Hip": ("RightUpLeg",),
+              "Spine1": ("LowerBack", "Spine"), "L_Knee": ("LeftLeg",),
+              "R_Knee": ("RightLeg",), "Spine2": ("Spine",), "L_Ankle": ("LeftFoot",),
+              "R_Ankle": ("RightFoot",), "Spine3": ("Spine", "Spine1"),
+              "L_Foot": ("LeftToeBase",), "R_Foot": ("RightToeBase",), "Neck": ("Neck1",),
+              "L_Collar": ("Spine1", "LeftArm"), "R_Collar": ("Spine1", "RightArm"),
+              "Head": ("Head",), "L_Shoulder": ("LeftArm",), "R_Shoulder": ("RightArm",),
+              "L_Elbow": ("LeftForeArm",), "R_Elbow": ("RightForeArm",),
+              "L_Wrist": ("LeftHand",), "R_Wrist": ("RightHand",)}
+
+
+def _frame_paths(robot, motion, frames) -> dict[str, np.ndarray]:
+    import pinocchio as pin
+
+    m, d = robot.model, robot.model.createData()
+    out = {f: np.empty((motion.T, 3)) for f in frames}
+    R = {f: np.empty((motion.T, 3, 3)) for f in frames}
+    for k, q in enumerate(motion.q):
+        pin.framesForwardKinematics(m, d, q)
+        for f in frames:
+            M = d.oMf[m.getFrameId(f)]
+            out[f][k], R[f][k] = M.translation, M.rotation
+    return out, R
+
+
+def smplx_joints(robot, motion) -> tuple[np.ndarray, float]:
+    """The demonstrator's global joint positions ``(T, 22, 3)`` [m] in holosoma's ``smplx``
+    layout (:data:`SMPLX_JOINTS`) and its standing height [m]. A BVH skeleton: its joints by
+    name (``_BVH_SMPLX``, CMU's names). An OpenSim gait model: hip, knee, ankle and toe joint
+    centres (the body origins); the spine, neck and head along the torso from the lumbar joint
+    to the ``Top.Head`` marker; shoulders 4 cm below the acromion markers and, the model having no
+    arms, elbows and wrists hanging 0.29 m and 0.54 m below them along the torso (stated in
+    the row's note)."""
+    m = robot.model
+    bvh = sorted({f for fs in _BVH_SMPLX.values() for f in fs})
+    if all(m.existFrame(f) for f in bvh):
+        P, _ = _frame_paths(robot, motion, bvh)
+        J = np.stack([np.mean([P[f] for f in _BVH_SMPLX[j]], axis=0) for j in SMPLX_JOINTS],
+                     axis=1)
+    else:
+        names = ["femur_l", "femur_r", "tibia_l", "tibia_r", "talus_l", "talus_r", "toes_l",
+                 "toes_r", "torso", "L.Acromium", "R.Acromium", "Top.Head"]
+        P, R = _frame_paths(robot, motion, names)
+        up = R["torso"][:, :, 2]  # the torso's own up axis (the URDF's z)
+        top = P["Top.Head"]
+        base = P["torso"]
+        along = lambda u: base + u * (top - base)  # noqa: E731
+        sh = {s: P[f"{s}.Acromium"] - 0.04 * up for s in "LR"}
+        J = {"Pelvis": 0.5 * (P["femur_l"] + P["femur_r"]) + 0.05 * up,
+             "L_Hip": P["femur_l"], "R_Hip": P["femur_r"], "L_Knee": P["tibia_l"],
+             "R_Knee": P["tibia_r"], "L_Ankle": P["talus_l"], "R_Ankle": P["talus_r"],
+             "L_Foot": P["toes_l"], "R_Foot": P["toes_r"], "Spine1": along(0.15),
+             "Spine2": along(0.35), "Spine3": along(0.5), "Neck": along(0.8),
+             "Head": along(0.92), "L_Collar": along(0.72) + 0.5 * (sh["L"] - along(0.72)),
+             "R_Collar": along(0.72) + 0.5 * (sh["R"] - along(0.72)),
+             "L_Shoulder": sh["L"], "R_Shoulder": sh["R"],
+             "L_Elbow": sh["L"] - 0.29 * up, "R_Elbow": sh["R"] - 0.29 * up,
+             "L_Wrist": sh["L"] - 0.54 * up, "R_Wrist": sh["R"] - 0.54 * up}
+        J = np.stack([J[j] for j in SMPLX_JOINTS], axis=1)
+    height = float(np.median(J[:, SMPLX_JOINTS.index("Head"), 2]
+                             - J[:, [10, 11], 2].min(axis=1))) + 0.12
+    return J, height
+
+
+def holosoma_motion(robot, demo, qpos: np.ndarray, names: list[str]):
+    """Holosoma's G1 ``qpos`` ``(T, 7 + n)`` (MuJoCo order, quaternion w x y z; joints
+    ``names``) as a Motion of ``robot`` on ``demo``'s times and contacts, joints by name; and
+    the joints ``robot`` lacks."""
+    m = robot.model
+    q = np.tile(robot.neutral, (len(qpos), 1))
+    q[:, :3] = qpos[:, :3]
+    q[:, 3:7] = qpos[:, [4, 5, 6, 3]]  # w x y z → x y z w
+    q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    missing = [n for n in names if not m.existJointName(n)]
+    for k, n in enumerate(names):
+        if m.existJointName(n):
+            q[:, m.joints[m.getJointId(n)].idx_q] = qpos[:, 7 + k]
+    motion = gd.Motion(demo.t.copy(), robot.joint_names, q,
+                       {s: np.asarray(demo.contact[s], bool).copy() for s in SIDES}, 7,
+                       tuple(m.joints[j].nq for j in range(1, m.njoints)))
+    return motion, missing
+
+
+def holosoma_plan(demo, demonstrator, robot, python: str):
+    """OmniRetarget's retargeter (holosoma-retargeting, run by ``python`` in a subprocess:
+    ``benchmarks/holosoma_run.py``) on the demonstrator's joint positions, its G1 output
+    put on ``robot``'s joints by name → ``(BaselinePlan, note)``."""
+    import subprocess
+    import sys
+    import tempfile
+
+    J, height = smplx_joints(demonstrator, demo)
+    J = J - np.r_[J[:, 0, :2].mean(axis=0), 0.0]  # centred on the origin (holosoma's ground)
+    with tempfile.TemporaryDirectory() as tmp:
+        src, out = Path(tmp) / "in.npz", Path(tmp) / "out.npz"
+        np.savez(src, global_joint_positions=J, height=height)
+        run = subprocess.run([python or sys.executable, str(Path(__file__).parent /
+                              "holosoma_run.py"), str(src), str(out)], capture_output=True,
+                             text=True, timeout=3600)
+        if run.returncode != 0:
+            raise RuntimeError(f"holosoma failed: {run.stderr[-400:]}")
+        res = np.load(out)
+        qpos, names, sec = res["qpos"], [str(n) for n in res["joint_names"]], float(
+            res["seconds"])
+        asked = float(res["scale"]) * float(np.linalg.norm(J[-1, 0, :2] - J[0, 0, :2]))
+    motion, missing = holosoma_motion(robot, demo, qpos, names)
+    went = float(np.linalg.norm(qpos[-1, :2] - qpos[0, :2]))
+    note = (f"holosoma G1, its defaults (ground grid widened to the walk); {len(qpos)} frames "
+            f"in {sec:.0f} s; its pelvis travels {went:.1f} m of the {asked:.1f} m asked"
+            + (f"; joints not on {robot.name}: {missing}" if missing else ""))
+    return kinematic_plan(robot, motion, "holosoma", sec), note
+
+
 def run(robots: list[str], optimal: bool = True, save: Path | None = None,
-        plans: Path | None = None) -> list[Row]:
+        plans: Path | None = None, holosoma: str | None = None) -> list[Row]:
     """Every method on every robot in ``robots`` (library names); ``save``: a folder for the
     optimal plans (``<robot>_optimal.npz`` and the adaptation's seconds in ``.json``);
-    ``plans``: such a folder to take the optimal plans from instead of adapting anew."""
+    ``plans``: such a folder to take the optimal plans from instead of adapting anew;
+    ``holosoma``: the Python that has ``holosoma-retargeting`` (its G1 row, G1 only)."""
     demonstrator, demo, forces = gd.gait.human_walk_3d()
     rows: list[Row] = []
     for name in robots:
@@ -207,6 +335,10 @@ def run(robots: list[str], optimal: bool = True, save: Path | None = None,
                     f"{int(plan.relaxed.sum())} frames feet held by cost")
             rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "diff IK (Pink)",
                                  note))
+            if holosoma and name.startswith("g1"):
+                plan, note = holosoma_plan(demo, demonstrator, robot, holosoma)
+                rows.append(evaluate(robot, plan, plan.frames_per_s, forces,
+                                     "OmniRetarget (holosoma)", note))
         if optimal and plans is not None:
             _saved_optimal(plans, robot, demo, forces, rows)
         elif optimal:
@@ -274,9 +406,13 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--plans", type=Path, default=None, metavar="DIR",
                    help="take the optimal plans from DIR (written by --save-plans) instead of "
                         "adapting anew: audit and simulate them again")
+    p.add_argument("--holosoma-python", default=None, metavar="PYTHON",
+                   help="a Python with holosoma-retargeting installed ('.[peers]', or a venv of "
+                        "its own: it pins numpy==2.3.5): adds OmniRetarget's row on G1")
     a = p.parse_args(argv)
     t0 = time.perf_counter()
-    rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans, plans=a.plans)
+    rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans, plans=a.plans,
+               holosoma=a.holosoma_python)
     text = (table(rows) + "\n\nNegative control (physics check):\n" + negative_control(rows)
             + f"\n\nDemonstration: OpenSim subject01 walk (3-D, measured GRF), 211 frames, 3.5 s; "
             f"simulation: MuJoCo, 1 kHz QP tracking controller; run took "
