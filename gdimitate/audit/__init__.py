@@ -5,7 +5,8 @@ never read from the optimiser that produced them: inverse dynamics (the unactuat
 must vanish, every actuated joint's torque within its effort limit), forward differences of
 ``q`` (against ``v`` and the velocity limits), position limits, each stance foot's wrench
 against its contact wrench cone (Caron, Pham, Nakamura, ICRA 2015), slip of the stance feet,
-every sole corner against the floor, and the push direction against the demonstrator's.
+every sole corner against the floor, the push direction against the demonstrator's, and the
+distances between the robot's own collision geometries (limb–limb, limb–trunk).
 """
 
 from .core import audit
@@ -18,6 +19,7 @@ from .report import (
     ForceDirectionAudit,
     JointAudit,
     Penetration,
+    SelfCollisionAudit,
     Worst,
 )
 
@@ -30,6 +32,7 @@ __all__ = [
     "ForceDirectionAudit",
     "JointAudit",
     "Penetration",
+    "SelfCollisionAudit",
     "Worst",
     "audit",
 ]

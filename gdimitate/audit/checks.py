@@ -30,6 +30,7 @@ from .report import (
     ForceDirectionAudit,
     JointAudit,
     Penetration,
+    SelfCollisionAudit,
     Worst,
 )
 
@@ -223,7 +224,8 @@ def _wrap(x: np.ndarray) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- the audit
-def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
+def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
+              collision_margin: float = 0.0):
     """See :func:`gdimitate.audit.audit`."""
     if not isinstance(tol, AuditTolerances):
         raise InvalidInputError(f"tolerances must be an AuditTolerances; got {type(tol).__name__}")
@@ -314,6 +316,7 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
     half = min(min(c.half_length, c.half_width) for c in contacts.values())
     add(_make("penetration", depth, tol.penetration, "max", "m", half))
     pen = max(pen_all, key=lambda p: p.depth)
+    collision = _self_collision(robot, motion, collision_margin, tol, add)
 
     failed = sorted((c for c in checks if not c.passed), key=lambda c: -c.violation)
     return AuditReport(
@@ -323,7 +326,25 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol):
         velocity_consistency=Worst(vc.value, vc.knot),
         knot_feasible=np.logical_and.reduce(masks), tau=tau, knot_checks=np.array(masks),
         tolerances=tol,
-        cone_half_angle=float(cone_half_angle))
+        cone_half_angle=float(cone_half_angle), self_collision=collision)
+
+
+def _self_collision(robot, motion, margin, tol, add) -> SelfCollisionAudit | None:
+    """The ``self_collision`` check (every knot's closest pair against ``margin``) and its
+    summary; ``None`` (no check) for a robot without collision geometry."""
+    from ..selfcollision import self_collision
+
+    if not (np.isfinite(margin) and margin >= 0):
+        raise InvalidInputError(f"collision_margin must be a finite distance ≥ 0 [m]; got "
+                                f"{margin!r}")
+    sc = self_collision(robot)
+    if sc is None or not sc.pairs:
+        return None
+    D = sc.distances(motion.q)
+    closest = D.min(axis=1)
+    c = add(_make("self_collision", closest, margin - tol.self_collision, "min", "m", 0.05))
+    return SelfCollisionAudit(c.value, c.knot, sc.pairs[int(np.argmin(D[c.knot]))],
+                              float(margin), len(sc.pairs), sc.excluded)
 
 
 def _foot(side, c: SoleContact, stance, w, pos, rot, svel, target, half_angle, tol, weight):

@@ -52,7 +52,10 @@ class AuditTolerances:
       is held across a one-step scheme's step ends it at about that half) — a foot on the floor
       is still;
     - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
-    - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench.
+    - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench;
+    - ``self_collision`` [m]: how far two of the robot's own collision geometries (limb–limb,
+      limb–trunk; :mod:`gdimitate.selfcollision`) may come closer than the audit's
+      ``collision_margin``.
     """
 
     base_residual: float = 1e-6
@@ -71,6 +74,7 @@ class AuditTolerances:
     stance_velocity: float = 1e-3
     force_direction: float = 1e-3
     swing_wrench: float = 1e-6
+    self_collision: float = 1e-3
 
     def __post_init__(self) -> None:
         from ..errors import InvalidInputError
@@ -195,6 +199,22 @@ class FootAudit:
     stance_velocity: Worst = Worst(float("nan"), -1)
 
 
+@dataclass(frozen=True)
+class SelfCollisionAudit:
+    """The closest approach of the robot's own collision geometries over the motion:
+    ``distance`` [m] (signed: negative where two overlap) between ``pair`` (geometry names) at
+    ``knot``; ``margin`` [m] the bound; ``pairs``: how many pairs were checked; ``excluded``
+    ``((a, b, distance at the neutral pose [m] or NaN for neighbouring bodies), …)``: the
+    pairs left out (:func:`gdimitate.selfcollision.self_collision`)."""
+
+    distance: float
+    knot: int
+    pair: tuple[str, str]
+    margin: float
+    pairs: int
+    excluded: tuple[tuple[str, str, float], ...] = ()
+
+
 def _json(x: object) -> object:
     """JSON-safe copy: NaN/inf → None, NumPy → Python, tuples → lists."""
     if isinstance(x, Mapping):
@@ -231,7 +251,9 @@ class AuditReport:
     ``tau`` ``(T, nv)`` [N·m, N]: the recomputed ``rnea(q, v, a) − Σ_c J_cᵀ w_c`` (the base
     rows are the residual, the others the joint torques); ``knot_checks`` ``(n_checks, T)``
     bool: each check's per-knot pass flags, rows in ``checks`` order; ``tolerances``;
-    ``cone_half_angle`` [rad].
+    ``cone_half_angle`` [rad]; ``self_collision``: the closest approach of the robot's own
+    collision geometries (:class:`SelfCollisionAudit`; ``None``: the robot has no collision
+    geometry — not checked, and the summary says so).
     """
 
     feasible: bool
@@ -248,6 +270,7 @@ class AuditReport:
     knot_checks: np.ndarray
     tolerances: AuditTolerances = field(default_factory=AuditTolerances)
     cone_half_angle: float = 0.0
+    self_collision: SelfCollisionAudit | None = None
 
     @property
     def force_direction_error(self) -> dict[str, ForceDirectionAudit | None]:
@@ -298,4 +321,12 @@ class AuditReport:
         if self.unlimited:
             lines.append("no limit in the model (not checked): " + ", ".join(
                 f"{j} ({k})" for j, k in self.unlimited))
+        sc = self.self_collision
+        if sc is None:
+            lines.append("self-collision: not checked (the robot has no collision geometry)")
+        else:
+            lines.append(f"self-collision: {sc.pairs} pairs, closest {sc.distance:.4g} m "
+                         f"({sc.pair[0]} – {sc.pair[1]}, knot {sc.knot}); "
+                         f"{len(sc.excluded)} pairs left out (neighbours or touching at the "
+                         "neutral pose)")
         return "\n".join(lines)

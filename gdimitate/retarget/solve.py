@@ -426,7 +426,7 @@ def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, pa
     q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
     if parts is None:
         parts = (default_parts(tuple(bmap.segments.values()), q_index)
-                 + body_parts(imitator, bmap, act_names))
+                 + body_parts(imitator, act_names))
     return pb.formulation(imitator, flags, tuple(parts))
 
 

@@ -1,0 +1,29 @@
+"""The whole body, faithfully: the parts every whole-body adaptation adds to
+:func:`~.default_parts` for an imitator — the joints its body map leaves out held within
+:data:`~gdimitate.retarget.bodymap.HOLD_RANGE` of their neutral pose (:class:`.PostureRange`)
+and its limbs kept apart (:class:`.SelfCollision`, robots with collision geometry)."""
+
+from __future__ import annotations
+
+from .posture_range import PostureRange
+from .self_collision import SelfCollision, sphere_pairs
+
+__all__ = ["body_parts"]
+
+
+def body_parts(imitator, act_names) -> tuple:
+    """``(PostureRange, SelfCollision)`` for ``imitator`` (a :class:`~gdimitate.Robot`) and
+    its actuated joints ``act_names`` (which of them the body map leaves out is a parameter of
+    the posture range; the self-collision part is left out for a robot without collision
+    geometry)."""
+    from ..bodymap import HOLD_RANGE
+
+    out = []
+    if act_names:
+        idx = tuple(int(imitator.idx_q(j)) for j in act_names)
+        out.append(PostureRange(idx, tuple(float(imitator.neutral[i]) for i in idx),
+                                HOLD_RANGE))
+    pairs = sphere_pairs(imitator)
+    if pairs:
+        out.append(SelfCollision(pairs))
+    return tuple(out)

@@ -1,0 +1,193 @@
+"""Self-collision as a constraint of the adaptor: pairs of spheres that enclose the robot's
+collision geometries (limb–limb and limb–trunk pairs of :mod:`gdimitate.selfcollision`) kept
+at least ``margin`` apart at every knot.
+
+Each collision geometry is covered by up to :data:`MAX_SPHERES` spheres, one per cluster of
+its vertices (a sphere primitive is itself): every vertex of its convex hull (a box's
+corners, a cylinder's rims) lies inside one of them, so spheres ``margin`` apart keep the hulls
+— hence the meshes — apart. Only geometry pairs that come within :data:`ACTIVE` of each other
+at the neutral pose (arms against the trunk and the thighs, the two legs' knees, shanks and
+feet) get rows, unless they meet where the limbs meet the trunk (:data:`PROXIMAL`), and of
+their spheres those within :data:`ACTIVE_SPHERES`; sphere pairs already
+closer than the margin at the neutral pose (the spheres' slack over the hull) keep at least
+their neutral gap instead. Rows: centre distance / leg length ≥ (r_a + r_b + gap) / leg
+length. Relaxable (the least-infeasible
+solve reports an unmet pair)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+
+from .base import Constraint
+
+__all__ = ["SelfCollision", "sphere_pairs", "MARGIN", "ACTIVE", "MAX_SPHERES"]
+
+#: The adaptor's clearance between sphere covers [m] (the audit's bound is 0 between hulls).
+MARGIN = 0.01
+#: Geometry pairs closer than this at the neutral pose get rows [m] ...
+ACTIVE = 0.15
+#: ... for their spheres closer than this [m].
+ACTIVE_SPHERES = 0.08
+#: At most this many spheres per geometry.
+MAX_SPHERES = 4
+#: Geometries on a limb's first this-many joints (hip, shoulder) are "proximal": a proximal
+#: geometry and the trunk link its limb hangs from (a thigh and the pelvis), or two proximal
+#: geometries of legs hanging from one trunk link (the two hips), get no rows — spheres are too
+#: coarse where limbs meet the trunk, and the audit checks those pairs on the hulls
+#: themselves.
+PROXIMAL = 3
+
+
+@dataclass(frozen=True)
+class SelfCollision(Constraint):
+    """``pairs``: ``((frame_a, (x, y, z), r_a, frame_b, (x, y, z), r_b, gap), …)`` — sphere
+    centres in Pinocchio frames (joint frames) [m], radii [m], and the least gap between the
+    two spheres' surfaces [m]: the margin, or their gap at the neutral pose where that is
+    smaller."""
+
+    pairs: tuple = ()
+    name: str = "self-collision"
+    relaxable: bool = True
+
+    def rows(self, k):
+        L = k.leg["left"].length
+        out = []
+        for fa, oa, _, fb, ob, _, _ in self.pairs:
+            Ra, pa = k.sym.placement(fa)
+            Rb, pb = k.sym.placement(fb)
+            d = (pa + Ra @ ca.DM(oa)) - (pb + Rb @ ca.DM(ob))
+            out.append(ca.sqrt(ca.sumsqr(d) + 1e-12) / L)
+        return ca.vertcat(*out) if out else ca.SX(0, 1)
+
+    def bounds(self, spec):
+        lo = np.tile([(ra + rb + gap) / spec.leg_length
+                      for _, _, ra, _, _, rb, gap in self.pairs], (spec.T, 1))
+        return lo, np.full_like(lo, np.inf)
+
+    def labels(self, k):
+        return [f"{self.name}: {fa}/{fb}" for fa, _, _, fb, _, _, _ in self.pairs]
+
+
+def _vertices(g) -> np.ndarray:
+    """Points ``(n, 3)`` in the geometry's own frame whose convex hull contains the shape
+    (sphere: its centre only; capsule: its cylinder, the caps covered by the spheres' radius
+    only approximately)."""
+    import coal
+
+    s = g.geometry
+    if isinstance(s, coal.BVHModelBase):
+        return np.asarray(s.vertices())
+    if isinstance(s, coal.ConvexBase):
+        return np.asarray(s.points())
+    if isinstance(s, coal.Box):
+        h = np.asarray(s.halfSide)
+        return np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * h
+    if isinstance(s, (coal.Cylinder, coal.Capsule)):
+        th = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+        rho = s.radius / np.cos(np.pi / 16)  # the 16-gon around the circle, not inside it
+        ring = np.c_[rho * np.cos(th), rho * np.sin(th)]
+        return np.vstack([np.c_[ring, np.full(16, z)] for z in (-s.halfLength, s.halfLength)])
+    return np.zeros((1, 3))
+
+
+def _cover(g) -> list[tuple[np.ndarray, float]]:
+    """Spheres ``[(centre (3,) in the geometry's frame, radius)]`` enclosing it: its vertices
+    split into up to :data:`MAX_SPHERES` clusters (k-means from farthest-point seeds, a few
+    Lloyd steps), each cluster's sphere centred on its mean with the radius of its farthest
+    vertex."""
+    import coal
+
+    if isinstance(g.geometry, coal.Sphere):
+        return [(np.zeros(3), float(g.geometry.radius))]
+    V = _vertices(g)
+    k = min(MAX_SPHERES, len(V))
+    seeds = [int(np.argmax(np.linalg.norm(V - V.mean(axis=0), axis=1)))]
+    for _ in range(k - 1):
+        seeds.append(int(np.argmax(np.min(np.linalg.norm(V[:, None] - V[seeds][None], axis=2),
+                                          axis=1))))
+    C = V[seeds].copy()
+    for _ in range(10):
+        near = np.argmin(np.linalg.norm(V[:, None] - C[None], axis=2), axis=1)
+        C = np.array([V[near == i].mean(axis=0) if np.any(near == i) else C[i]
+                      for i in range(len(C))])
+    near = np.argmin(np.linalg.norm(V[:, None] - C[None], axis=2), axis=1)
+    return [(C[i], float(np.max(np.linalg.norm(V[near == i] - C[i], axis=1))))
+            for i in range(len(C)) if np.any(near == i)]
+
+
+def _proximal(robot) -> dict[int, str | None]:
+    """``{joint id: where it meets the trunk}``: for a joint on one of a limb's first
+    :data:`PROXIMAL` joints, ``"limb:<top>@<trunk joint it hangs from>"``; for a trunk joint,
+    ``"trunk@<joint>"``; else ``None``."""
+    from ...selfcollision import TRUNK, limb_groups
+
+    groups = limb_groups(robot)
+    parents = robot.model.parents
+    out: dict[int, str | None] = {}
+    for j, g in groups.items():
+        if g == TRUNK:
+            out[j] = f"trunk@{j}"
+            continue
+        n, k = 0, j
+        while groups.get(parents[k]) == g:
+            k, n = parents[k], n + 1
+        out[j] = f"{g}@{parents[k]}" if n < PROXIMAL else None
+    return out
+
+
+def _leg_limbs(robot) -> set[str]:
+    """The limb labels (:func:`~gdimitate.selfcollision.limb_groups`) of the robot's legs."""
+    from ...selfcollision import limb_groups
+
+    groups = limb_groups(robot)
+    return {groups[robot.model.getJointId(leg.hip)] for leg in robot.legs.values()
+            if robot.model.existJointName(leg.hip)}
+
+
+def _near_root(a: str | None, b: str | None, legs: set[str]) -> bool:
+    """Two geometries where limbs meet the trunk: a proximal limb geometry and the trunk link
+    it hangs from (a thigh and the pelvis, an upper arm and the chest), or both proximal on
+    two legs hanging from the same trunk joint (the two hips; ``legs``: the legs' limb
+    labels)."""
+    if a is None or b is None or a.split("@")[1] != b.split("@")[1]:
+        return False
+    ga, gb = a.split("@")[0], b.split("@")[0]
+    return "trunk" in (ga, gb) or (ga in legs and gb in legs)
+
+
+def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
+    """The :class:`SelfCollision` pairs of ``robot`` (empty without collision geometry)."""
+    from ...selfcollision import self_collision
+
+    sc = self_collision(robot)
+    if sc is None:
+        return ()
+    model = robot.model
+    d0 = sc.distances(robot.neutral)
+    data = model.createData()
+    pin.forwardKinematics(model, data, robot.neutral)
+    pairs = []
+    prox = _proximal(robot)
+    legs = _leg_limbs(robot)
+    for (a, b), d in zip(sc.pairs, d0):
+        ja, jb = (int(robot.collision_model.geometryObjects[
+            robot.collision_model.getGeometryId(n)].parentJoint) for n in (a, b))
+        if d >= active or _near_root(prox[ja], prox[jb], legs):
+            continue
+        ends = []
+        for n in (a, b):
+            g = robot.collision_model.geometryObjects[robot.collision_model.getGeometryId(n)]
+            j = int(g.parentJoint)
+            ends.append([(model.names[j], g.placement.act(ci), r, data.oMi[j].act(
+                g.placement.act(ci))) for ci, r in _cover(g)])
+        for fa, oa, ra, wa in ends[0]:
+            for fb, ob, rb, wb in ends[1]:
+                gap = float(np.linalg.norm(wa - wb) - ra - rb)
+                if gap < ACTIVE_SPHERES:  # closer than the margin at rest: keep that gap
+                    pairs.append((fa, tuple(map(float, oa)), ra, fb, tuple(map(float, ob)), rb,
+                                  min(gap, margin)))
+    return tuple(pairs)

@@ -1,0 +1,185 @@
+"""Self-collision: distances between a robot's own collision geometries (docs/design.md §12).
+
+The robot's collision geometry (the URDF's ``<collision>`` elements, a Pinocchio
+``GeometryModel``) is split into the **trunk** and its **limbs** by the kinematic tree alone:
+from the root joint the trunk descends while exactly one child subtree is not a leg (the legs
+are :attr:`Robot.legs`); where two or more non-leg subtrees branch off (arms, head), each is a
+limb, and so is each leg. The pairs checked are every pair of geometries on two different
+limbs (limb–limb) or on a limb and the trunk (limb–trunk); geometries of one limb, or of the
+trunk, are never paired (neighbouring links overlap by design). Pairs already closer than the
+``margin`` at the neutral pose (a thigh against the pelvis, an upper arm against the torso)
+are left out and listed (:attr:`SelfCollision.excluded`): no motion could keep them apart.
+
+Distances are computed by coal (GJK/EPA, signed: negative inside each other) between convex
+shapes: meshes are replaced by their convex hulls (conservative — a hull is never farther from
+anything than its mesh), primitives (spheres, cylinders, boxes, capsules) are kept.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import InvalidInputError
+
+__all__ = ["SelfCollision", "self_collision", "limb_groups", "TRUNK"]
+
+TRUNK = "trunk"
+#: Default clearance [m] below which a pair at the neutral pose is left out.
+NEUTRAL_MARGIN = 0.0
+
+
+def _children(model: pin.Model) -> dict[int, list[int]]:
+    out: dict[int, list[int]] = {j: [] for j in range(model.njoints)}
+    for j in range(1, model.njoints):
+        out[model.parents[j]].append(j)
+    return out
+
+
+def _subtree(children: dict[int, list[int]], j: int) -> list[int]:
+    out, stack = [], [j]
+    while stack:
+        k = stack.pop()
+        out.append(k)
+        stack += children[k]
+    return out
+
+
+def limb_groups(robot) -> dict[int, str]:
+    """``{joint id: group}``: :data:`TRUNK` or the name of the joint a limb starts at (module
+    docstring). Joint 0 (the universe) and the root belong to the trunk."""
+    model = robot.model
+    children = _children(model)
+    leg_joints = set()
+    for leg in robot.legs.values():
+        if model.existJointName(leg.hip):
+            j = model.getJointId(leg.hip)
+            leg_joints.add(j)
+    groups = {0: TRUNK}
+    cur = 1 if model.njoints > 1 and model.parents[1] == 0 else 0
+    while True:
+        groups[cur] = TRUNK
+        kids = children[cur]
+        legs = [k for k in kids if leg_joints & set(_subtree(children, k))]
+        other = [k for k in kids if k not in legs]
+        for k in legs:
+            _assign(groups, children, k)
+        if len(other) == 1:
+            cur = other[0]
+            continue
+        for k in other:
+            _assign(groups, children, k)
+        break
+    for j in range(model.njoints):  # joints under the universe besides the root chain
+        groups.setdefault(j, TRUNK)
+    return groups
+
+
+def _assign(groups: dict[int, str], children, top: int) -> None:
+    """One limb: every joint of ``top``'s subtree labelled ``limb:<top>``."""
+    for k in _subtree(children, top):
+        groups[k] = f"limb:{top}"
+
+
+@dataclass(frozen=True)
+class SelfCollision:
+    """A robot's self-collision pairs and how to measure them.
+
+    ``geometry``: the convexified ``pin.GeometryModel`` with the checked pairs as its collision
+    pairs; ``pairs`` ``((name_a, name_b), …)``: the checked pairs (geometry object names);
+    ``groups`` ``{geometry name: "trunk" | limb}`` (a limb is named after its first joint);
+    ``excluded`` ``((name_a, name_b, distance [m]), …)``: pairs closer than ``margin`` at the
+    neutral pose (their distance there) and pairs on neighbouring bodies (NaN), left out;
+    ``margin`` [m]: that threshold."""
+
+    geometry: pin.GeometryModel
+    pairs: tuple[tuple[str, str], ...]
+    groups: dict[str, str]
+    excluded: tuple[tuple[str, str, float], ...]
+    margin: float
+    model: pin.Model
+
+    def distances(self, q: np.ndarray) -> np.ndarray:
+        """Signed distances ``(T, P)`` [m] of the checked pairs at configurations ``q``
+        ``(T, nq)`` (or ``(P,)`` for one ``(nq,)``); negative where two shapes overlap."""
+        q = np.asarray(q, dtype=float)
+        one = q.ndim == 1
+        Q = np.atleast_2d(q)
+        if Q.shape[1] != self.model.nq:
+            raise InvalidInputError(f"q has {Q.shape[1]} columns; the model has nq = "
+                                    f"{self.model.nq}")
+        data, gdata = self.model.createData(), pin.GeometryData(self.geometry)
+        out = np.empty((Q.shape[0], len(self.pairs)))
+        for k, qk in enumerate(Q):
+            pin.computeDistances(self.model, data, self.geometry, gdata, qk)
+            out[k] = [r.min_distance for r in gdata.distanceResults]
+        return out[0] if one else out
+
+
+def _convex(geom: pin.GeometryModel) -> pin.GeometryModel:
+    """A copy whose meshes are their convex hulls."""
+    import coal
+
+    out = pin.GeometryModel()
+    for g in geom.geometryObjects:
+        g = g.copy()
+        shape = g.geometry
+        if isinstance(shape, coal.BVHModelBase):
+            shape.buildConvexHull(False, "Qt")
+            g.geometry = shape.convex
+        out.addGeometryObject(g)
+    return out
+
+
+def self_collision(robot, margin: float = NEUTRAL_MARGIN) -> SelfCollision | None:
+    """The :class:`SelfCollision` of ``robot`` (a :class:`~gdimitate.Robot`), or ``None`` when
+    it has no collision geometry. ``margin`` [m]: pairs closer than this at the neutral pose
+    are left out. Cached on the robot per margin."""
+    if not (np.isfinite(margin) and margin >= 0):
+        raise InvalidInputError(f"margin must be a finite distance ≥ 0 [m]; got {margin!r}")
+    cache = robot.__dict__.setdefault("_self_collision", {})
+    if margin in cache:
+        return cache[margin]
+    geom = getattr(robot, "collision_model", None)
+    if geom is None or geom.ngeoms == 0:
+        cache[margin] = None
+        return None
+    model = robot.model
+    convex = _convex(geom)
+    jg = limb_groups(robot)
+    objs = convex.geometryObjects
+    groups = {g.name: jg.get(int(g.parentJoint), TRUNK) for g in objs}
+    par = model.parents
+    adjacent = [(i, j) for i in range(len(objs)) for j in range(i + 1, len(objs))
+                if groups[objs[i].name] != groups[objs[j].name]
+                and _adjacent(par, int(objs[i].parentJoint), int(objs[j].parentJoint))]
+    cand = [(i, j) for i in range(len(objs)) for j in range(i + 1, len(objs))
+            if groups[objs[i].name] != groups[objs[j].name] and (i, j) not in adjacent]
+    for i, j in cand:
+        convex.addCollisionPair(pin.CollisionPair(i, j))
+    data, gdata = model.createData(), pin.GeometryData(convex)
+    pin.computeDistances(model, data, convex, gdata, robot.neutral)
+    d0 = np.array([r.min_distance for r in gdata.distanceResults])
+    keep = [p for p, d in zip(cand, d0) if d >= margin]
+    excluded = tuple((objs[i].name, objs[j].name, float(d)) for (i, j), d in zip(cand, d0)
+                     if d < margin)
+    excluded += tuple((objs[i].name, objs[j].name, float("nan")) for i, j in adjacent)
+    convex.removeAllCollisionPairs()
+    for i, j in keep:
+        convex.addCollisionPair(pin.CollisionPair(i, j))
+    out = SelfCollision(convex, tuple((objs[i].name, objs[j].name) for i, j in keep),
+                        {k: _label(model, v) for k, v in groups.items()}, excluded,
+                        float(margin), model)
+    cache[margin] = out
+    return out
+
+
+def _adjacent(parents, a: int, b: int) -> bool:
+    """Two joints' bodies are neighbours: one is the other's parent."""
+    return a == b or parents[a] == b or parents[b] == a
+
+
+def _label(model: pin.Model, group: str) -> str:
+    return group if group == TRUNK else f"limb from {model.names[int(group.split(':')[1])]}"

@@ -1,0 +1,274 @@
+"""Self-collision (issue 20; docs/design.md §12): the pairs a robot's own collision geometry
+gives (limb–limb, limb–trunk; neighbours and pairs touching at the neutral pose left out and
+listed), their distances against closed forms and coal's own mesh distances, and the audit's
+``self_collision`` check: a motion that drives a hand through the pelvis fails it, standing
+and a real walk copied onto the robots pass it."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import gdimitate as gd
+from gdimitate.audit import audit
+from gdimitate.errors import InvalidInputError
+from gdimitate.motion import Motion
+from gdimitate.selfcollision import TRUNK, limb_groups, self_collision
+from gdimitate.wrenches import estimate_wrenches
+
+
+@pytest.fixture(scope="module")
+def g1():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gd.Robot.from_library("g1")
+
+
+def _world(robot, name, q):
+    """Placement of collision geometry ``name`` at ``q`` (Pinocchio)."""
+    g = robot.collision_model.geometryObjects[robot.collision_model.getGeometryId(name)]
+    d = robot.model.createData()
+    pin.forwardKinematics(robot.model, d, q)
+    return d.oMi[g.parentJoint] * g.placement, g.geometry
+
+
+def test_limbs_and_pairs_of_g1(g1):
+    """G1's tree gives the trunk (pelvis → waist → torso) and four limbs; no pair lies within
+    one group; every left-out pair is a neighbour (NaN) or closer than the margin at the
+    neutral pose (recomputed)."""
+    groups = limb_groups(g1)
+    m = g1.model
+    assert groups[m.getJointId("waist_pitch_joint")] == TRUNK
+    assert groups[m.getJointId("left_elbow_joint")] == groups[m.getJointId(
+        "left_shoulder_pitch_joint")] != groups[m.getJointId("right_elbow_joint")]
+    assert groups[m.getJointId("left_knee_joint")] != TRUNK
+    assert len({v for v in groups.values()}) == 5
+    sc = self_collision(g1, margin=0.01)
+    assert sc.pairs and all(sc.groups[a] != sc.groups[b] for a, b in sc.pairs)
+    d0 = sc.distances(g1.neutral)
+    assert d0.min() >= 0.01
+    for *_, d in sc.excluded:
+        if np.isfinite(d):
+            assert d < 0.01
+    assert self_collision(g1, margin=0.01) is sc  # cached
+    with pytest.raises(InvalidInputError, match="margin"):
+        self_collision(g1, margin=-1.0)
+
+
+def test_distances_against_closed_forms_and_meshes(g1):
+    """Sphere pairs: |c_a − c_b| − r_a − r_b from Pinocchio placements (to 1e-9 m); mesh
+    pairs: the hull distance never exceeds coal's distance between the meshes themselves
+    (conservative; up to GJK's tolerance, 1e-5 m), at random configurations within the
+    limits."""
+    import coal
+
+    sc = self_collision(g1)
+    rng = np.random.default_rng(3)
+    m = g1.model
+    spheres = [i for i, (a, b) in enumerate(sc.pairs)
+               if all(isinstance(_world(g1, n, g1.neutral)[1], coal.Sphere) for n in (a, b))]
+    meshes = [i for i, (a, b) in enumerate(sc.pairs)
+              if all(isinstance(_world(g1, n, g1.neutral)[1], coal.BVHModelBase)
+                     for n in (a, b))][::25]
+    assert len(spheres) >= 4 and len(meshes) >= 10
+    for _ in range(5):
+        q = g1.neutral.copy()
+        q[7:] = rng.uniform(m.lowerPositionLimit[7:], m.upperPositionLimit[7:])
+        D = sc.distances(q)
+        for i in spheres:
+            (Ma, ga), (Mb, gb) = (_world(g1, n, q) for n in sc.pairs[i])
+            ref = np.linalg.norm(Ma.translation - Mb.translation) - ga.radius - gb.radius
+            assert D[i] == pytest.approx(ref, abs=1e-9)
+        for i in meshes:
+            (Ma, ga), (Mb, gb) = (_world(g1, n, q) for n in sc.pairs[i])
+            req, res = coal.DistanceRequest(), coal.DistanceResult()
+            coal.distance(ga, coal.Transform3s(Ma.rotation, Ma.translation), gb,
+                          coal.Transform3s(Mb.rotation, Mb.translation), req, res)
+            assert D[i] <= res.min_distance + 1e-5  # GJK's convergence tolerance
+
+
+def _reach(robot, frame: str, geom: str, arm_prefix: str) -> np.ndarray:
+    """A configuration that brings ``frame`` as near as the arm reaches to the centre of mesh
+    ``geom``'s bounding box (damped least squares on the shoulder and elbow joints, the rest
+    at the neutral pose)."""
+    m, d = robot.model, robot.model.createData()
+    q = robot.neutral.copy()
+    Mg, mesh = _world(robot, geom, q)
+    V = np.asarray(mesh.vertices())
+    centre = Mg.act(0.5 * (V.min(axis=0) + V.max(axis=0)))
+    cols = [m.joints[j].idx_v for j in range(1, m.njoints)
+            if m.names[j].startswith(arm_prefix) and ("shoulder" in m.names[j]
+                                                     or "elbow" in m.names[j])]
+    qi = [m.joints[j].idx_q for j in range(1, m.njoints) if m.joints[j].idx_v in cols]
+    fid = m.getFrameId(frame)
+    for _ in range(100):
+        pin.computeJointJacobians(m, d, q)
+        pin.updateFramePlacements(m, d)
+        e = centre - d.oMf[fid].translation
+        J = pin.getFrameJacobian(m, d, fid, pin.LOCAL_WORLD_ALIGNED)[:3, cols]
+        v = np.zeros(m.nv)
+        v[cols] = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(3), e)
+        q = pin.integrate(m, q, 0.5 * v)
+        q[qi] = np.clip(q[qi], m.lowerPositionLimit[qi], m.upperPositionLimit[qi])
+    return q
+
+
+def _static(robot, qs: np.ndarray):
+    """A motion through configurations ``qs`` at 10 Hz, both feet in stance, its wrenches
+    (the cone QP)."""
+    from gdimitate.motion import differentiate
+    from gdimitate.sagittal import robot_motion
+
+    t = np.arange(len(qs)) * 0.1
+    mo = differentiate(robot.model, robot_motion(robot, t, qs, {s: np.ones(len(qs), bool)
+                                                                for s in ("left", "right")}))
+    return mo, estimate_wrenches(robot, mo).wrenches
+
+
+def test_hand_through_the_pelvis_fails_the_audit(g1):
+    """The left hand driven into the pelvis (its wrist towards the centre of the pelvis mesh's
+    bounding box, shoulder and elbow within their limits): the audit's ``self_collision``
+    fails, naming a pair that overlaps, and the wrist–pelvis distance is negative; standing
+    still passes."""
+    q_in = _reach(g1, "left_wrist_yaw_link", "pelvis_contour_link_0", "left_")
+    qs = np.array([g1.neutral + s * (q_in - g1.neutral) for s in np.linspace(0, 1, 6)])
+    qs[:, 3:7] = g1.neutral[3:7]
+    motion, w = _static(g1, qs)
+    rep = audit(g1, motion, w)
+    assert not rep.feasible and "self_collision" in rep.binding
+    chk = rep.check("self_collision")
+    assert chk.value < 0 and chk.knot == 5
+    sc = self_collision(g1)
+    i = sc.pairs.index(("pelvis_contour_link_0", "left_wrist_yaw_link_0"))
+    assert sc.distances(q_in)[i] < 0
+    assert rep.check_knots("self_collision")[0]  # the neutral start is clear
+    still, w0 = _static(g1, np.tile(g1.neutral, (6, 1)))
+    ok = audit(g1, still, w0)
+    assert ok.check("self_collision").passed and ok.self_collision.distance > 0
+    assert "self-collision" in ok.summary()
+
+
+@pytest.mark.parametrize("name", ["g1", "talos", "romeo"])
+def test_the_real_walk_copied_onto_the_robots_is_clear(name):
+    """The shipped 3-D walk, joint angles copied onto the robot (arms at their neutral pose):
+    no limb comes within 1 mm of another or of the trunk over the whole clip (measured:
+    G1 7.8 mm, Talos 5.1 mm, Romeo 19.7 mm). (iCub's copy is not clear: its thigh hull meets
+    its chest at 0.33 rad of hip and 0.31 rad of torso pitch — coal's mesh distance agrees.)"""
+    from gdimitate.baselines import joint_copy
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h, motion, _ = gd.gait.human_walk_3d()
+        robot = gd.Robot.from_library(name)
+        out = joint_copy(motion, h, robot)
+    q = getattr(out, "motion", out).q
+    assert self_collision(robot).distances(q).min() >= 1e-3
+
+
+def test_robot_without_collision_geometry_is_not_checked():
+    """A robot without collision geometry: no self-collision check, and the report says so."""
+    robot = gd.Robot.from_library("hoap2")
+    assert self_collision(robot) is None
+    t = np.arange(3) * 0.1
+    mo = Motion(t=t, joint_names=robot.joint_names, q=np.tile(robot.neutral, (3, 1)),
+                contact={s: np.ones(3, bool) for s in ("left", "right")},
+                v=np.zeros((3, robot.model.nv)), a=np.zeros((3, robot.model.nv)))
+    rep = audit(robot, mo, estimate_wrenches(robot, mo).wrenches)
+    assert rep.self_collision is None
+    assert "self-collision: not checked" in rep.summary()
+    assert all(c.name != "self_collision" for c in rep.checks)
+
+
+# ------------------------------------------------------------------ the adaptor's parts
+def test_sphere_covers_enclose_the_hulls(g1):
+    """Every vertex of every collision mesh (hence of its convex hull; a box's corners, a
+    cylinder's rims) lies inside one of the spheres that cover it, and a sphere primitive is
+    its own cover — so spheres kept apart keep the hulls apart."""
+    import coal
+
+    from gdimitate.retarget.parts.self_collision import MAX_SPHERES, _cover, _vertices
+
+    for g in g1.collision_model.geometryObjects:
+        cover = _cover(g)
+        assert 1 <= len(cover) <= MAX_SPHERES
+        if isinstance(g.geometry, coal.Sphere):
+            assert cover[0][1] == pytest.approx(g.geometry.radius)
+            continue
+        V = _vertices(g)  # a mesh's vertices include its hull's
+        inside = np.min([np.linalg.norm(V - c, axis=1) - r for c, r in cover], axis=0)
+        assert inside.max() <= 1e-9, g.name
+
+
+def test_self_collision_rows_match_pinocchio():
+    """The part's rows at random configurations: sphere-centre distances over the leg length
+    from Pinocchio's frame placements (to 1e-10), their Jacobian against central differences;
+    bounds (r_a + r_b + gap) / leg length, no gap above the 1 cm margin; labels per pair."""
+    import casadi as ca
+    from test_retarget_parts import _fd_check, knot_of, random_point
+
+    from gdimitate.retarget.parts import Spec
+    from gdimitate.retarget.parts.self_collision import MARGIN, SelfCollision, sphere_pairs
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = gd.Robot.from_library("romeo")  # the fewest pairs: a quick symbolic model
+    pairs = sphere_pairs(robot)
+    assert pairs and all(gap <= MARGIN for *_, gap in pairs)
+    part = SelfCollision(pairs[:6])
+    k, f = knot_of(robot, part)
+    x, p, s = random_point(robot, k)
+    d = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, d, s["q"])
+    L = robot.legs["left"].length
+    ref = [np.linalg.norm(d.oMf[robot.model.getFrameId(fa)].act(np.array(oa))
+                          - d.oMf[robot.model.getFrameId(fb)].act(np.array(ob))) / L
+           for fa, oa, _, fb, ob, _, _ in part.pairs]
+    np.testing.assert_allclose(np.array(f(x, p)).ravel(), ref, atol=1e-10)
+    xs = ca.SX.sym("x", x.size)
+    assert f.sx_in(0).shape == xs.shape
+    _fd_check(f, x, p)
+    spec = Spec(T=3, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
+                cone=False, clearance=0.0, leg_length=L, n_base=6, n_act=0)
+    lo, hi = part.bounds(spec)
+    np.testing.assert_allclose(lo[0], [(ra + rb + gap) / L
+                                       for _, _, ra, _, _, rb, gap in part.pairs])
+    assert np.all(np.isinf(hi)) and len(part.labels(k)) == 6
+
+
+def test_unmapped_joints_are_held_by_the_parts(g1):
+    """``body_parts``: a posture range over every actuated joint whose ``hold`` parameter is
+    1 exactly for the joints the body map leaves out — for subject01 (no arms) on G1 the arms
+    and wrists, not the legs — rows ``hold·(q − neutral)`` within ±HOLD_RANGE; and a
+    self-collision part."""
+    from types import SimpleNamespace
+
+    from gdimitate.retarget.bodymap import HOLD_RANGE, body_map
+    from gdimitate.retarget.parts import Spec
+    from gdimitate.retarget.parts.body import body_parts
+    from gdimitate.retarget.parts.posture_range import PostureRange
+    from gdimitate.retarget.parts.self_collision import SelfCollision
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        human = gd.Robot.from_osim(gd.gait.human_walk_3d_folder() / "subject01.osim")
+        bm = body_map(human, g1)
+    act = [j for j in g1.joint_names if g1.model.joints[g1.model.getJointId(j)].nq == 1]
+    parts = body_parts(g1, act)
+    hold = next(p for p in parts if isinstance(p, PostureRange))
+    assert any(isinstance(p, SelfCollision) for p in parts)
+    mapped = np.array([j in {v[0] for v in bm.joints.values()} for j in act])
+    ctx = SimpleNamespace(tg=SimpleNamespace(mapped=mapped, T=3),
+                          lim=SimpleNamespace(frozen=np.zeros(len(act), bool)))
+    h = hold.values(ctx)["hold"]
+    held = {j for j, x in zip(act, h[0]) if x == 1}
+    assert {"left_shoulder_pitch_joint", "right_elbow_joint", "left_wrist_yaw_joint"} <= held
+    assert not held & {v[0] for v in bm.joints.values()} and h.shape == (3, len(act))
+    spec = Spec(T=2, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
+                cone=False, clearance=0.0, leg_length=0.6, n_base=6, n_act=0)
+    lo, hi = hold.bounds(spec)
+    np.testing.assert_allclose(hi, HOLD_RANGE)
+    np.testing.assert_allclose(lo, -HOLD_RANGE)
+    np.testing.assert_allclose(hold.held, g1.neutral[list(hold.q_index)])
