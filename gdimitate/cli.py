@@ -200,6 +200,8 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
     print(f"adapting {motion.T} frames of {robot.name} → {imitator.name} "
           f"(method={a.method}, force={force}) …", flush=True)
     options = {"forces": forces} if a.method == "optimal" and forces is not None else {}
+    if getattr(a, "periodic", False):  # one stride as a periodic cycle (optimal only)
+        options["periodic"] = True
     return robot, motion, forces, adapt(motion, robot, imitator, a.method, force=force,
                                         **options)
 
@@ -455,6 +457,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="force-direction model of the goal: segment (hip→sole), com "
                          "(CoM→sole), dynamics (from the motion), measured (the --grf forces) "
                          "(default: %(default)s)")
+    ad.add_argument("--periodic", action="store_true",
+                    help="adapt one stride (heel strike to heel strike of the right foot) as a "
+                         "periodic cycle: its end state is its start shifted by one stride "
+                         "(method optimal)")
     ad.add_argument("--out", default="gdimitate-adapt", help="output folder (default: %(default)s)")
     ad.set_defaults(func=_cmd_adapt)
     from .examples import EXAMPLES

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -32,6 +32,7 @@ from . import parts as parts_module
 from .interrupt import Progress
 from .knot import Flags, Knot
 from .parts import Constraint, Cost, PairConstraint, Part, Spec
+from .parts.seam import SeamConstraint, seam_functions
 
 __all__ = ["Formulation", "Compiled", "formulation", "compiled", "clear_cache", "BUILD_COUNT",
            "CACHE_SIZE", "fingerprint", "Spec", "IPOPT_DEFAULTS"]
@@ -119,6 +120,11 @@ class Formulation:
     scale: np.ndarray
     fun: dict[str, ca.Function]
     compiled: bool
+    seam: dict[str, ca.Function] | None = None
+    """Rows between the last knot and the first (:class:`.parts.seam.SeamConstraint`: a
+    periodic cycle): ``sg (x_first, x_last, p_first)``, ``sjac``, ``sh``; ``None``: none."""
+    seam_labels: list[str] = field(default_factory=list)
+    seam_sizes: list[int] = field(default_factory=list)
 
     @property
     def relax_rows(self) -> np.ndarray:
@@ -149,6 +155,10 @@ class Formulation:
     @property
     def ns(self) -> int:
         return self.pair_slices[-1].stop if self.pair_slices else 0
+
+    @property
+    def nseam(self) -> int:
+        return len(self.seam_labels)
 
     def rows_of(self, kind: type) -> slice:
         """The per-knot row slice of the first constraint part of type ``kind``."""
@@ -235,7 +245,10 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
         digest = hashlib.sha1(repr((key, _SOURCE)).encode()).hexdigest()
         fun, comp = codegen.compiled_functions(
             digest, lambda: _functions(k, g_rows, costs, prow, x0))
-        return Formulation(k, parts, cons, slices, pairs, pslices, labels, scale, fun, comp)
+        seams = [p for p in parts if isinstance(p, SeamConstraint)]
+        seam, seam_labels, seam_sizes = seam_functions(k, seams) if seams else (None, [], [])
+        return Formulation(k, parts, cons, slices, pairs, pslices, labels, scale, fun, comp,
+                           seam, seam_labels, seam_sizes)
 
     return _lru(_FORM, key, make)
 
@@ -273,7 +286,7 @@ class Compiled:
 
     @property
     def ng(self) -> int:
-        return self.form.ngk * self.T + self.form.ns * (self.T - 1)
+        return self.form.ngk * self.T + self.form.ns * (self.T - 1) + self.form.nseam
 
 
 def _freeze(d: dict) -> tuple:
@@ -310,6 +323,12 @@ def _pair_spread(nx: int, T: int) -> ca.DM:
     return ca.DM(ca.Sparsity.triplet(2 * nx * (T - 1), nx * T, rows, cols), 1.0)
 
 
+def _seam_spread(nx: int, T: int) -> ca.DM:
+    """``(2·nx, nx·T)``: the columns of (first knot, last knot) → those knots."""
+    cols = list(range(nx)) + list(range(nx * (T - 1), nx * T))
+    return ca.DM(ca.Sparsity.triplet(2 * nx, nx * T, list(range(2 * nx)), cols), 1.0)
+
+
 def _select(keep: np.ndarray, ng: int) -> ca.DM:
     """``(len(keep), ng)`` selection matrix."""
     sp = ca.Sparsity.triplet(len(keep), ng, list(range(len(keep))), keep.tolist())
@@ -325,7 +344,7 @@ def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled
     P = ca.MX.sym("P", form.knot.par.size, T)
     z, p = ca.vec(X), ca.vec(P)
     g_list, j_list = [ca.vec(f["kg"].map(T)(X, P))], [_blockdiag(f["kjac"].map(T)(X, P), nx)]
-    ng = ngk * T + ns * (T - 1)
+    ng = ngk * T + ns * (T - 1) + form.nseam
     S = _select(keep, ng)
     lam_f, lam_s = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(keep))
     lam_g = ca.mtimes(S.T, lam_s)
@@ -335,8 +354,16 @@ def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled
         args = (X[:, :-1], X[:, 1:], P[:, 1:])
         g_list.append(ca.vec(f["pg"].map(T - 1)(*args)))
         j_list.append(ca.mtimes(_blockdiag(f["pjac"].map(T - 1)(*args), 2 * nx), E))
-        HS = f["ph"].map(T - 1)(*args, ca.reshape(lam_g[ngk * T:], ns, T - 1))
+        HS = f["ph"].map(T - 1)(*args, ca.reshape(lam_g[ngk * T:ngk * T + ns * (T - 1)],
+                                                      ns, T - 1))
         H = H + ca.triu(ca.mtimes([E.T, _blockdiag(HS, 2 * nx), E]))
+    if form.seam is not None:  # rows between the last knot and the first (periodic cycle)
+        sf, args = form.seam, (X[:, 0], X[:, T - 1], P[:, 0])
+        Es = _seam_spread(nx, T)
+        g_list.append(sf["sg"](*args))
+        j_list.append(ca.mtimes(sf["sjac"](*args), Es))
+        HS = sf["sh"](*args, lam_g[ngk * T + ns * (T - 1):])
+        H = H + ca.triu(ca.mtimes([Es.T, HS, Es]))
     G = ca.vertcat(*g_list)
     Gs, Js = ca.mtimes(S, G), ca.mtimes(S, ca.vertcat(*j_list))
     F = ca.sum2(f["kf"].map(T)(X, P)) / T
@@ -367,12 +394,17 @@ def row_bounds(form: Formulation, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
         b = [pp.bounds(spec, s.stop - s.start) for pp, s in zip(form.pairs, form.pair_slices)]
         los.append(np.concatenate([x[0] for x in b], axis=1).ravel())
         his.append(np.concatenate([x[1] for x in b], axis=1).ravel())
+    if form.nseam:
+        b = [sp.bounds(spec, n) for sp, n in
+             zip([p for p in form.parts if isinstance(p, SeamConstraint)], form.seam_sizes)]
+        los.append(np.concatenate([x[0] for x in b]))
+        his.append(np.concatenate([x[1] for x in b]))
     return np.concatenate(los), np.concatenate(his)
 
 
 def row_scale(form: Formulation, T: int) -> np.ndarray:
     """``(ng,)`` divisors putting each row in scaled units (:meth:`Constraint.scale`)."""
-    return np.r_[np.tile(form.scale, T), np.ones(form.ns * max(T - 1, 0))]
+    return np.r_[np.tile(form.scale, T), np.ones(form.ns * max(T - 1, 0) + form.nseam)]
 
 
 def row_labels(form: Formulation, T: int) -> list[str]:
@@ -381,4 +413,4 @@ def row_labels(form: Formulation, T: int) -> list[str]:
     for _ in range(T - 1):
         for pp, s in zip(form.pairs, form.pair_slices):
             out += [pp.name] * (s.stop - s.start)
-    return out
+    return out + list(form.seam_labels)

@@ -48,7 +48,7 @@ STALLED = "Infeasible_Stalled"
 BUDGET = "Iteration_Budget_Spent"
 
 OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
-           "tol", "ipopt", "verbose", "contacts", "stop")
+           "tol", "ipopt", "verbose", "contacts", "stop", "periodic")
 """Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
 
 
@@ -267,7 +267,8 @@ def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unme
     viol = (np.maximum(num.lbg - g, 0) + np.maximum(g - num.ubg, 0)) / num.row_scale
     T, n = num.spec.T, c.ng_knot
     worst: dict[str, tuple[float, int]] = {}
-    knot_of = np.r_[np.repeat(np.arange(T), n), np.repeat(np.arange(1, T), c.form.ns)]
+    knot_of = np.r_[np.repeat(np.arange(T), n), np.repeat(np.arange(1, T), c.form.ns),
+                    np.full(c.form.nseam, T - 1)]
     for i in np.flatnonzero(viol > tol):
         name = c.labels[i]
         if viol[i] > worst.get(name, (0.0, 0))[0]:
@@ -341,7 +342,10 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     - ``tol``: feasibility tolerance of the optimiser's own row check (scaled units, default
       1e-6); ``stop``: when a solve ends (:data:`STOPS`); ``ipopt``: extra IPOPT options;
       ``verbose`` (default True): progress lines
-      (iteration, cost, constraint violation) on stderr.
+      (iteration, cost, constraint violation) on stderr;
+    - ``periodic`` (default False): a periodic gait cycle (:mod:`.periodic`) — one stride,
+      heel strike to heel strike of the right foot, whose last knot is its first shifted by
+      one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
 
     Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
     ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
@@ -376,6 +380,9 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
         raise UnknownNameError("stop rule", stop, STOPS)
     cs = resolve_contacts(imitator, copts, options.get("contacts"))
     bmap = body_map(demonstrator, imitator, options.get("body_map"))
+    if mode == "per_frame" and options.get("periodic"):
+        raise InvalidInputError("periodic=True needs mode='trajectory' (the seam links the "
+                                "cycle's last knot to its first)")
     if mode == "per_frame":
         from .streaming import adapt_per_frame
 
@@ -383,13 +390,19 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                                weights=w, limits=lim_opts, contact=copts, contacts=cs,
                                body_map=bmap, tol=tol, ipopt=options.get("ipopt"))
     rate = options.get("rate", DEFAULT_RATE)
+    periodic = bool(options.get("periodic", False))
+    if periodic:
+        from .periodic import periodic_rate, periodic_stride
+
+        demo, forces = periodic_stride(demo, forces)
+        rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
     demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
     _, act = base_dofs(imitator)
     act_names = limits.resolve(imitator, act, lim_opts).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
                                copts.rule)
     t0 = time.perf_counter()
-    form = problem_for(imitator, force, copts, bmap, act_names)
+    form = problem_for(imitator, force, copts, bmap, act_names, periodic=periodic)
     num = setup(form, tg, imitator, demonstrator, w, lim_opts, copts, cs)
     c, cached = pb.compiled(form, tg.T, num.keep, options.get("ipopt"))
     build_s = 0.0 if cached else time.perf_counter() - t0
@@ -414,19 +427,24 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                       variables=int(np.sum(num.lbx != num.ubx)),
                       constraints=int(num.keep.size),
                       unmet=bad)
-    return package(c, num, z, tg, demonstrator, imitator, cs, force, copts, info)
+    return package(c, num, z, tg, demonstrator, imitator, cs, force, copts, info, periodic)
 
 
-def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, parts=None
-                ) -> pb.Formulation:
+def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, parts=None,
+                periodic: bool = False) -> pb.Formulation:
     """The :class:`~.problem.Formulation` of an imitator under a force model, contact options
-    and body map (``parts``: a list of parts instead of :func:`~.parts.default_parts`)."""
+    and body map (``parts``: a list of parts instead of :func:`~.parts.default_parts`;
+    ``periodic``: with the :class:`~.parts.periodic.PeriodicSeam`)."""
     flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
                   cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
     q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
     if parts is None:
         parts = (default_parts(tuple(bmap.segments.values()), q_index)
                  + body_parts(imitator, act_names))
+    if periodic:
+        from .parts.periodic import PeriodicSeam
+
+        parts = tuple(parts) + (PeriodicSeam(),)
     return pb.formulation(imitator, flags, tuple(parts))
 
 
@@ -455,16 +473,22 @@ def wrenches_of(c: pb.Compiled, Z: np.ndarray) -> dict[str, np.ndarray]:
 
 def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrator: Robot,
             imitator: Robot, cs: dict[str, SoleContact], force: str, copts: Contact,
-            info: SolverInfo):
-    """The :class:`~gdimitate.adapt.AdaptedMotion` of a solution vector ``z``."""
+            info: SolverInfo, periodic: bool = False):
+    """The :class:`~gdimitate.adapt.AdaptedMotion` of a solution vector ``z`` (``periodic``:
+    the seam made exact, :func:`.periodic.close_seam`, and audited)."""
     from ..result import AdaptedMotion, compare
 
     T = tg.T
     Z = z.reshape(T, -1).T
     var = c.knot.var
-    q, v, a, W = make_consistent(imitator, tg.t, Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T,
-                                 wrenches_of(c, Z), tg.stance,
-                                 {s: cs[s].frame for s in SIDES}, c.knot.base_idx)
+    args = (tg.t, Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T, wrenches_of(c, Z), tg.stance,
+            {s: cs[s].frame for s in SIDES}, c.knot.base_idx)
+    if periodic:
+        from .periodic import close_seam
+
+        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args)
+    else:
+        q, v, a, W = make_consistent(imitator, *args)
     base = robot_motion(imitator, tg.t, q, tg.stance)
     motion = base.replace(v=v, a=a)
     push_r = None
@@ -484,6 +508,10 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
         target = tg.push if force in ("measured", "dynamics") else None
         aud = audit(limited_robot(imitator, num.lim), motion, W, cs, target=target,
                     cone_half_angle=copts.cone_half_angle)
+        if periodic:
+            from ..audit.periodic import seam_audit
+
+            aud = seam_audit(aud, imitator, motion, W, demonstrator, tg.demo.q)
     except ImportError:  # the audit's checks are not installed yet
         aud = None
     return AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,

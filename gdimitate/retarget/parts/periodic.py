@@ -1,0 +1,60 @@
+"""The periodic seam of a gait cycle (docs/design.md §14): the last knot's state equals the
+first's shifted by one stride — the base advanced along the walking direction by a length
+the optimiser chooses, everything else equal (base height and orientation, every joint
+angle, every velocity). Free-flyer rows: the base displacement across the walking direction
+``n⊥·Δp_xy``, ``Δz``, the quaternion's 4 components, the joints, all of ``Δv``; planar: every
+``q`` but ``base_x``, all of ``Δv``. The walking direction ``d`` (unit, horizontal) is the
+demonstrator's pelvis displacement over the stride (a parameter). Never relaxed."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .seam import SeamConstraint
+
+__all__ = ["PeriodicSeam", "walking_direction"]
+
+
+def walking_direction(robot, q: np.ndarray) -> np.ndarray:
+    """``(2,)`` unit horizontal direction of ``robot``'s base displacement from ``q[0]`` to
+    ``q[-1]`` (free flyer: x, y; planar: +x); (1, 0) when the base does not move."""
+    if robot.base != "free":
+        return np.array([1.0, 0.0])
+    d = np.asarray(q[-1, :2] - q[0, :2], float)
+    n = float(np.linalg.norm(d))
+    return d / n if n > 1e-9 else np.array([1.0, 0.0])
+
+
+@dataclass(frozen=True)
+class PeriodicSeam(SeamConstraint):
+    """``x_last = x_first`` shifted along the walking direction (module docstring)."""
+
+    name: str = "periodic seam"
+
+    def params(self, k):
+        return {"seam_dir": 2}
+
+    def values(self, ctx):
+        d = walking_direction(ctx.demonstrator, ctx.tg.demo.q)
+        return {"seam_dir": np.tile(d, (ctx.tg.T, 1))}
+
+    def carry(self, k):
+        return ca.vertcat(k.q, k.v)
+
+    def rows(self, k, first, last):
+        nq = k.sym.nq
+        dq, dv = last[:nq] - first[:nq], last[nq:] - first[nq:]
+        if k.planar:
+            ix = k.robot.idx_q("base_x")
+            keep = [i for i in range(nq) if i != ix]
+            return ca.vertcat(dq[keep], dv)
+        d = k.P("seam_dir")
+        across = d[0] * dq[1] - d[1] * dq[0]
+        return ca.vertcat(across, dq[2:], dv)
+
+    def bounds(self, spec, n):
+        z = np.zeros(n)
+        return z, z
