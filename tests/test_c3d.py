@@ -202,3 +202,30 @@ def test_cli_adapt_c3d_end_to_end(subject01_c3d, tmp_path, capsys):
     rep = json.loads((out / "report.json").read_text())
     assert rep["frames"] == 151
     assert rc == (0 if rep["verdict"]["ok"] else 3)  # written; the exit status tells the verdict
+
+
+def test_y_up_lab_and_non_marker_points(tmp_path):
+    """A lab whose vertical is Y (some systems write it so) is turned as OpenSim's .trc files
+    are (x = X, y = −Z, z = Y) and says so; points the lab's software lists under
+    POINT:ANGLES (computed joint angles stored as points) are not markers."""
+    import ezc3d
+
+    from gdimitate.opensim.grf import ground_to_world
+
+    mk, _ = _synthetic()
+    R = ground_to_world("Y")  # ours from a Y-up lab
+    lab = mk.xyz @ R  # the same markers in a Y-up lab frame
+    c = ezc3d.c3d()
+    c["parameters"]["POINT"]["RATE"]["value"] = np.array([mk.rate])
+    c["parameters"]["POINT"]["LABELS"]["value"] = [*mk.names, "LKneeAngles"]
+    c["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    pts = np.ones((4, 4, mk.t.size))
+    pts[:3, :3] = lab.transpose(2, 1, 0) * 1000
+    pts[:3, 3] = 12.0  # degrees, not millimetres
+    c["data"]["points"] = pts
+    c.add_parameter("POINT", "ANGLES", ["LKneeAngles"])
+    c.write(str(tmp_path / "y.c3d"))
+    trial = read_c3d(tmp_path / "y.c3d")
+    assert trial.markers.names == mk.names and "lab Y up" in trial.note
+    np.testing.assert_allclose(trial.markers.xyz, mk.xyz, atol=1e-6)
+    assert trial.plates == ()
