@@ -15,24 +15,19 @@ The paper's planar case: ``gdimitate.adapt(demo, robot_m, imitator, "analytic")`
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 """
 
-from . import (
-    audit,
-    bvh,
-    contact,
-    gait,
-    metrics,
-    opensim,
-    oscillator,
-    planar,
-    retarget,
-    sim,
-    wrenches,
-)
-from .adapt import AdaptationReport, AdaptedMotion, adapt
-from .cases import paper_case
-from .contact import ContactForces, FootForces, SoleContact
-from .cpg import CPGReplay, entrain
-from .demonstration import Demonstration, load_demonstration
+# Every public name is imported on first use (PEP 562 module ``__getattr__``), so that
+# ``import gdimitate`` and ``gdimitate --help`` stay quick and load no engine (Pinocchio,
+# CasADi, MuJoCo, meshcat, numba ...) until a name that needs one is touched. Static type
+# checkers and IDEs read the ``TYPE_CHECKING`` imports below; both lists name the same things
+# (tests/test_architecture.py checks that every name resolves).
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
 from .errors import (
     ContactError,
     GdimitateError,
@@ -48,26 +43,109 @@ from .errors import (
     URDFError,
     ViewerError,
 )
-from .export import export_motion
-from .library import list_robots
-from .metrics import ForceDirection
-from .motion import Motion
-from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
-from .retarget import Limits, StreamingAdaptor, Weights
-from .robot import Leg, Robot
-from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
+
+if TYPE_CHECKING:
+    from . import (
+        audit,
+        bvh,
+        c3d,
+        contact,
+        gait,
+        metrics,
+        opensim,
+        oscillator,
+        planar,
+        retarget,
+        sim,
+        wrenches,
+    )
+    from .adapt import adapt
+    from .cases import paper_case
+    from .contact import ContactForces, FootForces, SoleContact
+    from .cpg import CPGReplay, entrain
+    from .demonstration import Demonstration, load_demonstration
+    from .export import export_motion
+    from .library import list_robots
+    from .metrics import ForceDirection
+    from .motion import Motion
+    from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
+    from .result import AdaptationReport, AdaptedMotion
+    from .retarget import Limits, StreamingAdaptor, Weights
+    from .robot import Leg, Robot
+    from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
 __version__ = "0.1.0"
 
+#: public name -> the submodule that defines it (imported when the name is first read)
+_LAZY_NAMES: dict[str, str] = {
+    "adapt": ".adapt",
+    "AdaptationReport": ".result",
+    "AdaptedMotion": ".result",
+    "paper_case": ".cases",
+    "ContactForces": ".contact",
+    "FootForces": ".contact",
+    "SoleContact": ".contact",
+    "CPGReplay": ".cpg",
+    "entrain": ".cpg",
+    "Demonstration": ".demonstration",
+    "load_demonstration": ".demonstration",
+    "export_motion": ".export",
+    "list_robots": ".library",
+    "ForceDirection": ".metrics",
+    "Motion": ".motion",
+    "MatsuokaBank": ".oscillator",
+    "MatsuokaParams": ".oscillator",
+    "self_adjust": ".oscillator",
+    "Limits": ".retarget",
+    "StreamingAdaptor": ".retarget",
+    "Weights": ".retarget",
+    "Leg": ".robot",
+    "Robot": ".robot",
+    "HUMAN_GAIT": ".walking",
+    "ROBOT_GAIT": ".walking",
+    "GaitSpec": ".walking",
+    "walking_motion": ".walking",
+}
 
-def __getattr__(name: str):
-    """``gdimitate.c3d`` (gait-lab C3D files) is imported on first use."""
-    if name == "c3d":
-        import importlib
+#: public subpackages / modules (``gdimitate.sim`` etc.), imported on first use
+_LAZY_MODULES: frozenset[str] = frozenset({
+    "audit", "bvh", "c3d", "contact", "gait", "metrics", "opensim", "oscillator", "planar",
+    "retarget", "sim", "wrenches",
+})
 
-        return importlib.import_module(".c3d", __name__)
-    raise AttributeError(f"module 'gdimitate' has no attribute {name!r}")
 
+def __getattr__(name: str) -> Any:
+    """Import a public name (or any submodule, e.g. ``gdimitate.viz``) on first use."""
+    if name in _LAZY_NAMES:
+        value = getattr(importlib.import_module(_LAZY_NAMES[name], __name__), name)
+    elif name in _LAZY_MODULES or (not name.startswith("_")
+                                   and importlib.util.find_spec(f"{__name__}.{name}")):
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'gdimitate' has no attribute {name!r}")
+    globals()[name] = value  # later reads skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+class _Package(ModuleType):
+    """``gdimitate.adapt`` is the function, as it was when ``__init__`` imported it eagerly.
+
+    Importing a submodule binds it on its package (``gdimitate.adapt = <module adapt>``) after
+    the submodule runs; a name that is both a submodule and a public function must keep the
+    function, so that binding is skipped here and ``__getattr__`` returns the function.
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, ModuleType) and _LAZY_NAMES.get(name) == f".{name}":
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "AdaptationReport",

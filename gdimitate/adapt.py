@@ -10,43 +10,16 @@ used, the solver's account and the independent physical audit (:func:`gdimitate.
 
 from __future__ import annotations
 
-import numpy as np
-
-from .errors import InvalidInputError, LegMatchError, UnknownNameError
+from .analytic import adapt_planar, check_pair
+from .errors import InvalidInputError, UnknownNameError
 from .motion import Motion
-from .planar import eq1
 from .result import AdaptationReport, AdaptedMotion, compare
-from .robot import SIDES, Robot
-from .sagittal import compose_q, ground_base, leg_angles, robot_motion
+from .robot import Robot
+from .types import AdaptMethod, ForceModel
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "adapt", "METHODS", "compare"]
 
-METHODS = ("analytic", "copy", "optimal")
-
-
-def _check_pair(motion: Motion, demonstrator: Robot, imitator: Robot) -> None:
-    if not isinstance(motion, Motion):
-        raise InvalidInputError(f"motion must be a gdimitate.Motion; got {type(motion).__name__}")
-    if tuple(motion.joint_names) != demonstrator.joint_names or \
-            motion.q.shape[1] != demonstrator.model.nq:
-        raise InvalidInputError(
-            f"the motion's joints do not match the demonstrator {demonstrator.name!r}: "
-            f"motion has {list(motion.joint_names)}, robot has {list(demonstrator.joint_names)}")
-    for r in (demonstrator, imitator):
-        if set(r.legs) != set(SIDES):
-            raise LegMatchError(f"{r.name} legs {sorted(r.legs)} cannot be matched to {SIDES}")
-        if r.base == "fixed":
-            raise LegMatchError(f"{r.name} has a fixed base; a walking imitator needs a floating "
-                                "base to follow its feet")
-    missing = [s for s in SIDES if s not in motion.contact]
-    if missing:
-        raise InvalidInputError(
-            f"the motion has no contact schedule for {missing} (a motion from "
-            "gd.opensim.read_coordinates has none yet): read the file with "
-            "gd.load_demonstration(path, grf=...) — contacts from the measured forces, or "
-            "from the feet when there are none —, or give the schedule yourself: "
-            "motion.replace(contact={'left': (T,) bool, 'right': (T,) bool}) (e.g. "
-            "contact=forces.contact of gd.opensim.read_grf(..., t=motion.t))")
+METHODS: tuple[AdaptMethod, ...] = ("analytic", "copy", "optimal")
 
 
 def _check_size(demo: Motion, imitator: Robot, method: str, rate: float | None) -> None:
@@ -67,8 +40,8 @@ def _check_size(demo: Motion, imitator: Robot, method: str, rate: float | None) 
                      (knots, imitator.model.nq + 2 * imitator.model.nv))
 
 
-def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "optimal",
-          force: str = "segment", forces=None, rate: float | None = None,
+def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: AdaptMethod = "optimal",
+          force: ForceModel = "segment", forces=None, rate: float | None = None,
           **options) -> AdaptedMotion:
     """Regenerate ``demo`` (a motion of ``demonstrator``) for ``imitator``.
 
@@ -84,9 +57,8 @@ def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "opt
     """
     if method not in METHODS:
         raise UnknownNameError("method", method, METHODS)
-    _check_pair(demo, demonstrator, imitator)
+    check_pair(demo, demonstrator, imitator)
     _check_size(demo, imitator, method, rate)
-    motion = demo
     if method == "optimal":
         from .retarget import adapt_optimal
 
@@ -96,19 +68,4 @@ def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: str = "opt
         given = sorted(options) + [k for k, v in (("forces", forces), ("rate", rate))
                                    if v is not None]
         raise InvalidInputError(f"method {method!r} takes no options; got {given}")
-    torso, angles = leg_angles(demonstrator, motion.q)
-    new, feasible = {}, {}
-    for s in SIDES:
-        a = angles[s]
-        if method == "copy":
-            new[s] = a.copy()
-            feasible[s] = np.ones(len(a), dtype=bool)
-        else:
-            dl, il = demonstrator.legs[s], imitator.legs[s]
-            r = eq1(a[:, 0], a[:, 1], (dl.thigh, dl.shank), (il.thigh, il.shank))
-            new[s] = np.column_stack([r.theta1, r.theta2, a[:, 2]])
-            feasible[s] = r.feasible
-    q = ground_base(imitator, compose_q(imitator, torso, new), motion.contact)
-    out = robot_motion(imitator, motion.t, q, motion.contact)
-    report = compare(demonstrator, motion, imitator, out, method, feasible, force)
-    return AdaptedMotion(motion=out, report=report, robot=imitator)
+    return adapt_planar(demo, demonstrator, imitator, method, force)

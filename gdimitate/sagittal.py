@@ -13,19 +13,12 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InvalidInputError
-from .motion import Motion
+from .kinematics import check_q as _check_q
+from .kinematics import robot_motion
 from .robot import SIDES, Robot
 
 __all__ = ["leg_angles", "compose_q", "frame_paths", "joint_paths", "ground_base",
            "kinematic_contact", "robot_motion", "torso_angle"]
-
-
-def _check_q(robot: Robot, q: np.ndarray) -> np.ndarray:
-    q = np.asarray(q, dtype=float)
-    if q.ndim != 2 or q.shape[1] != robot.model.nq:
-        raise InvalidInputError(
-            f"q must have shape (T, {robot.model.nq}) for {robot.name}; got {q.shape}")
-    return q
 
 
 def torso_angle(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -186,13 +179,3 @@ def kinematic_contact(robot: Robot, q: np.ndarray, tol: float | None = None
     low = np.minimum(z["left"], z["right"])
     tol = 0.02 * robot.legs["left"].length if tol is None else tol
     return {s: z[s] - low < tol for s in SIDES}
-
-
-def robot_motion(robot: Robot, t: np.ndarray, q: np.ndarray,
-                 contact: dict[str, np.ndarray]) -> Motion:
-    """A :class:`Motion` of ``robot`` (joint names, per-joint widths and base width filled in)."""
-    m = robot.model
-    nqs = tuple(int(m.joints[i].nq) for i in range(1, m.njoints))
-    base_nq = 7 if robot.base == "free" else 3 if robot.base == "planar" else 0
-    return Motion(t=t, joint_names=robot.joint_names, q=_check_q(robot, q), contact=contact,
-                  base_nq=base_nq, joint_nq=nqs)

@@ -38,6 +38,7 @@ from ..errors import (
     OpenSimDataError,
     UnitError,
 )
+from ..kinematics import robot_motion
 from ..motion import Motion
 from ._table import Table, read_table
 
@@ -128,8 +129,6 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
     :class:`~gdimitate.errors.OpenSimDataError` (malformed file, NaN, a coordinate twice) and
     :class:`~gdimitate.errors.TimeGridError` (time not strictly increasing).
     """
-    from ..sagittal import robot_motion
-
     table = read_table(path)
     cols, ignored = coordinate_columns(table)
     plans = getattr(getattr(robot, "osim", None), "plans", ())

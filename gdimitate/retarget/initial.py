@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..analytic import adapt_planar
 from ..errors import GdimitateError
 from ..robot import SIDES, Robot
 from .targets import Targets
@@ -17,11 +18,9 @@ from .targets import Targets
 def initial_q(demonstrator: Robot, imitator: Robot, tg: Targets, q_index: np.ndarray
               ) -> np.ndarray:
     """Configurations ``(T, nq)`` of the warm start."""
-    from ..adapt import adapt
-
     demo = tg.demo.replace(contact=tg.stance)
     try:
-        q = adapt(demo, demonstrator, imitator, method="analytic").motion.q.copy()
+        q = adapt_planar(demo, demonstrator, imitator, "analytic").motion.q.copy()
     except GdimitateError:
         q = np.tile(imitator.neutral, (tg.T, 1))
         if imitator.base == "free" and demonstrator.base == "free":

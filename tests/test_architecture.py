@@ -1,0 +1,220 @@
+"""The package's shape (docs/design.md "imports run one way"): no import cycle, counting imports
+inside functions, and a quick ``import gdimitate`` that loads no heavy engine."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import gdimitate
+
+PKG = Path(gdimitate.__file__).resolve().parent
+
+#: cycles left inside the optimal adaptor's own package (another issue's files; see the xfail)
+KNOWN_CYCLES = [["gdimitate.retarget.solve", "gdimitate.retarget.streaming"]]
+
+ENGINES = ("mujoco", "meshcat", "dask", "numba", "pink", "matplotlib")
+
+
+# ------------------------------------------------------------------ the import graph
+def _module_name(root: Path, path: Path) -> str:
+    parts = list(path.relative_to(root.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def _runtime_nodes(tree: ast.AST):
+    """Every node that runs: function bodies included, ``if TYPE_CHECKING:`` blocks left out
+    (imports for annotations only)."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        yield node
+        if isinstance(node, ast.If) and _is_type_checking(node.test):
+            todo.extend(node.orelse)
+        else:
+            todo.extend(ast.iter_child_nodes(node))
+
+
+def _imported(node: ast.AST, package: str, mods: set[str]) -> list[str]:
+    """The modules of ``mods`` an import statement loads (``from . import x`` -> ``pkg.x``
+    when ``x`` is a module, else ``pkg``; relative imports resolved against ``package``)."""
+    if isinstance(node, ast.Import):
+        names = [a.name for a in node.names]
+    elif isinstance(node, ast.ImportFrom):
+        if node.level:
+            up = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+            base = ".".join(up + ([node.module] if node.module else []))
+        else:
+            base = node.module or ""
+        subs = [f"{base}.{a.name}" for a in node.names]
+        names = [s for s in subs if s in mods]
+        if len(names) < len(subs):
+            names.append(base)
+    else:
+        return []
+    out = []
+    for name in names:
+        while name and name not in mods:  # ``import a.b.c`` of a name inside a module
+            name = name.rpartition(".")[0]
+        if name:
+            out.append(name)
+    return out
+
+
+def import_graph(root: Path) -> dict[str, set[str]]:
+    """``{module: modules it imports}`` over the package at ``root`` (a folder), from the
+    source with :mod:`ast`: module-level and function-level imports alike."""
+    files = {_module_name(root, p): p for p in sorted(root.rglob("*.py"))}
+    mods = set(files)
+    graph: dict[str, set[str]] = {}
+    for mod, path in files.items():
+        package = mod if path.name == "__init__.py" else mod.rpartition(".")[0]
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        graph[mod] = {t for node in _runtime_nodes(tree)
+                      for t in _imported(node, package, mods) if t != mod}
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan), sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(out)
+
+
+def _describe(graph: dict[str, set[str]], comp: list[str]) -> str:
+    return "; ".join(f"{m} -> {sorted(graph[m] & set(comp))}" for m in comp)
+
+
+def gdimitate_graph() -> dict[str, set[str]]:
+    """The package's graph; ``gdimitate/__init__`` imports its public names on first use
+    (module ``__getattr__``), which counts as importing the modules that define them."""
+    graph = import_graph(PKG)
+    graph["gdimitate"] |= {f"gdimitate{m}" for m in gdimitate._LAZY_NAMES.values()}
+    graph["gdimitate"] |= {f"gdimitate.{m}" for m in gdimitate._LAZY_MODULES}
+    return graph
+
+
+# ------------------------------------------------------------------ tests
+def test_the_graph_sees_a_cycle_through_an_import_inside_a_function(tmp_path):
+    """The checker itself: a cycle closed by a function-level relative import is found; one
+    closed only under ``if TYPE_CHECKING:`` is not a runtime cycle."""
+    pkg = tmp_path / "toy"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "sub" / "__init__.py").write_text("from .b import f\n")
+    (pkg / "a.py").write_text("from .sub import f\n")
+    (pkg / "sub" / "b.py").write_text(textwrap.dedent("""
+        from typing import TYPE_CHECKING
+        if TYPE_CHECKING:
+            from ..c import C
+        def f():
+            from .. import a
+    """))
+    (pkg / "c.py").write_text("from .sub.b import f\n")
+    graph = import_graph(pkg)
+    assert graph["toy.sub.b"] == {"toy.a"}
+    assert cycles(graph) == [["toy.a", "toy.sub", "toy.sub.b"]]
+
+
+def test_no_import_cycle_besides_the_listed_ones():
+    graph = gdimitate_graph()
+    found = [c for c in cycles(graph) if c not in KNOWN_CYCLES]
+    assert not found, "import cycles in gdimitate/ (counting imports inside functions): " + \
+        " | ".join(_describe(graph, c) for c in found)
+
+
+@pytest.mark.xfail(strict=True, reason="retarget/solve.py imports retarget/streaming.py "
+                   "(adapt_per_frame) and streaming imports solve's functions: inside the "
+                   "optimal adaptor's package (issue 17's files), left for its redesign")
+def test_no_import_cycle_at_all():
+    graph = gdimitate_graph()
+    found = cycles(graph)
+    assert not found, " | ".join(_describe(graph, c) for c in found)
+
+
+def test_import_gdimitate_loads_no_engine():
+    code = f"import gdimitate, sys; print([m for m in {ENGINES!r} if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]", f"import gdimitate loaded {out}"
+
+
+def test_public_names_resolve_and_adapt_stays_the_function():
+    """Every name of ``__all__`` resolves (lazily) and is listed by ``dir``; importing the
+    submodule ``gdimitate.adapt`` first does not replace the function ``gdimitate.adapt``."""
+    code = textwrap.dedent("""
+        import sys
+        import gdimitate.adapt
+        import gdimitate as gd
+        assert gd.adapt is sys.modules["gdimitate.adapt"].adapt, gd.adapt
+        missing = [n for n in gd.__all__ if not hasattr(gd, n)]
+        assert not missing, missing
+        assert set(gd.__all__) <= set(dir(gd))
+        assert gd.Robot.__module__ == "gdimitate.robot" and gd.sim.__name__ == "gdimitate.sim"
+        assert gd.viz.__name__ == "gdimitate.viz"
+        try:
+            gd.no_such_name
+        except AttributeError:
+            pass
+        else:
+            raise AssertionError("gd.no_such_name resolved")
+    """)
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_literal_aliases_match_the_values_checked_at_run_time():
+    from typing import get_args
+
+    from gdimitate.adapt import METHODS
+    from gdimitate.errors import UnknownNameError
+    from gdimitate.legs import SIDES
+    from gdimitate.metrics import FORCE_MODELS
+    from gdimitate.retarget.params import Contact
+    from gdimitate.types import AdaptMethod, ContactRule, ForceModel, PlanarMethod, Side
+
+    assert get_args(Side) == SIDES
+    assert set(get_args(ForceModel)) == set(FORCE_MODELS)
+    assert get_args(AdaptMethod) == METHODS
+    assert set(get_args(PlanarMethod)) == set(METHODS) - {"optimal"}
+    for rule in get_args(ContactRule):
+        assert Contact(rule=rule).rule == rule
+    with pytest.raises(UnknownNameError):
+        Contact(rule="both")
