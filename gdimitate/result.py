@@ -6,10 +6,11 @@ audit) and :class:`AdaptationReport`, made by :func:`compare`. Every method retu
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .contact import SoleContact
 from .metrics import (
     angle_down,
     foot_heights,
@@ -19,6 +20,10 @@ from .metrics import (
 )
 from .motion import Motion
 from .robot import SIDES, Robot
+
+if TYPE_CHECKING:  # annotations only: the audit is below this module, the solver above it
+    from .audit.report import AuditReport
+    from .retarget.solve import SolverInfo
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "compare"]
 
@@ -111,9 +116,9 @@ class AdaptedMotion:
     report: AdaptationReport
     robot: Robot
     wrenches: dict[str, np.ndarray] | None = None
-    contacts: dict[str, Any] | None = None
-    audit: Any = None
-    solver: Any = None
+    contacts: dict[str, SoleContact] | None = None
+    audit: AuditReport | None = None
+    solver: SolverInfo | None = None
     force_model: str = "segment"
     frame_feasible: np.ndarray | None = None
 
