@@ -54,8 +54,67 @@ SOLVED = (1, 2)
 """DAQP's exit flags of a solved QP (2: optimal with some soft rows relaxed)."""
 
 
-def _dense(m) -> np.ndarray:
-    return np.asarray(m.full() if hasattr(m, "full") else m, dtype=float)
+class _Fast:
+    """A ``casadi.Function`` of dense inputs called through CasADi's buffer interface (the
+    NumPy arrays are read and written in place: converting sparse ``DM`` outputs with
+    ``.full()`` cost 60 ms per Talos frame, the evaluations themselves 3 ms). ``(*args) ->
+    [dense output arrays]``."""
+
+    def __init__(self, f, cols: np.ndarray | None = None):
+        self.buf, self._ret = f.buffer()
+        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        for i, a in enumerate(self.args):
+            self.buf.set_arg(i, memoryview(a))
+        for i, r in enumerate(self.res):
+            self.buf.set_res(i, memoryview(r))
+        self.shape, self.idx, self.sel = [], [], []
+        for k in range(f.n_out()):  # keep only the columns ``cols`` (of a matrix output)
+            i, j = (np.array(t, int) for t in f.sparsity_out(k).get_triplet())
+            shape = f.size_out(k)
+            sel = np.ones(i.size, bool)
+            if cols is not None and shape[1] > 1:
+                new = np.full(shape[1], -1)
+                new[cols] = np.arange(len(cols))
+                j, sel = new[j], new[j] >= 0
+                i, j, shape = i[sel], j[sel], (shape[0], len(cols))
+            self.shape.append(shape)
+            self.idx.append((i, j))
+            self.sel.append(sel)
+
+    def __call__(self, *args) -> list[np.ndarray]:
+        for a, v in zip(self.args, args):
+            a[:] = v
+        self.buf._eval()
+        out = []
+        for r, shape, (i, j), sel in zip(self.res, self.shape, self.idx, self.sel):
+            M = np.zeros(shape)
+            M[i, j] = r[sel]
+            out.append(M)
+        return out
+
+
+_FAST: dict = {}
+
+
+def _core(form) -> np.ndarray:
+    """Indices of a knot's variables other than the elastic slacks (fixed at 0 here)."""
+    var = form.knot.var
+    return np.array([i for n, sl in var.slices.items() if not n.startswith("s_")
+                     for i in range(sl.start, sl.stop)], int)
+
+
+def _fast(form, name: str) -> _Fast:
+    key = (id(form), name)
+    if key not in _FAST or _FAST[key][0] is not form:
+        core = _core(form)
+        cols = np.r_[core, form.nx + core] if name in ("pjac",) else core
+        _FAST[key] = (form, _Fast(form.fun[name], cols))
+    return _FAST[key][1]
+
+
+def _dense(f, *args) -> np.ndarray:
+    return f(*args)[0]
 
 
 def qp_step(form, Z0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
@@ -66,21 +125,22 @@ def qp_step(form, Z0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarra
     ``Z0``, ``lbx``, ``ubx`` ``(n_x, 2)``; ``P`` ``(n_p, 2)``; ``lbg``, ``ubg``: bounds of
     every row of the window (:func:`~.problem.row_bounds`). Returns ``(Z (n_x, 2), DAQP's exit
     flag)`` (:data:`SOLVED`: 1 every row met, 2 some soft rows relaxed)."""
-    f = form.fun
-    nx = form.nx
+    f = {n: _fast(form, n) for n in ("kg", "kjac", "pg", "pjac", "kres", "kresjac")}
+    core = _core(form)  # the QP's columns: every variable but the slacks (fixed at 0)
+    nx = core.size
     Z0 = np.clip(Z0, lbx, ubx)  # fixed variables at their values, the rest inside bounds
     x0, x1, p0, p1 = Z0[:, 0], Z0[:, 1], P[:, 0], P[:, 1]
-    G = np.concatenate([_dense(f["kg"](x0, p0)).ravel(), _dense(f["kg"](x1, p1)).ravel(),
-                        _dense(f["pg"](x0, x1, p1)).ravel()])
+    G = np.concatenate([_dense(f["kg"], x0, p0).ravel(), _dense(f["kg"], x1, p1).ravel(),
+                        _dense(f["pg"], x0, x1, p1).ravel()])
     ngk = form.ngk
     J = np.zeros((G.size, 2 * nx))
-    J[:ngk, :nx] = _dense(f["kjac"](x0, p0))
-    J[ngk:2 * ngk, nx:] = _dense(f["kjac"](x1, p1))
-    J[2 * ngk:] = _dense(f["pjac"](x0, x1, p1))
-    Jr = [_dense(f["kresjac"](x, p)) for x, p in ((x0, p0), (x1, p1))]
-    r = [_dense(f["kres"](x, p)).ravel() for x, p in ((x0, p0), (x1, p1))]
-    z0 = Z0.T.ravel()
-    lo, hi = lbx.T.ravel(), ubx.T.ravel()
+    J[:ngk, :nx] = _dense(f["kjac"], x0, p0)
+    J[ngk:2 * ngk, nx:] = _dense(f["kjac"], x1, p1)
+    J[2 * ngk:] = _dense(f["pjac"], x0, x1, p1)
+    Jr = [_dense(f["kresjac"], x, p) for x, p in ((x0, p0), (x1, p1))]
+    r = [_dense(f["kres"], x, p).ravel() for x, p in ((x0, p0), (x1, p1))]
+    z0 = Z0[core].T.ravel()
+    lo, hi = lbx[core].T.ravel(), ubx[core].T.ravel()
     free = np.flatnonzero(lo != hi)
     H = np.zeros((2 * nx, 2 * nx))
     g = np.zeros(2 * nx)
@@ -135,7 +195,9 @@ def qp_step(form, Z0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarra
     z = z0.copy()
     if flag in SOLVED:
         z[free] += np.asarray(d)
-    return z.reshape(2, nx).T, int(flag)
+    Z = Z0.copy()
+    Z[core] = z.reshape(2, nx).T
+    return Z, int(flag)
 
 
 def _cone_matrix(X, Y, mu, Xc, Yc, planar: bool) -> np.ndarray:
