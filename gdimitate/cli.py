@@ -231,6 +231,15 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
     return v.exit_status
 
 
+def _cmd_walk(a: argparse.Namespace) -> int:
+    from .walk.command import walk_command
+
+    with removed_on_failure(a.out):
+        out = prepare_output_dir(a.out)
+        return walk_command(out, _demonstration(a.demonstration, a), _robot(a.imitator, a),
+                            a.steps, a.gain, html=not a.no_html)
+
+
 def _cmd_view(a: argparse.Namespace) -> int:
     import time
 
@@ -463,6 +472,19 @@ def build_parser() -> argparse.ArgumentParser:
                          "(method optimal)")
     ad.add_argument("--out", default="gdimitate-adapt", help="output folder (default: %(default)s)")
     ad.set_defaults(func=_cmd_adapt)
+    wk = sub.add_parser("walk", help="a periodic cycle, a whole-body oscillator network and N "
+                                     "steps in MuJoCo (walk.json, plots, trajectory, HTML)",
+                        epilog=f"exit status {EXIT_NOT_FEASIBLE}: the robot fell, fewer steps "
+                               "than asked, or the cycle is not feasible")
+    _add_demonstration_args(wk, "demonstration", "the shipped real 3-D walk")
+    _add_robot_args(wk, "--imitator", DEFAULT_IMITATOR, "imitator robot")
+    wk.add_argument("--steps", type=int, default=20, help="steps to walk (default: %(default)s)")
+    wk.add_argument("--gain", type=float, default=0.5,
+                    help="feedback gain of the ground into the network (0: open loop) "
+                         "(default: %(default)s)")
+    wk.add_argument("--no-html", action="store_true", help="skip walk.html")
+    wk.add_argument("--out", default="gdimitate-walk", help="output folder (default: %(default)s)")
+    wk.set_defaults(func=_cmd_walk)
     from .examples import EXAMPLES
 
     vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE",

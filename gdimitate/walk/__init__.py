@@ -1,0 +1,71 @@
+"""The walk that keeps going (docs/design.md §14): a demonstration → a periodic gait cycle
+(``adapt(..., periodic=True)``) → a whole-body Matsuoka network tuned to it
+(:class:`~.network.WalkNetwork`) → N steps in MuJoCo with the network's phase indexing the
+plan and the ground feeding back into the network (:mod:`.loop`) → :class:`~.result.
+WalkResult` (``walk.json``, plots, trajectory, HTML)."""
+
+from __future__ import annotations
+
+import warnings
+
+from ..robot import Robot
+from .loop import WalkPush, run_loop
+from .network import WalkNetwork
+from .result import WalkResult
+
+__all__ = ["walk", "periodic_cycle", "WalkResult", "WalkNetwork", "WalkPush", "WALK_RATE",
+           "DEFAULT_GAIN"]
+
+#: Knots per second of the cycle's optimal solve.
+WALK_RATE = 30.0
+#: Feedback gain of the ground into the network's input (0: open loop).
+DEFAULT_GAIN = 0.5
+
+
+def periodic_cycle(demo=None, demonstrator: Robot | None = None,
+                   imitator: str | Robot = "g1", forces=None, rate: float = WALK_RATE):
+    """The periodic cycle (an :class:`~gdimitate.adapt.AdaptedMotion`) of a demonstration on
+    ``imitator``: the measured push directions kept (``force="measured"``) when ``forces``
+    are given. Without ``demo``: the shipped 3-D walk (:func:`gdimitate.demo.
+    default_demonstration`). Returns ``(cycle, forces)``."""
+    from ..adapt import adapt
+
+    if demo is None:
+        from ..demo import default_demonstration
+
+        demonstrator, demo, forces = default_demonstration()
+    imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
+    opts = dict(force="measured", forces=forces) if forces is not None else {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        cyc = adapt(demo, demonstrator, imit, "optimal", rate=rate, periodic=True,
+                    verbose=False, **opts)
+    return cyc, forces
+
+
+def walk(demo=None, demonstrator: Robot | None = None, imitator: str | Robot = "g1",
+         steps: int = 20, *, forces=None, feedback_gain: float = DEFAULT_GAIN,
+         push: WalkPush | None = None, cycle=None, network: WalkNetwork | None = None,
+         rate: float = WALK_RATE) -> WalkResult:
+    """Walk ``steps`` steps in MuJoCo under a whole-body oscillator network.
+
+    ``demo``/``demonstrator``/``forces``: the demonstration (default: the shipped 3-D walk
+    with its measured forces); ``imitator``: a library name or :class:`Robot` (default G1);
+    ``feedback_gain``: the ground's feedback into the network (0 = open-loop replay);
+    ``push``: a :class:`~.loop.WalkPush`; ``cycle``: a periodic cycle already adapted
+    (skips the adaptation; pass its ``forces`` too), ``network``: a tuned
+    :class:`WalkNetwork` of that cycle. Returns a :class:`WalkResult`."""
+    from ..errors import InvalidInputError
+    from ..sim.periodic import PeriodicReference
+
+    if not (isinstance(steps, int) and 1 <= steps <= 1000):
+        raise InvalidInputError(f"steps must be an integer in 1..1000; got {steps!r}")
+    if not (feedback_gain >= 0 and feedback_gain < 100):
+        raise InvalidInputError(f"feedback_gain must be in [0, 100); got {feedback_gain!r}")
+    if cycle is None:
+        cycle, forces = periodic_cycle(demo, demonstrator, imitator, forces, rate)
+    robot = cycle.robot
+    pref = PeriodicReference(robot, cycle)
+    net = network or WalkNetwork.tune(robot, cycle.motion)
+    tr = run_loop(robot, pref, net, steps, float(feedback_gain), push)
+    return WalkResult(robot, cycle, net, pref, tr, steps, float(feedback_gain), forces)

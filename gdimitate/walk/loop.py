@@ -1,0 +1,200 @@
+"""The closed loop of a walk (docs/design.md §14): every control period the oscillator network
+advances under its input ``g``, its phase indexes the periodic plan
+(:class:`~gdimitate.sim.periodic.PeriodicReference`), the tracking controller
+(:class:`~gdimitate.sim.controller.TrackingController`) follows the plan at that phase in
+MuJoCo, and the simulated feet feed back into ``g``.
+
+Feedback (entrainment to the ground): a foot's contact onset in the simulation (its vertical
+force rising above :data:`ONSET_FRACTION` of m·g after a swing: below :data:`OFF_FRACTION`
+for at least :data:`MIN_SWING` of the period) says where in the cycle the body is; the
+*ground phase* jumps there and otherwise advances at the cycle's own rate. Where "there" is
+comes from the walk itself: the network's phase at each foot's first onset (the first,
+unperturbed steps), so the controller's own touchdown lag is no bias. The network's
+input is ``g = gain · u(ground phase)``, ``u`` the input it was taught with at that fraction
+(:meth:`~gdimitate.walk.network.WalkNetwork.input_at`): with ``gain`` 0 the network runs
+open loop (free), with ``gain`` > 0 it is pulled towards the body's rhythm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from ..errors import SimulationError
+from ..robot import SIDES, Robot
+from ..sim.controller import ControllerGains, TrackingController
+from ..sim.metrics import FallCriteria
+from ..sim.model import build_model
+from ..sim.periodic import PeriodicReference
+from ..sim.simulate import measure_contacts, mujoco_warnings
+from .network import WalkNetwork
+
+__all__ = ["WalkPush", "Trace", "run_loop", "ONSET_FRACTION", "OFF_FRACTION"]
+
+ONSET_FRACTION = 0.05
+OFF_FRACTION = 0.01
+MIN_SWING = 0.15
+
+
+@dataclass(frozen=True)
+class WalkPush:
+    """A horizontal push ``force`` ``(3,)`` [N] (world) on the base for ``duration`` [s],
+    starting at mid-stance of step ``step`` (0-based; the middle of its cycle interval)."""
+
+    step: int
+    force: tuple[float, float, float]
+    duration: float = 0.1
+
+    def __post_init__(self) -> None:
+        f = np.asarray(self.force, float)
+        if f.shape != (3,) or not np.all(np.isfinite(f)) or not self.duration > 0 \
+                or self.step < 0:
+            raise SimulationError(f"WalkPush needs step ≥ 0, 3 finite force components [N] and "
+                                  f"duration > 0 s; got {self!r}")
+
+
+@dataclass
+class Trace:
+    """One run, sampled every control period (``N`` samples): ``t`` [s], ``q``, ``v``,
+    ``tau``; ``cycles`` the network's phase (cycles, unwrapped), ``ground`` the ground phase;
+    ``force`` {side: (N, 3)} [N] MuJoCo's force of the ground on each foot (world);
+    ``stance`` {side: (N,) bool} the plan's at that phase; ``height``/``plan_height`` [m],
+    ``tilt`` [rad]; ``y`` ``(N, n)`` the oscillators' outputs; ``joints`` ``(N, n)`` their
+    read-out [rad]; ``onsets`` [(t, side)] the contact onsets; ``fell_at`` [s] or None;
+    ``push_window`` (start, end) [s] or None."""
+
+    t: list = field(default_factory=list)
+    q: list = field(default_factory=list)
+    v: list = field(default_factory=list)
+    tau: list = field(default_factory=list)
+    cycles: list = field(default_factory=list)
+    ground: list = field(default_factory=list)
+    force: dict = field(default_factory=lambda: {s: [] for s in SIDES})
+    stance: dict = field(default_factory=lambda: {s: [] for s in SIDES})
+    height: list = field(default_factory=list)
+    plan_height: list = field(default_factory=list)
+    tilt: list = field(default_factory=list)
+    y: list = field(default_factory=list)
+    joints: list = field(default_factory=list)
+    onsets: list = field(default_factory=list)
+    fell_at: float | None = None
+    push_window: tuple[float, float] | None = None
+
+    def arrays(self) -> None:
+        """Turn the recorded lists into arrays (in place)."""
+        for name, val in list(self.__dict__.items()):
+            if isinstance(val, list) and name != "onsets":
+                setattr(self, name, np.asarray(val))
+            elif isinstance(val, dict):
+                setattr(self, name, {s: np.asarray(x) for s, x in val.items()})
+
+
+def step_bounds(pref: PeriodicReference, steps: int) -> np.ndarray:
+    """Cycle values ``(steps + 1,)`` where steps begin: the right strike (fraction 0) and the
+    left one (its fraction), alternating."""
+    fl = pref.strike_fractions()["left"]
+    out = []
+    n = 0
+    while len(out) < steps + 1:
+        out += [n, n + fl]
+        n += 1
+    return np.array(out[:steps + 1], float)
+
+
+def _tilt(data, sim, s) -> tuple[float, float, float]:
+    b = sim.base_body
+    R = data.xmat[b].reshape(3, 3)
+    up = R @ (s.base_rot.T @ np.array([0.0, 0.0, 1.0]))
+    return float(data.xpos[b][2]), float(s.base_height), float(np.arccos(np.clip(up[2], -1, 1)))
+
+
+def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int, gain: float,
+             push: WalkPush | None = None, dt: float = 1e-3,
+             gains: ControllerGains = ControllerGains(),  # noqa: B008 (frozen)
+             fall: FallCriteria = FallCriteria(),  # noqa: B008 (frozen)
+             record_every: int = 1) -> Trace:
+    """Walk ``steps`` steps (module docstring); stops early when the robot falls."""
+    sim = build_model(robot, contacts=pref.plan.contacts)
+    ctl = TrackingController(sim, gains)
+    data = sim.new_data()
+    mo = pref.plan.motion
+    sim.set_state(data, mo.q[0], mo.v[0])
+    net.start_at(0.0)
+    bounds = step_bounds(pref, steps)
+    strike: dict[str, float | None] = {s: None for s in SIDES}
+    mg = robot.mass * 9.81
+    P = pref.period
+    c, ground = 0.0, 0.0
+    loaded = {s: bool(mo.contact[s][0]) for s in SIDES}
+    off_since = {s: None if loaded[s] else 0.0 for s in SIDES}
+    push_c = None if push is None else 0.5 * (bounds[push.step] + bounds[push.step + 1]) \
+        if push.step < steps else None
+    push_t0 = None
+    tr = Trace()
+    t_max = (bounds[-1] * P) * 2.0 + 2.0
+    k = 0
+    with mujoco_warnings():
+        while c < bounds[-1] and k * dt < t_max:
+            t = k * dt
+            q, v = sim.state(data)
+            wr = measure_contacts(sim, data)
+            for s in SIDES:  # contact onsets → ground phase
+                fz = wr[s][2]
+                swung = off_since[s] is not None and t - off_since[s] >= MIN_SWING * P
+                if fz > ONSET_FRACTION * mg:
+                    if swung:
+                        if strike[s] is None:
+                            strike[s] = c % 1.0  # where this foot lands, unperturbed
+                        ground = _nearest(ground, strike[s])
+                        tr.onsets.append((t, s))
+                    off_since[s] = None
+                elif fz < OFF_FRACTION * mg and off_since[s] is None:
+                    off_since[s] = t
+            g = gain * net.input_at(ground) if gain > 0 else None
+            net.step(dt, g)
+            ground += dt / P
+            f = net.fraction()
+            c = c + ((f - c + 0.5) % 1.0 - 0.5)
+            s_ref = pref.at(max(c, 0.0))
+            out = ctl.step(q, v, s_ref)
+            data.ctrl[:] = out.tau
+            h, ph, tilt = _tilt(data, sim, s_ref)
+            if k % record_every == 0:
+                _record(tr, t, q, v, out.tau, c, ground, wr, s_ref, h, ph, tilt, net)
+            if h < fall.min_height_ratio * ph or tilt > fall.max_tilt:
+                tr.fell_at = t
+                break
+            if push_c is not None and push_t0 is None and c >= push_c:
+                push_t0 = t
+                tr.push_window = (t, t + push.duration)
+            on = push_t0 is not None and push_t0 <= t < push_t0 + push.duration
+            data.xfrc_applied[sim.base_body, :3] = push.force if on else 0.0
+            mujoco.mj_step(sim.mj, data)
+            k += 1
+    tr.arrays()
+    return tr
+
+
+def _nearest(x: float, frac: float) -> float:
+    """The value ≡ ``frac`` (mod 1) nearest ``x``."""
+    return frac + np.round(x - frac)
+
+
+def _record(tr, t, q, v, tau, c, ground, wr, s_ref, h, ph, tilt, net) -> None:
+    tr.t.append(t)
+    tr.q.append(q.copy())
+    tr.v.append(v.copy())
+    tr.tau.append(np.array(tau))
+    tr.cycles.append(c)
+    tr.ground.append(ground)
+    for s in SIDES:
+        tr.force[s].append(wr[s][:3].copy())
+        tr.stance[s].append(bool(s_ref.stance[s]))
+    tr.height.append(h)
+    tr.plan_height.append(ph)
+    tr.tilt.append(tilt)
+    st = net.state
+    tr.y.append(np.maximum(st[0], 0) - np.maximum(st[1], 0))
+    tr.joints.append(net.joints())

@@ -1,0 +1,131 @@
+"""The walk (docs/design.md §14): the phase-indexed plan against the plan at its knots, the
+network's phase (uniform on its limit cycle, aligned with the cycle's joints, pulled by the
+ground's feedback), and a 2-step walk of the planar HOAP-2-sized model in MuJoCo (no fall,
+the push of each stance foot within 5° RMS of the demonstrator's measured one, the stride
+frequency within 1 % of the cycle's)."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from gdimitate.errors import InvalidInputError, PlanError
+from gdimitate.robot import SIDES
+from gdimitate.sim.periodic import PeriodicReference
+from gdimitate.walk import WalkNetwork, periodic_cycle, walk
+
+
+@pytest.fixture(scope="module")
+def cycle():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cyc, forces = periodic_cycle(imitator="hoap2")
+    assert cyc.feasible
+    return cyc, forces
+
+
+@pytest.fixture(scope="module")
+def network(cycle):
+    return WalkNetwork.tune(cycle[0].robot, cycle[0].motion)
+
+
+def test_phase_lookup_equals_plan_at_knots(cycle):
+    cyc, _ = cycle
+    robot, mo = cyc.robot, cyc.motion
+    pr = PeriodicReference(robot, cyc)
+    T = mo.T
+    ix = robot.idx_q("base_x")
+    stride = mo.q[-1, ix] - mo.q[0, ix]
+    for n in (0, 3):
+        for k in range(T - 1):
+            s = pr.at(n + (mo.t[k] - mo.t[0]) / pr.period)
+            want = mo.q[k].copy()
+            want[ix] += n * stride
+            np.testing.assert_allclose(s.q, want, atol=1e-9)
+            np.testing.assert_allclose(s.v, mo.v[k], atol=1e-9)
+            np.testing.assert_allclose(s.a, mo.a[k], atol=1e-9)
+            for side in SIDES:
+                np.testing.assert_allclose(s.wrench[side], cyc.wrenches[side][k], atol=1e-9)
+                assert s.stance[side] == bool(mo.contact[side][k])
+    # across the seam: one cycle on is the last knot
+    s = pr.at(1.0)
+    np.testing.assert_allclose(pin.difference(robot.model, s.q, mo.q[-1]), 0.0, atol=1e-9)
+    # a re-timed plan: velocities × r, accelerations × r²
+    s1, s2 = pr.at(0.37), pr.at(0.37, rate=1.1)
+    np.testing.assert_allclose(s2.v, 1.1 * s1.v)
+    np.testing.assert_allclose(s2.a, 1.21 * s1.a)
+
+
+def test_non_periodic_plan_is_refused(cycle):
+    cyc, _ = cycle
+    from types import SimpleNamespace
+
+    mo = cyc.motion
+    q = mo.q.copy()
+    q[-1, cyc.robot.idx_q("base_z")] += 0.0
+    v = mo.v.copy()
+    v[-1] += 0.1
+    bad = SimpleNamespace(motion=mo.replace(v=v), wrenches=cyc.wrenches, contacts=cyc.contacts)
+    with pytest.raises(PlanError, match="not periodic"):
+        PeriodicReference(cyc.robot, bad)
+
+
+def test_network_phase_and_entrainment(cycle, network):
+    cyc, _ = cycle
+    net = network
+    f_cycle = 1.0 / net.period
+    assert net.frequency == pytest.approx(f_cycle, rel=0.01)
+    assert net.alignment_nrmse < 0.1
+    # free running: the phase advances at the network's frequency, never backwards
+    net.start_at(0.0)
+    dt, fr = 1e-3, []
+    for _ in range(int(2 * net.period / dt)):
+        net.step(dt)
+        fr.append(net.fraction())
+    c = np.unwrap(2 * np.pi * np.array(fr)) / (2 * np.pi)
+    assert np.all(np.diff(c) > 0)
+    assert (c[-1] - c[0]) / (dt * (len(c) - 1)) == pytest.approx(net.frequency, rel=0.01)
+
+    # feedback pulls the phase: started 0.25 cycle off, driven by the taught input at a
+    # clock's phase, the gap shrinks; with gain 0 it stays
+    def gap_after(gain):
+        net.start_at(0.25)
+        ground = 0.0
+        for _ in range(int(4 * net.period / dt)):
+            net.step(dt, gain * net.input_at(ground) if gain else None)
+            ground += dt / net.period
+        return abs((net.fraction() - ground % 1.0 + 0.5) % 1.0 - 0.5)
+
+    assert gap_after(0.0) > 0.2
+    assert gap_after(1.0) < 0.1
+
+
+def test_two_step_walk_in_mujoco(cycle, network, tmp_path):
+    cyc, forces = cycle
+    res = walk(cycle=cyc, forces=forces, steps=2, network=network, feedback_gain=0.5)
+    d = res.to_dict()
+    assert not d["fell"] and d["steps_completed"] == 2
+    rmse = d["per_step_force_direction_rmse_deg"]
+    assert len(rmse) == 2 and all(0 < x <= 5.0 for x in rmse), rmse
+    # 2 % over two steps (the start included); the 1 % criterion is the 20-step benchmark
+    assert d["frequency_hz"] == pytest.approx(d["cycle_frequency_hz"], rel=0.02)
+    files = res.save(tmp_path, html=False)
+    got = json.loads((tmp_path / "walk.json").read_text())
+    for key in ("steps_completed", "fell", "fell_at_s", "per_step_force_direction_rmse_deg",
+                "frequency_hz", "feedback_gain"):
+        assert key in got
+    assert {"walk_trajectory.npz", "walk_frequency.png"} <= set(files)
+    z = np.load(tmp_path / "walk_trajectory.npz")
+    assert z["q"].shape[1] == cyc.robot.model.nq
+
+
+def test_walk_refuses_bad_options(cycle):
+    cyc, forces = cycle
+    with pytest.raises(InvalidInputError, match="steps"):
+        walk(cycle=cyc, forces=forces, steps=0)
+    with pytest.raises(InvalidInputError, match="feedback_gain"):
+        walk(cycle=cyc, forces=forces, steps=2, feedback_gain=-1.0)
