@@ -72,6 +72,7 @@ if TYPE_CHECKING:
     from .result import AdaptationReport, AdaptedMotion
     from .retarget import Limits, StreamingAdaptor, Weights
     from .robot import Leg, Robot
+    from .walk import walk
     from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
 __version__ = "0.1.0"
@@ -105,6 +106,7 @@ _LAZY_NAMES: dict[str, str] = {
     "ROBOT_GAIT": ".walking",
     "GaitSpec": ".walking",
     "walking_motion": ".walking",
+    "walk": ".walk",
 }
 
 #: public subpackages / modules (``gdimitate.sim`` etc.), imported on first use
@@ -198,6 +200,7 @@ __all__ = [
     "retarget",
     "self_adjust",
     "sim",
+    "walk",
     "walking_motion",
     "wrenches",
 ]
