@@ -184,3 +184,51 @@ def test_following_report(armed):
     assert f.r < -0.99 and f.demonstrator_range == pytest.approx(0.8, abs=1e-3)
     assert f.ratio == pytest.approx(f.imitator_range / 0.8, rel=1e-3)
     assert np.isnan(rep["left_shoulder_pitch_joint"].r)  # constant: no correlation
+
+
+@pytest.mark.slow
+def test_g1_swings_its_arms_like_the_demonstrator(armed):
+    """Issue 20, done when: the shipped 3-D walk on the synthetic full-body model (subject01
+    with arms swinging against the legs, ±0.23 rad), one stride adapted to G1 at 20 knots/s.
+    Each G1 shoulder pitch correlates with the demonstrator's arm flexion (|r| ≥ 0.8) over at
+    least half its range (mapped and clipped to G1's limits); no unmapped joint (wrists)
+    leaves its neutral pose by more than HOLD_RANGE; the audit's self-collision check
+    passes."""
+    import sys
+    import warnings
+    from pathlib import Path
+
+    import gdimitate as gd
+    from gdimitate.opensim import read_coordinates, read_grf
+    from gdimitate.retarget.bodymap import HOLD_RANGE, following
+
+    sys.path.insert(0, str(Path(__file__).parent / "opensim_ref"))
+    from with_arms import arm_swing
+
+    folder = gd.gait.human_walk_3d_folder()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        motion = arm_swing(armed, read_coordinates(folder / "subject01_walk1_ik.mot", armed))
+        forces = read_grf(folder / "subject01_walk1_grf.mot", armed,
+                          folder / "subject01_walk1_grf.xml", t=motion.t)
+        g1 = gd.Robot.from_library("g1")
+    demo, fs = gd.gait.one_stride(motion.replace(contact=forces.contact), forces, "left")
+    r = gd.adapt(demo, armed, g1, method="optimal", force="measured", forces=fs, rate=20,
+                 verbose=False)
+    bm = body_map(armed, g1)
+    rep = following(bm, demo, armed, r.motion, g1)
+    for s in ("left", "right"):
+        f = rep[f"{s}_shoulder_pitch_joint"]
+        print(f"\n{s} shoulder pitch: r = {f.r:.3f}, range {f.imitator_range:.3f} rad of "
+              f"{f.demonstrator_range:.3f} (ratio {f.ratio:.2f})")
+        assert abs(f.r) >= 0.8 and f.ratio >= 0.5, f
+    mapped = {v[0] for v in bm.joints.values()}
+    held = [j for j in g1.joint_names if j not in mapped and g1.model.joints[
+        g1.model.getJointId(j)].nq == 1]
+    moved = max(np.max(np.abs(r.motion.q[:, g1.idx_q(j)] - g1.neutral[g1.idx_q(j)]))
+                for j in held)
+    print(f"unmapped joints ({len(held)}): largest excursion {moved:.3f} rad")
+    assert moved <= HOLD_RANGE + 1e-6
+    sc = r.audit.check("self_collision")
+    print(f"self-collision: closest {sc.value * 1e3:.1f} mm at knot {sc.knot}")
+    assert sc.passed
