@@ -137,8 +137,61 @@ def gait_lab() -> Path:
     return path
 
 
+def arms_g1() -> Path:
+    """One stride of the 3-D walk on a full-body demonstrator (subject01 with Rajagopal-style
+    arms swinging against the legs, tests/opensim_ref/with_arms.py) adapted to G1: each
+    shoulder pitch against the demonstrator's arm flexion (mapped), and the closest approach
+    of G1's own collision geometries (limb–limb, limb–trunk) over the stride."""
+    import tempfile
+    import warnings
+
+    import matplotlib.pyplot as plt
+
+    import gdimitate as gd
+    from gdimitate.opensim import read_coordinates, read_grf
+    from gdimitate.retarget.bodymap import body_map, following
+    from gdimitate.selfcollision import self_collision
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "opensim_ref"))
+    from with_arms import arm_swing, write_model
+
+    folder = gd.gait.human_walk_3d_folder()
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        human = gd.Robot.from_osim(write_model(folder / "subject01.osim",
+                                               Path(tmp) / "armed.osim"))
+        walk = arm_swing(human, read_coordinates(folder / "subject01_walk1_ik.mot", human))
+        forces = read_grf(folder / "subject01_walk1_grf.mot", human,
+                          folder / "subject01_walk1_grf.xml", t=walk.t)
+        g1 = gd.Robot.from_library("g1")
+    demo, fs = gd.gait.one_stride(walk.replace(contact=forces.contact), forces, "left")
+    r = gd.adapt(demo, human, g1, "optimal", force="measured", forces=fs, rate=20,
+                 verbose=False)
+    rep = following(body_map(human, g1), demo, human, r.motion, g1)
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.4))
+    for s, c in (("left", "C0"), ("right", "C1")):
+        f = rep[f"{s}_shoulder_pitch_joint"]
+        _, scale, offset = body_map(human, g1).joints[f.demonstrator]
+        ax[0].plot(demo.t, scale * demo.column(f.demonstrator) + offset, c + "--",
+                   label=f"demonstrator {f.demonstrator} (mapped)")
+        ax[0].plot(r.motion.t, r.motion.column(f.imitator), c,
+                   label=f"G1 {s} shoulder pitch: r = {f.r:.2f}, range ×{f.ratio:.2f}")
+    ax[0].set(xlabel="t [s]", ylabel="angle [rad]", title="arms: G1 vs the demonstrator")
+    ax[0].legend(fontsize=7)
+    d = self_collision(g1).distances(r.motion.q).min(axis=1)
+    ax[1].plot(r.motion.t, d * 1e3, "k")
+    ax[1].axhline(0, color="r", lw=0.8)
+    ax[1].set(xlabel="t [s]", ylabel="closest pair [mm]",
+              title=f"self-collision clearance ({len(self_collision(g1).pairs)} pairs)")
+    fig.tight_layout()
+    path = IMG / "arms_g1.png"
+    fig.savefig(path, dpi=110)
+    print(r.audit.summary(only_failed=True))
+    return path
+
+
 FIGURES = {"force_direction_3d": force_direction_3d, "adaptor_g1": adaptor_g1,
-           "gait_lab": gait_lab}
+           "gait_lab": gait_lab, "arms_g1": arms_g1}
 
 if __name__ == "__main__":
     names = sys.argv[1:] or list(FIGURES)
