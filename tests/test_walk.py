@@ -129,3 +129,20 @@ def test_walk_refuses_bad_options(cycle):
         walk(cycle=cyc, forces=forces, steps=0)
     with pytest.raises(InvalidInputError, match="feedback_gain"):
         walk(cycle=cyc, forces=forces, steps=2, feedback_gain=-1.0)
+
+
+@pytest.mark.slow
+def test_cli_walk_writes_its_files(tmp_path):
+    from gdimitate.cli import main
+
+    out = tmp_path / "w"
+    status = main(["walk", "--imitator", "hoap2", "--steps", "2", "--no-html", "--out",
+                   str(out)])
+    d = json.loads((out / "walk.json").read_text())
+    assert status == (0 if d["steps_completed"] == 2 and not d["fell"] else 3)
+    assert isinstance(d["steps_completed"], int) and isinstance(d["fell"], bool)
+    assert len(d["per_step_force_direction_rmse_deg"]) == d["steps_completed"]
+    assert d["feedback_gain"] == 0.5
+    for f in ("walk_trajectory.npz", "walk_phase_portraits.png", "walk_frequency.png",
+              "walk_force_directions.png"):
+        assert (out / f).is_file()

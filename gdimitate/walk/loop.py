@@ -5,11 +5,15 @@ advances under its input ``g``, its phase indexes the periodic plan
 MuJoCo, and the simulated feet feed back into ``g``.
 
 Feedback (entrainment to the ground): a foot's contact onset in the simulation (its vertical
-force rising above :data:`ONSET_FRACTION` of m·g after a swing: below :data:`OFF_FRACTION`
-for at least :data:`MIN_SWING` of the period) says where in the cycle the body is; the
-*ground phase* jumps there and otherwise advances at the cycle's own rate. Where "there" is
-comes from the walk itself: the network's phase at each foot's first onset (the first,
-unperturbed steps), so the controller's own touchdown lag is no bias. The network's
+force rising above :data:`ONSET_FRACTION` of m·g after a swing — below :data:`OFF_FRACTION`
+for at least :data:`MIN_SWING` of the period — and staying above :data:`OFF_FRACTION` for
+:data:`MIN_LOAD` of the period: a scuff or a bounce of a few milliseconds is no heel strike)
+says where in the cycle the body is; the
+*ground phase* jumps there and otherwise advances at the cycle's own rate. Only onsets within
+:data:`STRIKE_WINDOW` cycles of the plan's heel strike of that foot count (a swing foot that
+scuffs the floor mid-swing is no heel strike). Where "there" is comes from the walk itself:
+the ground phase at each foot's first heel strike (the first, unperturbed steps), so
+neither the controller's touchdown lag nor the network's lead on its drive is a bias. The network's
 input is ``g = gain · u(ground phase)``, ``u`` the input it was taught with at that fraction
 (:meth:`~gdimitate.walk.network.WalkNetwork.input_at`): with ``gain`` 0 the network runs
 open loop (free), with ``gain`` > 0 it is pulled towards the body's rhythm.
@@ -36,6 +40,8 @@ __all__ = ["WalkPush", "Trace", "run_loop", "ONSET_FRACTION", "OFF_FRACTION"]
 ONSET_FRACTION = 0.05
 OFF_FRACTION = 0.01
 MIN_SWING = 0.15
+MIN_LOAD = 0.05
+STRIKE_WINDOW = 0.2
 
 
 @dataclass(frozen=True)
@@ -79,6 +85,7 @@ class Trace:
     y: list = field(default_factory=list)
     joints: list = field(default_factory=list)
     onsets: list = field(default_factory=list)
+    strike: dict = field(default_factory=dict)
     fell_at: float | None = None
     push_window: tuple[float, float] | None = None
 
@@ -87,7 +94,7 @@ class Trace:
         for name, val in list(self.__dict__.items()):
             if isinstance(val, list) and name != "onsets":
                 setattr(self, name, np.asarray(val))
-            elif isinstance(val, dict):
+            elif isinstance(val, dict) and name != "strike":
                 setattr(self, name, {s: np.asarray(x) for s, x in val.items()})
 
 
@@ -124,11 +131,13 @@ def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int
     net.start_at(0.0)
     bounds = step_bounds(pref, steps)
     strike: dict[str, float | None] = {s: None for s in SIDES}
+    planned = pref.strike_fractions()
     mg = robot.mass * 9.81
     P = pref.period
     c, ground = 0.0, 0.0
     loaded = {s: bool(mo.contact[s][0]) for s in SIDES}
     off_since = {s: None if loaded[s] else 0.0 for s in SIDES}
+    pending: dict[str, tuple[float, float] | None] = {s: None for s in SIDES}
     push_c = None if push is None else 0.5 * (bounds[push.step] + bounds[push.step + 1]) \
         if push.step < steps else None
     push_t0 = None
@@ -140,18 +149,9 @@ def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int
             t = k * dt
             q, v = sim.state(data)
             wr = measure_contacts(sim, data)
-            for s in SIDES:  # contact onsets → ground phase
-                fz = wr[s][2]
-                swung = off_since[s] is not None and t - off_since[s] >= MIN_SWING * P
-                if fz > ONSET_FRACTION * mg:
-                    if swung:
-                        if strike[s] is None:
-                            strike[s] = c % 1.0  # where this foot lands, unperturbed
-                        ground = _nearest(ground, strike[s])
-                        tr.onsets.append((t, s))
-                    off_since[s] = None
-                elif fz < OFF_FRACTION * mg and off_since[s] is None:
-                    off_since[s] = t
+            for s in SIDES:  # heel strikes → ground phase
+                ground = _strikes(s, wr[s][2] / mg, t, c, P, ground, off_since, pending,
+                                  strike, planned, tr)
             g = gain * net.input_at(ground) if gain > 0 else None
             net.step(dt, g)
             ground += dt / P
@@ -174,7 +174,34 @@ def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int
             mujoco.mj_step(sim.mj, data)
             k += 1
     tr.arrays()
+    tr.strike = dict(strike)
     return tr
+
+
+def _strikes(s, fz, t, c, P, ground, off_since, pending, strike, planned, tr) -> float:
+    """Heel-strike detection of foot ``s`` (``fz``: vertical force / m·g) and the ground
+    phase it sets (module docstring); returns the ground phase."""
+    if pending[s] is not None:
+        t_on, off_before = pending[s]
+        if fz < OFF_FRACTION:  # a scuff: the swing goes on
+            pending[s], off_since[s] = None, off_before
+        elif t - t_on >= MIN_LOAD * P:  # confirmed: a heel strike at t_on
+            pending[s] = None
+            g_on = ground - (t - t_on) / P  # the ground phase at the strike
+            if strike[s] is None:
+                strike[s] = g_on % 1.0  # where this foot lands, unperturbed
+            ground = _nearest(g_on, strike[s]) + (t - t_on) / P
+            tr.onsets.append((t_on, s))
+        return ground
+    swung = off_since[s] is not None and t - off_since[s] >= MIN_SWING * P
+    near = abs((c - planned[s] + 0.5) % 1.0 - 0.5) < STRIKE_WINDOW
+    if fz > ONSET_FRACTION:
+        if swung and near:
+            pending[s] = (t, off_since[s])
+        off_since[s] = None
+    elif fz < OFF_FRACTION and off_since[s] is None:
+        off_since[s] = t
+    return ground
 
 
 def _nearest(x: float, frac: float) -> float:

@@ -6,8 +6,9 @@ between the simulated stance foot's force and the demonstrator's measured one at
 cycle fraction, over the step's single-support samples where the plan has one stance foot,
 the simulation loads it (> 1 % m·g) and the demonstrator's foot is in measured contact
 (planar robots: the angle in the sagittal plane; 3-D robots: the 3-D angle). The body's
-rhythm is the simulated contact onsets: after a push, the steps to return to it count the
-onsets until two successive intervals are within :data:`RHYTHM_TOL` of their nominal ones.
+rhythm is the simulated heel strikes (the onsets :mod:`.loop` counts): after a push, the
+steps to return to it count the strikes until two successive intervals are within
+:data:`RHYTHM_TOL` of their nominal ones (those of the walk's own first, unpushed strikes).
 """
 
 from __future__ import annotations
@@ -101,9 +102,11 @@ class WalkResult:
         tr = self.trace
         if tr.push_window is None:
             return None
-        fl = self.reference.strike_fractions()["left"]
+        st = {**self.reference.strike_fractions(),
+              **{k: v for k, v in tr.strike.items() if v is not None}}
         P = self.reference.period
-        nominal = {"left": fl * P, "right": (1 - fl) * P}  # interval ending at that foot
+        gap = (st["left"] - st["right"]) % 1.0
+        nominal = {"left": gap * P, "right": (1 - gap) * P}  # interval ending at that foot
         on = [(t, s) for t, s in tr.onsets if t >= tr.push_window[0]]
         good = 0
         for i in range(1, len(on)):

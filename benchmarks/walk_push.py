@@ -1,0 +1,147 @@
+"""Push experiment of the walk (docs/design.md §14): what does the ground's feedback into the
+oscillator network buy?
+
+For each robot: its periodic cycle from the shipped 3-D walk (cached under --cache, not in
+the package: a G1 cycle takes minutes), one tuned network, then walks of --steps steps with a
+horizontal push of 0.1 s on the base at mid-stance (forward: +x; sideways: +y, 3-D robots
+only — the planar model has no lateral freedom), magnitudes as fractions of m·g, feedback
+gain 0 (open loop) and > 0, repeated trials (the push at mid-stance of different steps).
+Same-run baseline: the unpushed walk at each gain. Reports, per (robot, direction, gain),
+the largest push every trial survived and the steps the body's rhythm needed to come back
+(:meth:`gdimitate.walk.WalkResult.steps_to_rhythm`), as a Markdown table (stdout and --md).
+
+    python benchmarks/walk_push.py                       # HOAP-2, forward, quick
+    python benchmarks/walk_push.py --robots hoap2 g1 --md benchmarks/walk_push.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import warnings
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from gdimitate.contact import SoleContact
+from gdimitate.motion import Motion
+from gdimitate.robot import SIDES, Robot
+
+
+def save_cycle(path: Path, cyc, name: str) -> None:
+    m = cyc.motion
+    np.savez(path, t=m.t, q=m.q, v=m.v, a=m.a, joint_names=np.array(m.joint_names),
+             base_nq=m.base_nq, joint_nq=np.array(m.joint_nq),
+             **{f"contact_{s}": m.contact[s] for s in SIDES},
+             **{f"w_{s}": cyc.wrenches[s] for s in SIDES},
+             contacts=json.dumps({s: cyc.contacts[s].__dict__ for s in SIDES}),
+             feasible=bool(cyc.feasible), robot=name)
+
+
+def load_cycle(path: Path):
+    d = np.load(path, allow_pickle=False)
+    robot = Robot.load(str(d["robot"]))
+    m = Motion(t=d["t"], joint_names=tuple(d["joint_names"]), q=d["q"], v=d["v"], a=d["a"],
+               contact={s: d[f"contact_{s}"] for s in SIDES}, base_nq=int(d["base_nq"]),
+               joint_nq=tuple(int(x) for x in d["joint_nq"]))
+    cs = {s: SoleContact(**v) for s, v in json.loads(str(d["contacts"])).items()}
+    return SimpleNamespace(robot=robot, motion=m, wrenches={s: d[f"w_{s}"] for s in SIDES},
+                           contacts=cs, feasible=bool(d["feasible"]))
+
+
+def cycle_of(name: str, cache: Path):
+    from gdimitate.walk import periodic_cycle
+
+    path = cache / f"cycle_{name}.npz"
+    if not path.exists():
+        t = time.perf_counter()
+        cyc, _ = periodic_cycle(imitator=name)
+        print(f"{name}: periodic cycle in {time.perf_counter() - t:.0f} s, audit "
+              f"{'feasible' if cyc.feasible else 'NOT feasible'}", flush=True)
+        save_cycle(path, cyc, name)
+    return load_cycle(path)
+
+
+def run(name: str, args, forces) -> list[dict]:
+    from gdimitate.walk import WalkNetwork, WalkPush, walk
+
+    cyc = cycle_of(name, args.cache)
+    net = WalkNetwork.tune(cyc.robot, cyc.motion)
+    mg = cyc.robot.mass * 9.81
+    dirs = {"forward": (1.0, 0.0, 0.0)}
+    if cyc.robot.base == "free":
+        dirs["sideways"] = (0.0, 1.0, 0.0)
+    rows = []
+    for gain in args.gains:
+        base = walk(cycle=cyc, forces=forces, steps=args.steps, network=net, feedback_gain=gain)
+        rows.append(dict(robot=name, direction="none", gain=gain, push=0.0, trial=0,
+                         survived=not base.fell, steps=base.steps_completed, rhythm=None))
+        print(f"{name} gain {gain}: unpushed {base.steps_completed} steps, fell {base.fell}",
+              flush=True)
+        for dname, d in dirs.items():
+            for frac in args.magnitudes:
+                for trial in range(args.trials):
+                    push = WalkPush(step=2 + trial, force=tuple(frac * mg * np.array(d)))
+                    r = walk(cycle=cyc, forces=forces, steps=args.steps, network=net,
+                             feedback_gain=gain, push=push)
+                    rows.append(dict(robot=name, direction=dname, gain=gain, push=frac,
+                                     trial=trial, survived=not r.fell,
+                                     steps=r.steps_completed, rhythm=r.steps_to_rhythm()))
+                    print(f"  {dname} {frac:.2f} m·g trial {trial}: "
+                          f"{'survived' if not r.fell else 'FELL'}, steps "
+                          f"{r.steps_completed}, rhythm back after {r.steps_to_rhythm()}",
+                          flush=True)
+    return rows
+
+
+def table(rows: list[dict]) -> str:
+    out = ["| robot | push | feedback gain | largest push survived (all trials) [m·g, 0.1 s] "
+           "| steps to rhythm at that push (per trial) | unpushed walk |",
+           "|---|---|---|---|---|---|"]
+    keys = sorted({(r["robot"], r["direction"], r["gain"]) for r in rows
+                   if r["direction"] != "none"})
+    for robot, d, g in keys:
+        mine = [r for r in rows if (r["robot"], r["direction"], r["gain"]) == (robot, d, g)]
+        ok = sorted({r["push"] for r in mine
+                     if all(x["survived"] for x in mine if x["push"] == r["push"])})
+        best = ok[-1] if ok else None
+        rh = [x["rhythm"] for x in mine if x["push"] == best] if best is not None else []
+        base = [r for r in rows if (r["robot"], r["direction"], r["gain"]) == (robot, "none", g)]
+        bs = f"{base[0]['steps']} steps, {'no fall' if base[0]['survived'] else 'FELL'}" \
+            if base else "–"
+        out.append(f"| {robot} | {d} | {g:g} | {best if best is not None else 'none'} | "
+                   f"{', '.join('–' if x is None else str(x) for x in rh) or '–'} | {bs} |")
+    return "\n".join(out)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--robots", nargs="+", default=["hoap2"])
+    p.add_argument("--magnitudes", nargs="+", type=float, default=[0.1, 0.2, 0.4])
+    p.add_argument("--gains", nargs="+", type=float, default=[0.0, 0.5])
+    p.add_argument("--trials", type=int, default=2)
+    p.add_argument("--steps", type=int, default=8)
+    p.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "gdimitate" / "walk_push")
+    p.add_argument("--md", type=Path, default=None, help="also write the table there")
+    args = p.parse_args()
+    args.cache.mkdir(parents=True, exist_ok=True)
+    warnings.simplefilter("ignore")
+    from gdimitate.demo import default_demonstration
+
+    _, _, forces = default_demonstration()
+    t0 = time.perf_counter()
+    rows = []
+    for name in args.robots:
+        rows += run(name, args, forces)
+    md = table(rows)
+    print(md)
+    print(f"({time.perf_counter() - t0:.0f} s)")
+    if args.md:
+        args.md.write_text(md + "\n")
+    (args.cache / "walk_push_rows.json").write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()
