@@ -189,11 +189,12 @@ def test_following_report(armed):
 @pytest.mark.slow
 def test_g1_swings_its_arms_like_the_demonstrator(armed):
     """Issue 20, done when: the shipped 3-D walk on the synthetic full-body model (subject01
-    with arms swinging against the legs, ±0.23 rad), one stride adapted to G1 at 20 knots/s.
+    with arms swinging against the legs, ±0.23 rad), one stride adapted to G1 at 10 knots/s.
     Each G1 shoulder pitch correlates with the demonstrator's arm flexion (|r| ≥ 0.8) over at
     least half its range (mapped and clipped to G1's limits); no unmapped joint (wrists)
     leaves its neutral pose by more than HOLD_RANGE; the audit's self-collision check
-    passes."""
+    passes. Measured: r = −0.882 / −0.980 (left/right; the map's scale is −1), range ratio
+    0.90 / 0.83, wrists within 0.100 rad, 13.2 mm clear (20 knots/s: 0.89 / 0.85, 13.5 mm)."""
     import sys
     import warnings
     from pathlib import Path
@@ -213,7 +214,7 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
                           folder / "subject01_walk1_grf.xml", t=motion.t)
         g1 = gd.Robot.from_library("g1")
     demo, fs = gd.gait.one_stride(motion.replace(contact=forces.contact), forces, "left")
-    r = gd.adapt(demo, armed, g1, method="optimal", force="measured", forces=fs, rate=20,
+    r = gd.adapt(demo, armed, g1, method="optimal", force="measured", forces=fs, rate=10,
                  verbose=False)
     bm = body_map(armed, g1)
     rep = following(bm, demo, armed, r.motion, g1)
