@@ -233,3 +233,33 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
     sc = r.audit.check("self_collision")
     print(f"self-collision: closest {sc.value * 1e3:.1f} mm at knot {sc.knot}")
     assert sc.passed
+
+
+@pytest.mark.slow
+def test_g1_holds_its_arms_under_an_armless_demonstrator():
+    """Issue 20, done when, on the shipped subject01 walk (gait2354: no arms): one stride on
+    G1 at 10 knots/s — G1's 14 arm and wrist joints (unmapped) stay within HOLD_RANGE of their
+    neutral pose (a weak posture cost let them sweep 1.9–2.5 rad), and the audit, its
+    self-collision check included, finds the plan feasible."""
+    import warnings
+
+    import gdimitate as gd
+    from gdimitate.retarget.bodymap import HOLD_RANGE
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h, m, f = gd.gait.human_walk_3d()
+        g1 = gd.Robot.from_library("g1")
+        demo, fs = gd.gait.one_stride(m, f, "left")
+        r = gd.adapt(demo, h, g1, method="optimal", force="measured", forces=fs, rate=10,
+                     verbose=False)
+        mapped = {v[0] for v in body_map(h, g1).joints.values()}
+    held = [j for j in g1.joint_names if j not in mapped
+            and g1.model.joints[g1.model.getJointId(j)].nq == 1]
+    assert len(held) == 14
+    moved = max(np.max(np.abs(r.motion.q[:, g1.idx_q(j)] - g1.neutral[g1.idx_q(j)]))
+                for j in held)
+    print(f"\nsubject01 → G1: unmapped excursion {moved:.3f} rad, self-collision "
+          f"{r.audit.self_collision.distance * 1e3:.1f} mm, feasible {r.audit.feasible}")
+    assert moved <= HOLD_RANGE + 1e-6
+    assert r.audit.check("self_collision").passed and r.audit.feasible, r.audit.binding
