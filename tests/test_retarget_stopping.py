@@ -52,3 +52,24 @@ def test_settled_and_converged_give_motions_the_audit_accepts():
     # the same motion to within a fraction of the joints' range of motion
     dq = np.abs(s.motion.q[:, 7:] - c.motion.q[:, 7:]).max()
     assert dq <= 0.05, dq
+
+
+def test_stall_is_recognised_and_a_falling_violation_is_not():
+    """No feasible iterate and < 10 % fall of the least violation over 20 iterations (after
+    40): stop with reason 'stalled', keeping the least-violating iterate; a violation that
+    keeps falling (12 → 3 over 25 iterations, Talos's trace) never stalls."""
+    p = _rule()
+    flat = [0.30 - 0.0005 * i for i in range(60)]  # 0.30 → 0.27: < 10 % over any 20
+    stop_at = next(i for i, v in enumerate(flat)
+                   if p.update(1.0, np.array([float(i)]), np.array([0.0, 1.0 + v])))
+    assert stop_at == 39 and p.reason == "stalled"  # the 40th iterate
+    assert p.least_x[0] == 39.0 and p.least_viol == pytest.approx(flat[39])
+    q = _rule()
+    falling = [12.0 * 0.95 ** i for i in range(100)]  # 5 % per iteration: 64 % over 20
+    assert not any(q.update(1.0, np.zeros(1), np.array([0.0, 1.0 + v])) for v in falling)
+
+
+def test_budget_stops_the_solve():
+    p = _rule(budget=7, settle=False)
+    stops = [p.update(1.0, np.zeros(1), np.array([0.0, 0.0])) for _ in range(7)]
+    assert stops == [False] * 6 + [True] and p.reason == "budget"
