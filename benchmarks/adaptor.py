@@ -125,6 +125,18 @@ def planar_case2() -> dict:
     return out
 
 
+class _Rows(list):
+    """The table, each row printed as soon as it is measured."""
+
+    def __init__(self, head: list[str]):
+        super().__init__(head)
+        print("\n".join(head), flush=True)
+
+    def append(self, row: str) -> None:
+        super().append(row)
+        print(row, flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--knots", type=int, default=100)
@@ -134,9 +146,9 @@ def main() -> None:
                     help="robots also adapted by --baseline-rev (comma-separated, or '')")
     ap.add_argument("--cases", default="hoap2,cmu,clip")
     a = ap.parse_args()
-    rows = ["| case | goal | first time ever | fresh process | second call | iterations | "
-            "peak memory | audit | same-run baseline (second call, iterations) |",
-            "|---|---|---|---|---|---|---|---|---|"]
+    rows = _Rows(["| case | goal | first time ever | fresh process | second call | iterations "
+                  "| peak memory | audit | same-run baseline (second call, iterations) |",
+                  "|---|---|---|---|---|---|---|---|---|"])
     base_tree = None
     tmp = tempfile.TemporaryDirectory()
     if a.baseline_rev and a.baseline:
@@ -177,7 +189,6 @@ def main() -> None:
                 f"| {p['first']:.2f} s | {p['cached']:.2f} s | | | "
                 f"{'feasible' if p['feasible'] else 'infeasible'} | |")
     tmp.cleanup()
-    print("\n".join(rows))
     print("\nstreaming: python benchmarks/streaming.py")
 
 
