@@ -8,7 +8,8 @@ only — the planar model has no lateral freedom), magnitudes as fractions of m�
 gain 0 (open loop) and > 0, repeated trials (the push at mid-stance of different steps).
 Same-run baseline: the unpushed walk at each gain. Reports, per (robot, direction, gain),
 the largest push every trial survived and the steps the body's rhythm needed to come back
-(:meth:`gdimitate.walk.WalkResult.steps_to_rhythm`), as a Markdown table (stdout and --md).
+(:meth:`gdimitate.walk.WalkResult.steps_to_rhythm`: heel-strike intervals back within 5 %
+of the period of the unpushed walk's), as a Markdown table (stdout and --md).
 
     python benchmarks/walk_push.py                       # HOAP-2, forward, quick
     python benchmarks/walk_push.py --robots hoap2 g1 --md benchmarks/walk_push.md
@@ -88,10 +89,10 @@ def run(name: str, args, forces) -> list[dict]:
                              feedback_gain=gain, push=push)
                     rows.append(dict(robot=name, direction=dname, gain=gain, push=frac,
                                      trial=trial, survived=not r.fell,
-                                     steps=r.steps_completed, rhythm=r.steps_to_rhythm()))
+                                     steps=r.steps_completed, rhythm=r.steps_to_rhythm(base)))
                     print(f"  {dname} {frac:.2f} m·g trial {trial}: "
                           f"{'survived' if not r.fell else 'FELL'}, steps "
-                          f"{r.steps_completed}, rhythm back after {r.steps_to_rhythm()}",
+                          f"{r.steps_completed}, rhythm back after {r.steps_to_rhythm(base)}",
                           flush=True)
     return rows
 

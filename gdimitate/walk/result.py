@@ -8,7 +8,7 @@ the simulation loads it (> 1 % m·g) and the demonstrator's foot is in measured 
 (planar robots: the angle in the sagittal plane; 3-D robots: the 3-D angle). The body's
 rhythm is the simulated heel strikes (the onsets :mod:`.loop` counts): after a push, the
 steps to return to it count the strikes until two successive intervals are within
-:data:`RHYTHM_TOL` of their nominal ones (those of the walk's own first, unpushed strikes).
+:data:`RHYTHM_TOL` of the period of the same walk's unpushed ones.
 """
 
 from __future__ import annotations
@@ -96,25 +96,24 @@ class WalkResult:
             out.append(float(np.sqrt(np.mean(err[w] ** 2))) if w.any() else float("nan"))
         return out
 
-    def steps_to_rhythm(self) -> int | None:
-        """Steps after the push until the body's rhythm (contact onsets) is back (module
-        docstring); None without a push or when it never comes back."""
+    def steps_to_rhythm(self, baseline: WalkResult | None = None) -> int | None:
+        """Steps (heel strikes) after the push until the body's rhythm is back: two
+        successive strike intervals within :data:`RHYTHM_TOL` of the period of the
+        ``baseline``'s (the same walk unpushed; the simulation is deterministic, so before
+        the push they are equal). None without a push or a baseline, or when it never
+        comes back."""
         tr = self.trace
-        if tr.push_window is None:
+        if tr.push_window is None or baseline is None:
             return None
-        st = {**self.reference.strike_fractions(),
-              **{k: v for k, v in tr.strike.items() if v is not None}}
-        P = self.reference.period
-        gap = (st["left"] - st["right"]) % 1.0
-        nominal = {"left": gap * P, "right": (1 - gap) * P}  # interval ending at that foot
-        on = [(t, s) for t, s in tr.onsets if t >= tr.push_window[0]]
+        t0, P = tr.push_window[0], self.reference.period
+        on = [t for t, _ in tr.onsets if t >= t0]
+        ref = [t for t, _ in baseline.trace.onsets if t >= t0]
         good = 0
-        for i in range(1, len(on)):
-            dt = on[i][0] - on[i - 1][0]
-            ok = on[i][1] != on[i - 1][1] and abs(dt / nominal[on[i][1]] - 1) < RHYTHM_TOL
+        for i in range(1, min(len(on), len(ref))):
+            ok = abs((on[i] - on[i - 1]) - (ref[i] - ref[i - 1])) < RHYTHM_TOL * P
             good = good + 1 if ok else 0
             if good == 2:
-                return i
+                return i - 1
         return None
 
     def to_dict(self) -> dict[str, Any]:
@@ -138,7 +137,6 @@ class WalkResult:
             "network_alignment_nrmse": float(net.alignment_nrmse),
             "feedback_gain": float(self.feedback_gain),
             "push_window_s": list(tr.push_window) if tr.push_window else None,
-            "steps_to_rhythm": self.steps_to_rhythm(),
             "cycle_feasible": bool(self.cycle.feasible),
             "cycle_period_s": float(self.reference.period),
             "stride_m": [float(x) for x in self.reference.stride],
