@@ -103,6 +103,13 @@ def _worker_init() -> None:
     # Ctrl-C reaches the whole foreground process group: the workers leave it to the parent,
     # which stops them (terminate) after cancelling what is queued.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # terminate() sends SIGTERM: end as an exception, so that a file being written is removed
+    # (safety.atomic_write) instead of a half-written temporary being left in the output folder
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+
+
+def _exit_on_sigterm(signum: int, frame: object) -> None:
+    raise SystemExit(128 + signum)
 
 
 def _context() -> mp.context.BaseContext:
