@@ -145,6 +145,8 @@ def main() -> None:
     ap.add_argument("--baseline", default="talos",
                     help="robots also adapted by --baseline-rev (comma-separated, or '')")
     ap.add_argument("--cases", default="hoap2,cmu,clip")
+    ap.add_argument("--no-first", action="store_true",
+                    help="skip Talos's first-time-ever run (an empty cache: its compilation)")
     a = ap.parse_args()
     rows = _Rows(["| case | goal | first time ever | fresh process | second call | iterations "
                   "| peak memory | audit | same-run baseline (second call, iterations) |",
@@ -155,7 +157,7 @@ def main() -> None:
         base_tree = checkout(a.baseline_rev, tmp.name)
     for name in [n for n in a.robots.split(",") if n]:
         first = ""
-        if name == "talos":
+        if name == "talos" and not a.no_first:
             with tempfile.TemporaryDirectory() as cache:
                 f = child(ROOT, name, a.knots, 1, cache)
             first = f"{f['process_s']:.0f} s" if "error" not in f else f"error {f['error']!r}"
