@@ -43,6 +43,7 @@ class Plateau:
     stall_after: int = 40
     stall_window: int = 20
     stall_ratio: float = 0.9
+    stall_floor: float = 1e-2
     least_viol: float = np.inf
     least_x: np.ndarray | None = None
     viol_trace: list = field(default_factory=list)
@@ -83,10 +84,13 @@ class Plateau:
         return False
 
     def _stalled(self) -> bool:
-        """No feasible iterate yet and the least violation of the last ``stall_window``
-        iterations is no better than ``stall_ratio`` × the least before them (after at least
-        ``stall_after`` iterations): the rows cannot all be met from here."""
+        """No feasible iterate yet, and the least violation of the last ``stall_window``
+        iterations is still above ``stall_floor`` (clearly infeasible, not a solve closing in
+        on feasibility: Talos's violation wanders around 1e-3 before it converges) and no better
+        than ``stall_ratio`` × the least before them (after at least ``stall_after``
+        iterations): the rows cannot all be met from here."""
         v, n = self.viol_trace, self.stall_window
         if self.best_x is not None or len(v) < max(self.stall_after, n + 1):
             return False
-        return min(v[-n:]) > self.stall_ratio * min(v[:-n])
+        recent = min(v[-n:])
+        return recent > self.stall_floor and recent > self.stall_ratio * min(v[:-n])
