@@ -272,3 +272,44 @@ def test_unmapped_joints_are_held_by_the_parts(g1):
     np.testing.assert_allclose(hi, HOLD_RANGE)
     np.testing.assert_allclose(lo, -HOLD_RANGE)
     np.testing.assert_allclose(hold.held, g1.neutral[list(hold.q_index)])
+
+
+def test_sphere_rows_leave_out_pairs_within_the_margin_at_neutral():
+    """The adaptor's sphere rows apply the audit's rule: geometry pairs closer than the margin
+    at the neutral pose are left out and listed; a sphere pair's least gap is the margin or
+    its gap at the neutral pose, whichever is smaller. No sphere pair spans the two legs (their
+    covers overlap by centimetres where the hulls pass with millimetres to spare: Talos spent
+    its iteration budget); one smooth row keeps the soles apart instead, whose slack at the
+    neutral pose is the legs' closest hull distance there less the margin. Distances
+    re-derived from Pinocchio placements and coal (:meth:`SelfCollision.distances`)."""
+    from gdimitate.retarget.parts.self_collision import (
+        MARGIN,
+        left_out_sphere_pairs,
+        leg_separation,
+        sphere_pairs,
+    )
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = gd.Robot.from_library("talos")
+    model, data = robot.model, robot.model.createData()
+    pin.framesForwardKinematics(model, data, robot.neutral)
+    pairs, left = sphere_pairs(robot), left_out_sphere_pairs(robot)
+    assert pairs and left and all(d < MARGIN for *_, d in left)
+    groups = limb_groups(robot)
+    legs = {groups[model.getJointId(leg.hip)] for leg in robot.legs.values()}
+    for fa, oa, ra, fb, ob, rb, gap in pairs:
+        ja, jb = model.getJointId(fa), model.getJointId(fb)
+        d = np.linalg.norm(data.oMi[ja].act(np.array(oa)) - data.oMi[jb].act(np.array(ob)))
+        assert gap == pytest.approx(min(d - ra - rb, MARGIN), abs=1e-9)
+        assert not (groups[ja] in legs and groups[jb] in legs and groups[ja] != groups[jb])
+    sc = self_collision(robot)
+    d0 = sc.distances(robot.neutral)
+    leg_labels = {f"limb from {model.names[int(g.split(':')[1])]}" for g in legs}
+    leg_d = min(d for (a, b), d in zip(sc.pairs, d0)
+                if {sc.groups[a], sc.groups[b]} <= leg_labels and sc.groups[a] != sc.groups[b])
+    (fl, fr, root, least), = leg_separation(robot)
+    R = data.oMi[model.getJointId(root)].rotation
+    y0 = (R.T @ (data.oMf[model.getFrameId(fl)].translation
+                 - data.oMf[model.getFrameId(fr)].translation))[1]
+    assert y0 - least == pytest.approx(leg_d - MARGIN, abs=1e-9)

@@ -6,7 +6,7 @@ and its limbs kept apart (:class:`.SelfCollision`, robots with collision geometr
 from __future__ import annotations
 
 from .posture_range import PostureRange
-from .self_collision import SelfCollision, sphere_pairs
+from .self_collision import SelfCollision, leg_separation, sphere_pairs
 
 __all__ = ["body_parts"]
 
@@ -23,7 +23,7 @@ def body_parts(imitator, act_names) -> tuple:
         idx = tuple(int(imitator.idx_q(j)) for j in act_names)
         out.append(PostureRange(idx, tuple(float(imitator.neutral[i]) for i in idx),
                                 HOLD_RANGE))
-    pairs = sphere_pairs(imitator)
-    if pairs:
-        out.append(SelfCollision(pairs))
+    pairs, legs = sphere_pairs(imitator), leg_separation(imitator)
+    if pairs or legs:
+        out.append(SelfCollision(pairs, legs))
     return tuple(out)

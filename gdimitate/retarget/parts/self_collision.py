@@ -4,14 +4,17 @@ at least ``margin`` apart at every knot.
 
 Each collision geometry is covered by up to :data:`MAX_SPHERES` spheres, one per cluster of
 its vertices (a sphere primitive is itself): every vertex of its convex hull (a box's
-corners, a cylinder's rims) lies inside one of them, so spheres ``margin`` apart keep the hulls
-— hence the meshes — apart. Only geometry pairs that come within :data:`ACTIVE` of each other
-at the neutral pose (arms against the trunk and the thighs, the two legs' knees, shanks and
-feet) get rows, unless they meet where the limbs meet the trunk (:data:`PROXIMAL`), and of
-their spheres those within :data:`ACTIVE_SPHERES`; sphere pairs already
-closer than the margin at the neutral pose (the spheres' slack over the hull) keep at least
-their neutral gap instead. Rows: centre distance / leg length ≥ (r_a + r_b + gap) / leg
-length. Relaxable (the least-infeasible
+corners, a cylinder's rims) lies inside one of them. Only geometry pairs that come within
+:data:`ACTIVE` of each other at the neutral pose (arms against the trunk and the thighs) get
+rows, unless they meet where the limbs meet the trunk (:data:`PROXIMAL`), and of their spheres
+those within :data:`ACTIVE_SPHERES`. The audit's rule applies (:mod:`gdimitate.selfcollision`):
+geometry pairs already closer than the margin at the neutral pose are left out and listed
+(:func:`left_out_sphere_pairs`); sphere pairs closer than the margin at the neutral pose (the
+spheres' slack over the hulls) keep at least their neutral gap. The two legs get no
+sphere pairs: their covers overlap by centimetres where the hulls pass each other with
+millimetres to spare (Talos's warm start: rows 62 mm short, hulls 8.6 mm apart); one smooth
+row keeps the soles apart along the root's y axis instead (:func:`leg_separation`). Rows:
+centre distance / leg length ≥ (r_a + r_b + gap) / leg length. Relaxable (the least-infeasible
 solve reports an unmet pair)."""
 
 from __future__ import annotations
@@ -24,7 +27,8 @@ import pinocchio as pin
 
 from .base import Constraint
 
-__all__ = ["SelfCollision", "sphere_pairs", "MARGIN", "ACTIVE", "MAX_SPHERES"]
+__all__ = ["SelfCollision", "sphere_pairs", "left_out_sphere_pairs", "leg_separation", "MARGIN",
+           "ACTIVE", "MAX_SPHERES"]
 
 #: The adaptor's clearance between sphere covers [m] (the audit's bound is 0 between hulls).
 MARGIN = 0.01
@@ -46,10 +50,10 @@ PROXIMAL = 3
 class SelfCollision(Constraint):
     """``pairs``: ``((frame_a, (x, y, z), r_a, frame_b, (x, y, z), r_b, gap), …)`` — sphere
     centres in Pinocchio frames (joint frames) [m], radii [m], and the least gap between the
-    two spheres' surfaces [m]: the margin, or their gap at the neutral pose where that is
-    smaller."""
+    two spheres' surfaces [m] (:func:`sphere_pairs`); ``legs``: :func:`leg_separation`."""
 
     pairs: tuple = ()
+    legs: tuple = ()
     name: str = "self-collision"
     relaxable: bool = True
 
@@ -61,15 +65,20 @@ class SelfCollision(Constraint):
             Rb, pb = k.sym.placement(fb)
             d = (pa + Ra @ ca.DM(oa)) - (pb + Rb @ ca.DM(ob))
             out.append(ca.sqrt(ca.sumsqr(d) + 1e-12) / L)
+        for fl, fr, fo, _ in self.legs:
+            Ro = k.sym.placement(fo)[0]
+            out.append((Ro.T @ (k.sym.placement(fl)[1] - k.sym.placement(fr)[1]))[1] / L)
         return ca.vertcat(*out) if out else ca.SX(0, 1)
 
     def bounds(self, spec):
         lo = np.tile([(ra + rb + gap) / spec.leg_length
-                      for _, _, ra, _, _, rb, gap in self.pairs], (spec.T, 1))
+                      for _, _, ra, _, _, rb, gap in self.pairs]
+                     + [y / spec.leg_length for *_, y in self.legs], (spec.T, 1))
         return lo, np.full_like(lo, np.inf)
 
     def labels(self, k):
-        return [f"{self.name}: {fa}/{fb}" for fa, _, _, fb, _, _, _ in self.pairs]
+        return ([f"{self.name}: {fa}/{fb}" for fa, _, _, fb, _, _, _ in self.pairs]
+                + [f"{self.name}: legs apart ({fl}/{fr})" for fl, fr, *_ in self.legs])
 
 
 def _vertices(g) -> np.ndarray:
@@ -159,24 +168,84 @@ def _near_root(a: str | None, b: str | None, legs: set[str]) -> bool:
     return "trunk" in (ga, gb) or (ga in legs and gb in legs)
 
 
-def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
-    """The :class:`SelfCollision` pairs of ``robot`` (empty without collision geometry)."""
-    from ...selfcollision import self_collision
+def _two_legs(ja: int, jb: int, limbs: dict[int, str], legs: set[str]) -> bool:
+    """Joints ``ja`` and ``jb`` on the two legs: their sphere covers (a shank's spheres ~17 cm
+    on Talos) overlap by centimetres where the hulls pass each other with millimetres to spare
+    (Talos's warm start: sphere rows 62 mm short, hulls 8.6 mm apart), so the rows would force
+    the legs apart; the audit checks these pairs on the hulls."""
+    return limbs[ja] != limbs[jb] and limbs[ja] in legs and limbs[jb] in legs
+
+
+def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
+    """:attr:`SelfCollision.legs` of ``robot``: ``((left sole frame, right sole frame, root
+    joint, least separation [m]),)`` — the soles' separation along the root's y axis at least
+    its neutral value less the legs' closest hull distance there less ``margin``, a smooth row
+    in place of the two legs' sphere pairs (:func:`_two_legs`); empty when the legs' closest
+    pair at the neutral pose is ``active`` or more apart, or already within ``margin``."""
+    from ...selfcollision import limb_groups, self_collision
 
     sc = self_collision(robot)
-    if sc is None:
+    if sc is None or set(robot.legs) != {"left", "right"}:
         return ()
+    model, cm = robot.model, robot.collision_model
+    limbs, legs = limb_groups(robot), _leg_limbs(robot)
+    joint = {n: int(cm.geometryObjects[cm.getGeometryId(n)].parentJoint)
+             for pair in sc.pairs for n in pair}
+    d = [dn for (a, b), dn in zip(sc.pairs, sc.distances(robot.neutral))
+         if _two_legs(joint[a], joint[b], limbs, legs)]
+    if not d or not margin <= min(d) < active:
+        return ()
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, robot.neutral)
+    sole = {s: data.oMf[model.getFrameId(robot.legs[s].sole)].translation
+            for s in ("left", "right")}
+    y0 = float((data.oMi[1].rotation.T @ (sole["left"] - sole["right"]))[1])
+    if y0 <= 0:
+        return ()
+    return ((robot.legs["left"].sole, robot.legs["right"].sole, model.names[1],
+             float(y0 - (min(d) - margin))),)
+
+
+def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
+    """The :class:`SelfCollision` pairs of ``robot`` (empty without collision geometry): the
+    sphere pairs closer than :data:`ACTIVE_SPHERES` of the active geometry pairs at least
+    ``margin`` [m] apart at the neutral pose, each with gap ``min(g, margin)`` (``g`` the
+    spheres' gap at the neutral pose)."""
+    return _sphere_pairs(robot, margin, active)[0]
+
+
+def left_out_sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
+    """The active geometry pairs left out because they are closer than ``margin`` [m] at the
+    neutral pose: ``((geometry a, geometry b, hull distance at neutral [m]), …)``."""
+    return _sphere_pairs(robot, margin, active)[1]
+
+
+def _sphere_pairs(robot, margin: float, active: float) -> tuple[tuple, tuple]:
+    """``(kept, left out)`` sphere pairs (:func:`sphere_pairs`, :func:`left_out_sphere_pairs`),
+    cached on the robot per ``(margin, active)``."""
+    from ...selfcollision import limb_groups, self_collision
+
+    cache = robot.__dict__.setdefault("_sphere_pairs", {})
+    if (margin, active) in cache:
+        return cache[margin, active]
+    sc = self_collision(robot)
+    if sc is None:
+        return (), ()
     model = robot.model
     d0 = sc.distances(robot.neutral)
     data = model.createData()
     pin.forwardKinematics(model, data, robot.neutral)
-    pairs = []
+    pairs, left_out = [], []
     prox = _proximal(robot)
     legs = _leg_limbs(robot)
+    limbs = limb_groups(robot)
     for (a, b), d in zip(sc.pairs, d0):
         ja, jb = (int(robot.collision_model.geometryObjects[
             robot.collision_model.getGeometryId(n)].parentJoint) for n in (a, b))
-        if d >= active or _near_root(prox[ja], prox[jb], legs):
+        if d >= active or _near_root(prox[ja], prox[jb], legs) or _two_legs(ja, jb, limbs, legs):
+            continue
+        if d < margin:  # within the margin at rest: left out and listed, like the audit's
+            left_out.append((a, b, float(d)))
             continue
         ends = []
         for n in (a, b):
@@ -189,5 +258,6 @@ def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple
                 gap = float(np.linalg.norm(wa - wb) - ra - rb)
                 if gap < ACTIVE_SPHERES:  # closer than the margin at rest: keep that gap
                     pairs.append((fa, tuple(map(float, oa)), ra, fb, tuple(map(float, ob)), rb,
-                                  min(gap, margin)))
-    return tuple(pairs)
+                                  float(min(gap, margin))))
+    cache[margin, active] = out = (tuple(pairs), tuple(left_out))
+    return out
