@@ -180,8 +180,9 @@ def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tup
     """:attr:`SelfCollision.legs` of ``robot``: ``((left sole frame, right sole frame, root
     joint, least separation [m]),)`` — the soles' separation along the root's y axis at least
     its neutral value less the legs' closest hull distance there less ``margin``, a smooth row
-    in place of the two legs' sphere pairs (:func:`_two_legs`); empty when the legs' closest
-    pair at the neutral pose is ``active`` or more apart, or already within ``margin``."""
+    in place of the two legs' sphere pairs (:func:`_two_legs`); legs already within ``margin``
+    at the neutral pose (iCub's shanks and feet) keep their neutral separation; empty when the
+    legs' closest pair there is ``active`` or more apart."""
     from ...selfcollision import limb_groups, self_collision
 
     sc = self_collision(robot)
@@ -193,17 +194,17 @@ def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tup
              for pair in sc.pairs for n in pair}
     d = [dn for (a, b), dn in zip(sc.pairs, sc.distances(robot.neutral))
          if _two_legs(joint[a], joint[b], limbs, legs)]
-    if not d or not margin <= min(d) < active:
+    if not d or min(d) >= active:
         return ()
     data = model.createData()
     pin.framesForwardKinematics(model, data, robot.neutral)
     sole = {s: data.oMf[model.getFrameId(robot.legs[s].sole)].translation
             for s in ("left", "right")}
     y0 = float((data.oMi[1].rotation.T @ (sole["left"] - sole["right"]))[1])
-    if y0 <= 0:
-        return ()
-    return ((robot.legs["left"].sole, robot.legs["right"].sole, model.names[1],
-             float(y0 - (min(d) - margin))),)
+    a, b = robot.legs["left"].sole, robot.legs["right"].sole
+    if y0 < 0:  # the root's y axis points to the right (iCub's root_link)
+        a, b, y0 = b, a, -y0
+    return ((a, b, model.names[1], float(y0 - max(min(d) - margin, 0.0))),)
 
 
 def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
