@@ -24,11 +24,12 @@ import json
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 import textwrap
 import time
 from pathlib import Path
+
+from revision import checkout
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -91,15 +92,6 @@ def child(root: Path, case: str, knots: int, calls: int = 2, cache: str | None =
             return out
     return {"error": (p.stderr or p.stdout)[-400:]}
 
-
-def checkout(rev: str, into: str) -> Path:
-    """The tree of ``rev`` extracted into ``into`` (nothing in the working folder changes)."""
-    tar = Path(into) / "tree.tar"
-    with open(tar, "wb") as fh:
-        subprocess.run(["git", "-C", str(ROOT), "archive", rev], stdout=fh, check=True)
-    with tarfile.open(tar) as t:
-        t.extractall(Path(into) / "tree", filter="data")
-    return Path(into) / "tree"
 
 
 def _audit(r: dict) -> str:

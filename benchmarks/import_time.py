@@ -19,10 +19,11 @@ import os
 import statistics
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
+
+from revision import checkout as extract
 
 ROOT = Path(__file__).resolve().parents[1]
 ENGINES = ("mujoco", "meshcat", "dask", "numba", "pink", "matplotlib", "casadi", "pinocchio",
@@ -35,15 +36,6 @@ CASES = {
                          "        pass"),
 }
 
-
-def extract(rev: str, into: str) -> Path:
-    """The tree of ``rev`` extracted into ``into`` (nothing in the working folder changes)."""
-    tar = Path(into) / "tree.tar"
-    with open(tar, "wb") as fh:
-        subprocess.run(["git", "-C", str(ROOT), "archive", rev], stdout=fh, check=True)
-    with tarfile.open(tar) as t:
-        t.extractall(Path(into) / "tree", filter="data")
-    return Path(into) / "tree"
 
 
 def measure(tree: Path, code: str, repeat: int) -> tuple[float, list[str]]:

@@ -21,10 +21,11 @@ import json
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 import textwrap
 from pathlib import Path
+
+from revision import checkout
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -85,16 +86,6 @@ def run(root: Path, robot: str, frames: int, force: str) -> dict:
             return json.loads(line[7:])
     return {"error": (p.stderr or p.stdout)[-400:]}
 
-
-def checkout(rev: str, into: str) -> Path:
-    """The tree of ``rev`` extracted into ``into`` (``git archive``; nothing in the working
-    folder changes)."""
-    tar = Path(into) / "tree.tar"
-    with open(tar, "wb") as fh:
-        subprocess.run(["git", "-C", str(ROOT), "archive", rev], stdout=fh, check=True)
-    with tarfile.open(tar) as t:
-        t.extractall(Path(into) / "tree", filter="data")
-    return Path(into) / "tree"
 
 
 def row(label: str, r: dict) -> str:
