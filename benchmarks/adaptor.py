@@ -103,7 +103,7 @@ def _audit(r: dict) -> str:
 
 def planar_case2() -> dict:
     from gdimitate.adapt import adapt
-    from gdimitate.cases import paper_case
+    from gdimitate.apps.cases import paper_case
 
     d, i, m = paper_case("II")
     rate = 99 / (m.t[-1] - m.t[0]) * (1 + 1e-9)

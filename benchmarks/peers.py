@@ -10,13 +10,13 @@ Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``
 The demonstration is the shipped 3-D walk (OpenSim subject01, 211 frames at 60 Hz, measured
 ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
 
-- ``copy`` — joint-angle copy: 3-D (``gdimitate.baselines.joint_copy``) onto the free-flyer
+- ``copy`` — joint-angle copy: 3-D (``gdimitate.apps.baselines.joint_copy``) onto the free-flyer
   robots, the planar copy (``adapt(method="copy")``: sagittal hip/knee/ankle angles) onto the
   HOAP-2-sized planar model;
 - ``Eq. (1)`` — the paper's analytic adaptor (``adapt(method="analytic")``), planar only;
 - ``diff IK`` — a per-frame kinematic retargeter of the kind today's humanoid tools use:
   differential IK on leg-length-scaled keypoints with joint limits, on Pink
-  (``gdimitate.baselines.diff_ik``); free-flyer robots;
+  (``gdimitate.apps.baselines.diff_ik``); free-flyer robots;
 - ``OmniRetarget (holosoma)`` — a real peer: OmniRetarget's retargeter as published on PyPI
   (``holosoma-retargeting`` 0.1.0: an interaction-mesh SQP with foot sticking, joint limits
   and its own G1 model), fed the demonstrator's global joint positions in its ``smplx``
@@ -55,8 +55,8 @@ from pathlib import Path
 import numpy as np
 
 import gdimitate as gd
+from gdimitate.apps.baselines import diff_ik, joint_copy, kinematic_plan
 from gdimitate.audit import audit
-from gdimitate.baselines import diff_ik, joint_copy, kinematic_plan
 from gdimitate.demonstration import load_demonstration
 from gdimitate.export import read_wrenches
 from gdimitate.sim.reference import Plan

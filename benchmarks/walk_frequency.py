@@ -34,7 +34,7 @@ def main() -> None:
     p.add_argument("--gain", type=float, default=0.5)
     args = p.parse_args()
     warnings.simplefilter("ignore")
-    from gdimitate.demo import default_demonstration
+    from gdimitate.apps.demo import default_demonstration
     from gdimitate.robot import Robot
     from gdimitate.walk import periodic_cycle, walk
 

@@ -129,7 +129,7 @@ def main() -> None:
     args = p.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("ignore")
-    from gdimitate.demo import default_demonstration
+    from gdimitate.apps.demo import default_demonstration
 
     _, _, forces = default_demonstration()
     t0 = time.perf_counter()

@@ -60,7 +60,7 @@ if TYPE_CHECKING:
         wrenches,
     )
     from .adapt import adapt
-    from .cases import paper_case
+    from .apps.cases import paper_case
     from .contact import ContactForces, FootForces, SoleContact
     from .cpg import CPGReplay, entrain
     from .demonstration import Demonstration, load_demonstration
@@ -82,7 +82,7 @@ _LAZY_NAMES: dict[str, str] = {
     "adapt": ".adapt",
     "AdaptationReport": ".result",
     "AdaptedMotion": ".result",
-    "paper_case": ".cases",
+    "paper_case": ".apps.cases",
     "ContactForces": ".contact",
     "FootForces": ".contact",
     "SoleContact": ".contact",

@@ -4,7 +4,7 @@
 
 Without a demonstration file, ``adapt``, ``entrain`` and ``view`` use the default story of
 ``demo``: one stride of the shipped real 3-D walk (with its measured forces) and the G1
-imitator (:func:`gdimitate.demo.default_demonstration`).
+imitator (:func:`gdimitate.apps.demo.default_demonstration`).
 
 Ctrl-C (SIGINT) and SIGTERM stop a command cleanly: every meshcat server it started is
 stopped, temporary files are removed, output files are written under a temporary name and
@@ -155,7 +155,7 @@ def _demonstration(path: str | None, a: argparse.Namespace):
 
 
 def _cmd_demo(a: argparse.Namespace) -> int:
-    from .demo import run_demo
+    from .apps.demo import run_demo
 
     imitator = _robot(a.imitator, a)
     with removed_on_failure(a.out):  # interrupted or failed: no half-written folder
@@ -169,15 +169,16 @@ def _cmd_demo(a: argparse.Namespace) -> int:
 
 
 def _cmd_paper(a: argparse.Namespace) -> None:
-    from .paper import run_paper
+    from .apps.paper import run_paper
 
     run_paper(a.out)
 
 
 def _default_story(imitator: str | None, a: argparse.Namespace):
-    """The default demonstration and imitator (:func:`gdimitate.demo.default_demonstration`,
+    """The default demonstration and imitator
+    (:func:`gdimitate.apps.demo.default_demonstration`,
     G1 unless ``imitator`` names another), announced."""
-    from .demo import DEFAULT_IMITATOR, default_demonstration
+    from .apps.demo import DEFAULT_IMITATOR, default_demonstration
 
     robot, motion, forces = default_demonstration()
     print(f"no demonstration given: one stride of the shipped real 3-D walk ({motion.T} frames, "
@@ -243,7 +244,7 @@ def _cmd_walk(a: argparse.Namespace) -> int:
 def _cmd_view(a: argparse.Namespace) -> int:
     import time
 
-    from .examples import example
+    from .apps.examples import example
     from .metrics import force_direction
     from .verdict import verdict
     from .viz import Viewer, compare
@@ -431,7 +432,7 @@ def _simulate(a: argparse.Namespace, demo, wrenches, forces) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
-    from .demo import DEFAULT_IMITATOR
+    from .apps.demo import DEFAULT_IMITATOR
 
     p = argparse.ArgumentParser(
         prog="gdimitate",
@@ -485,7 +486,7 @@ def build_parser() -> argparse.ArgumentParser:
     wk.add_argument("--no-html", action="store_true", help="skip walk.html")
     wk.add_argument("--out", default="gdimitate-walk", help="output folder (default: %(default)s)")
     wk.set_defaults(func=_cmd_walk)
-    from .examples import EXAMPLES
+    from .apps.examples import EXAMPLES
 
     vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the adaptation shown is not "

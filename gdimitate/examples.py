@@ -1,49 +1,14 @@
-"""Built-in examples: a demonstrator, its motion, an imitator and its adapted motion, by name.
+"""Deprecated alias of :mod:`gdimitate.apps.examples` (scenario code, not API): import that.
 
-Used by ``gdimitate view`` and the notebooks. Names: ``human-walk`` (the shipped real walk →
-HOAP-2-sized imitator), ``case-I``, ``case-II``, ``humanoid`` (the paper's cases), and any
-library robot name (the real walk retargeted onto it, e.g. ``talos``, ``g1``).
+Importing ``gdimitate.examples`` warns (DeprecationWarning) and binds the same module object, so
+every name (and any monkeypatching) is shared; there is no second implementation.
 """
 
-from __future__ import annotations
+import sys
+import warnings
 
-from typing import NamedTuple
+from .apps import examples as _moved
 
-from .adapt import AdaptedMotion, adapt
-from .cases import PAPER_CASES, paper_case
-from .errors import UnknownNameError
-from .gait import human_walk
-from .library import list_robots
-from .motion import Motion
-from .robot import Robot
-
-__all__ = ["Example", "EXAMPLES", "example"]
-
-
-class Example(NamedTuple):
-    """A demonstration and its adaptation."""
-
-    demonstrator: Robot
-    demonstration: Motion
-    imitator: Robot
-    adapted: AdaptedMotion
-
-
-def _names() -> list[str]:
-    return ["human-walk", *(f"case-{c}" if c != "humanoid" else c for c in PAPER_CASES),
-            *[r for r in list_robots() if r not in ("hoap2",)]]
-
-
-EXAMPLES = _names()
-
-
-def example(name: str = "human-walk", method: str = "analytic") -> Example:
-    """Build a named example (see the module docstring) with the given adaptor method."""
-    if name not in EXAMPLES:
-        raise UnknownNameError("example", name, EXAMPLES)
-    if name.startswith("case-") or name == "humanoid":
-        demo, imit, motion = paper_case(name.removeprefix("case-"))
-    else:
-        demo, motion = human_walk()
-        imit = Robot.from_library("hoap2" if name == "human-walk" else name)
-    return Example(demo, motion, imit, adapt(motion, demo, imit, method))
+warnings.warn("gdimitate.examples moved to gdimitate.apps.examples (scenario code, not API); "
+              "import it from there", DeprecationWarning, stacklevel=2)
+sys.modules[__name__] = _moved

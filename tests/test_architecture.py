@@ -218,3 +218,48 @@ def test_literal_aliases_match_the_values_checked_at_run_time():
         assert Contact(rule=rule).rule == rule
     with pytest.raises(UnknownNameError):
         Contact(rule="both")
+
+
+# ------------------------------------------------------------------ scenario code (apps/)
+#: the scenario modules that moved into gdimitate/apps/ and their old import paths, kept as
+#: deprecated aliases (the same module object, a DeprecationWarning on import)
+MOVED = {"gdimitate.demo": "gdimitate.apps.demo", "gdimitate.paper": "gdimitate.apps.paper",
+         "gdimitate.cases": "gdimitate.apps.cases",
+         "gdimitate.examples": "gdimitate.apps.examples",
+         "gdimitate.baselines": "gdimitate.apps.baselines",
+         "gdimitate.sim.scenarios": "gdimitate.apps.scenarios"}
+
+
+def test_scenario_code_is_imported_only_by_the_command_line():
+    """``gdimitate.apps`` (scenario code, not API) is imported inside the package only by the
+    CLI, by itself, by the deprecated aliases of its old paths and by ``gdimitate/__init__``
+    (the documented name ``paper_case``, lazily)."""
+    graph = gdimitate_graph()
+    allowed = {"gdimitate", "gdimitate.cli", *MOVED}
+    users = {m: sorted(t for t in deps if t == "gdimitate.apps" or
+                       t.startswith("gdimitate.apps."))
+             for m, deps in graph.items()
+             if m not in allowed and not m.startswith("gdimitate.apps")}
+    users = {m: t for m, t in users.items() if t}
+    assert not users, f"library modules importing scenario code: {users}"
+    assert {f"gdimitate{m}" for m in gdimitate._LAZY_NAMES.values()} & set(MOVED.values()) \
+        == {"gdimitate.apps.cases"}
+    apps = __import__("importlib").import_module("gdimitate.apps")
+    assert "not api" in apps.__doc__.lower()
+
+
+def test_old_scenario_paths_warn_and_are_the_moved_modules():
+    code = textwrap.dedent(f"""
+        import importlib, warnings
+        moved = {MOVED!r}
+        for old, new in moved.items():
+            with warnings.catch_warnings(record=True) as w:
+                warnings.simplefilter("always")
+                mod = importlib.import_module(old)
+            assert mod is importlib.import_module(new), (old, mod)
+            assert any(issubclass(x.category, DeprecationWarning) and new in str(x.message)
+                       for x in w), (old, [str(x.message) for x in w])
+        import gdimitate as gd
+        assert gd.paper_case is importlib.import_module("gdimitate.apps.cases").paper_case
+    """)
+    subprocess.run([sys.executable, "-c", code], check=True)

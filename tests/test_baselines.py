@@ -1,4 +1,4 @@
-"""The comparison baselines (gdimitate.baselines) and the physics check's negative control.
+"""The comparison baselines (gdimitate.apps.baselines) and the physics check's negative control.
 
 References: the legs' sagittal signs/offsets that ``Robot`` measures from each model's geometry
 (independent of the body map's joint-axis signs), Pinocchio's forward kinematics of the
@@ -17,8 +17,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.audit import audit
-from gdimitate.baselines import (
+from gdimitate.apps.baselines import (
     IKOptions,
     anchor_base,
     diff_ik,
@@ -26,6 +25,7 @@ from gdimitate.baselines import (
     leg_ratio,
     scaled_keypoints,
 )
+from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
 from gdimitate.sagittal import leg_angles
 
@@ -221,7 +221,7 @@ def test_negative_control_joint_copy_fails_the_physics_check(walk, name, copies)
     m = gd.sim.simulate(robot, plan, demo_forces=forces).metrics
     assert m.fell or m.slip_max > 0.05, (m.fall_time, m.slip_max)
     if name == "talos":
-        from gdimitate.sim.scenarios import standing_plan
+        from gdimitate.apps.scenarios import standing_plan
 
         ok = gd.sim.simulate(robot, standing_plan(robot, 1.5)).metrics
         assert not ok.fell and ok.slip_max < 0.05, (ok.fall_time, ok.slip_max)

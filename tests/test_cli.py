@@ -159,8 +159,8 @@ def test_simulate_command(tmp_path, capsys):
     """`gdimitate simulate PLAN.npz`: a standing plan written with its wrenches, read back
     with its recorded robot, simulated; sim.json equals gd.sim.simulate run directly."""
     import gdimitate as gd
+    from gdimitate.apps.scenarios import standing_plan
     from gdimitate.export import export_motion
-    from gdimitate.sim.scenarios import standing_plan
 
     robot = gd.Robot.from_library("g1")
     plan = standing_plan(robot, 1.0)

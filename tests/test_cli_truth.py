@@ -143,7 +143,7 @@ def test_batch_console_shows_falls_and_unmet_goals():
 def test_adapt_entrain_view_default_to_the_demos_walk_and_g1(tmp_path, capsys):
     """adapt/entrain/view without a file used other demonstrations and imitators than demo
     (the sagittal walk on HOAP-2); now all use demo's: one stride of the 3-D walk, G1."""
-    from gdimitate.demo import DEFAULT_IMITATOR, default_demonstration
+    from gdimitate.apps.demo import DEFAULT_IMITATOR, default_demonstration
     from gdimitate.motion import RobotRecord
 
     sub = {a.dest: a for a in build_parser()._actions if a.dest == "command"}["command"].choices
@@ -253,7 +253,7 @@ def test_view_without_a_file_shows_the_default_story_with_its_verdict(tmp_path, 
 def test_entrain_without_a_file_learns_demos_stride(tmp_path, capsys):
     """`entrain` without a file: demo's stride adapted to --robot (here HOAP-2 by Eq. (1), to
     be quick), taught at that stride's frequency (heel strike to heel strike)."""
-    from gdimitate.demo import default_demonstration
+    from gdimitate.apps.demo import default_demonstration
 
     _, stride, _ = default_demonstration()
     out = tmp_path / "e"

@@ -157,7 +157,7 @@ def test_the_real_walk_copied_onto_the_robots_is_clear(name):
     no limb comes within 1 mm of another or of the trunk over the whole clip (measured:
     G1 7.8 mm, Talos 5.1 mm, Romeo 19.7 mm). (iCub's copy is not clear: its thigh hull meets
     its chest at 0.33 rad of hip and 0.31 rad of torso pitch — coal's mesh distance agrees.)"""
-    from gdimitate.baselines import joint_copy
+    from gdimitate.apps.baselines import joint_copy
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -26,7 +26,7 @@ RNG = np.random.default_rng(18)
 
 @pytest.fixture(scope="module")
 def story():
-    from gdimitate.demo import default_demonstration
+    from gdimitate.apps.demo import default_demonstration
 
     return default_demonstration()
 

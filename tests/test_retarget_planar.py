@@ -22,7 +22,7 @@ import pinocchio as pin
 import pytest
 
 from gdimitate.adapt import adapt
-from gdimitate.cases import paper_case
+from gdimitate.apps.cases import paper_case
 from gdimitate.contact import SoleContact
 from gdimitate.errors import ContactError, GdimitateError, InvalidInputError, UnknownNameError
 from gdimitate.retarget import Contact, Limits, Weights, problem, resample, schedule
@@ -184,7 +184,7 @@ def test_bad_input(case1, robot):
 _SCRIPT = textwrap.dedent("""
     import sys
     import gdimitate as gd
-    from gdimitate.cases import paper_case
+    from gdimitate.apps.cases import paper_case
     d, i, m = paper_case("II")
     print("ready", flush=True)
     gd.adapt(m, d, i, method="optimal", rate=100, ipopt={"max_iter": 100000, "tol": 1e-14},

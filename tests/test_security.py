@@ -574,7 +574,7 @@ def test_oscillator_bank_shape_is_bounded(shape):
 def test_a_diverging_simulation_writes_no_mujoco_log(tmp_path, monkeypatch):
     """MuJoCo appends its warnings to MUJOCO_LOG.TXT in the working folder; a simulation that
     goes to NaN (here: a 1e30 N push) left one there. Now the warning is a Python warning."""
-    from gdimitate.baselines import kinematic_plan
+    from gdimitate.apps.baselines import kinematic_plan
     from gdimitate.errors import GdimitateWarning
     from gdimitate.sim import simulate
     from gdimitate.sim.simulate import Push

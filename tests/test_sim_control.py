@@ -15,10 +15,10 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
+from gdimitate.apps.scenarios import kinematic_walk_plan, standing_plan, sway_plan
 from gdimitate.contact import ContactForces, FootForces, cone_margin
 from gdimitate.robot import SIDES
 from gdimitate.sim import Push, Reference, TrackingController, build_model, check_plan, simulate
-from gdimitate.sim.scenarios import kinematic_walk_plan, standing_plan, sway_plan
 
 G = 9.81
 PUSH = 20.0  # [N], the push

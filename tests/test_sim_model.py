@@ -14,12 +14,12 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
+from gdimitate.apps.scenarios import standing_plan
 from gdimitate.contact import SoleContact
 from gdimitate.errors import ContactError, PlanError, SimModelError
 from gdimitate.robot import SIDES
 from gdimitate.sim import ModelOptions, build_model
 from gdimitate.sim.reference import Plan, check_plan
-from gdimitate.sim.scenarios import standing_plan
 
 ROBOTS = ["hoap2", "talos", "g1", "icub", "romeo"]
 

@@ -11,7 +11,8 @@ maps), :mod:`~.reference` (the plan contract and its references in time), :mod:`
 (the QP tracking controller), :mod:`~.simulate` (the loop and :class:`SimResult`),
 :mod:`~.metrics` (falls, slip, force direction, centre of pressure, torques, tracking),
 :mod:`~.plots` (matplotlib figures), :mod:`~.animation` (plan and simulation side by side in
-meshcat). :mod:`~.scenarios` holds small plans for tests and demos (not core API).
+meshcat). Small plans for tests and demos live in :mod:`gdimitate.apps.scenarios`
+(scenario code, not API).
 """
 
 from .controller import ControllerGains, TrackingController, pendulum_frequency

@@ -1,0 +1,14 @@
+"""Scenario code — NOT API: the stories told with the library, not the library.
+
+``demo`` (``gdimitate demo``), ``paper`` (``gdimitate paper``: the paper's figures and
+numbers), ``cases`` (the paper's three planar cases: robots and the generated walk),
+``examples`` (named demonstration/adaptation pairs for ``gdimitate view`` and the notebooks),
+``baselines`` (the kinematic retargeters the benchmarks compare against) and ``scenarios``
+(small plans for the physics check's tests). Their names may change between releases without
+a deprecation period.
+
+Only the command line (:mod:`gdimitate.cli`), ``benchmarks/``, ``notebooks/``, ``docs/`` and
+``tests/`` import this package; nothing in the library below it does (``tests/
+test_architecture.py`` checks, docs/design.md §8). The one documented public name defined
+here, :func:`gdimitate.paper_case`, is re-exported lazily by ``gdimitate/__init__``.
+"""

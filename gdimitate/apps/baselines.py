@@ -1,0 +1,464 @@
+"""Baselines for comparison — not the product: what retargeting looks like without the goal.
+
+gdimitate's adaptor (``adapt(..., method="optimal")``) keeps each stance foot's push direction
+under the imitator's limits and the physics of contact. To show what that buys, the
+benchmarks (``benchmarks/peers.py``) run the same demonstration through two kinematic
+retargeters of the kinds in common use and audit and simulate them exactly like the adaptor's
+output:
+
+- :func:`joint_copy` — action-level imitation in 3-D: every joint the body map pairs
+  (:func:`gdimitate.retarget.body_map`) copies the demonstrator's angle as ``scale · q + offset``
+  (the map's signs come from the joint axes at the two neutral poses), the others stay at the
+  imitator's neutral pose; the base turns as the demonstrator's pelvis turns (relative to the
+  neutral poses) and is placed by the same rule as the planar copy
+  (:func:`gdimitate.sagittal.ground_base`): the lowest stance sole on z = 0, the *anchor* foot
+  (the stance foot down longest) staying where it landed in x and y. No joint limit is
+  enforced (the audit reports them).
+- :func:`diff_ik` — a per-frame kinematic retargeter of the kind today's humanoid tools use
+  (differential inverse kinematics on scaled keypoints with joint limits, built on Pink,
+  S. Caron et al., https://github.com/stephane-caron/pink): per frame, frame tasks on the
+  imitator's pelvis and torso (orientation), hips and knees (position) and soles (pose)
+  towards the demonstrator's keypoints scaled by the leg-length ratio about the point under
+  the demonstrator's start (the floor stays at z = 0); a stance foot is held, flat on the
+  floor (z = 0, yaw only), where it was when it touched down — by the QP's equality
+  constraints once it is there (by cost on the touchdown frame, and where the constraints
+  leave the QP without a solution); a posture task towards the neutral pose; Pink's position
+  and velocity limits; a few QPs (DAQP) per frame, each velocity integrated over its share of
+  the frame period.
+
+Both give a :class:`BaselinePlan`: ``motion`` with ``v``, ``a`` (central differences,
+:func:`gdimitate.motion.differentiate`) and the demonstrator's stance schedule, and the
+contact wrenches the motion implicitly asks of the floor —
+:func:`gdimitate.wrenches.estimate_wrenches` with ``method="lstsq"`` (no cone: feet may pull,
+the centre of pressure may leave the sole). A :class:`BaselinePlan` is a plan in the contract
+of :func:`gdimitate.sim.simulate` and fits :func:`gdimitate.audit.audit`.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..contact import SoleContact
+from ..errors import InvalidInputError, LegMatchError, SolverError
+from ..motion import Motion, differentiate
+from ..robot import SIDES, Robot
+
+__all__ = ["BaselinePlan", "IKOptions", "joint_copy", "diff_ik", "kinematic_plan",
+           "anchor_base", "scaled_keypoints", "leg_ratio"]
+
+
+@dataclass(frozen=True)
+class BaselinePlan:
+    """A kinematic baseline's result, in the plan contract of :func:`gdimitate.sim.simulate`.
+
+    ``motion``: the imitator's :class:`~gdimitate.motion.Motion` (``q`` ``(T, nq)``, ``v``,
+    ``a`` ``(T, nv)``, ``contact`` = the demonstrator's stance schedule); ``wrenches`` ``{side:
+    (T, 6)}`` [N, N·m]: the minimum-norm wrenches that explain the base rows of the inverse
+    dynamics, in each sole frame at its origin (zeros in swing); ``contacts`` ``{side:
+    SoleContact}``; ``method`` (``"copy"``, ``"diff_ik"`` or the planar adaptor's name);
+    ``seconds`` [s]: wall-clock time of the retargeting itself (wrenches not included);
+    ``frames_per_s`` = T / seconds; ``residual`` ``(T,)`` [m]: the largest position error of
+    the IK's hip, knee and sole keypoints per frame (zeros for the copy); ``relaxed`` ``(T,)``
+    bool: frames where the IK could not hold the stance feet exactly and held them by cost."""
+
+    motion: Motion
+    wrenches: dict[str, np.ndarray]
+    contacts: dict[str, SoleContact]
+    method: str
+    seconds: float
+    frames_per_s: float
+    residual: np.ndarray
+    relaxed: np.ndarray
+
+
+@dataclass(frozen=True)
+class IKOptions:
+    """Weights and settings of :func:`diff_ik`.
+
+    Costs (Pink's task costs, [1/m] for positions, [1/rad] for orientations): ``hip`` and
+    ``knee`` (the hip and knee joints' positions), ``pelvis`` and ``torso`` (orientation
+    only: the two bodies' frame origins lie at different places), ``swing_foot``,
+    ``stance_foot`` (sole pose); ``posture`` [1/rad]
+    towards the imitator's neutral pose; ``iterations``: QP iterations per frame, each
+    integrating over ``frame period / iterations``, and more, up to ``max_iterations``, while
+    a stance foot is farther than ``tolerance`` [-] (the norm of its pose error, m and rad
+    together) from where it is held — each extra iteration integrates over the sub-step
+    again, so the velocity limits hold over a frame only with ``max_iterations ==
+    iterations`` (the default); ``damping`` (Levenberg–Marquardt, Pink's
+    ``damping``); ``solver``: a qpsolvers name (``"daqp"``, ``"proxqp"``, …); ``settle``: extra
+    iterations on the first frame, from the neutral pose, to reach the first targets;
+    ``velocity_limits``: apply the model's velocity limits (Pink's ``VelocityLimit``);
+    ``hard_stance``: hold stance feet by equality constraints of the QP (Pink's
+    ``constraints``) instead of the ``stance_foot`` cost (after the first frame)."""
+
+    hip: float = 1.0
+    pelvis: float = 1.0
+    torso: float = 0.3
+    knee: float = 0.3
+    swing_foot: float = 1.0
+    stance_foot: float = 100.0
+    posture: float = 1e-2
+    iterations: int = 4
+    max_iterations: int = 4
+    tolerance: float = 1e-3
+    damping: float = 1e-8
+    solver: str = "daqp"
+    settle: int = 200
+    velocity_limits: bool = True
+    hard_stance: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("hip", "pelvis", "torso", "knee", "swing_foot", "stance_foot", "posture",
+                     "damping"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"IKOptions.{name} must be a finite number ≥ 0; "
+                                        f"got {v!r}")
+        if not (isinstance(self.tolerance, (int, float)) and self.tolerance > 0):
+            raise InvalidInputError(f"IKOptions.tolerance must be > 0; got {self.tolerance!r}")
+        if not (isinstance(self.max_iterations, int) and isinstance(self.iterations, int)
+                and self.max_iterations >= self.iterations):
+            raise InvalidInputError("IKOptions.max_iterations must be an int ≥ iterations; "
+                                    f"got {self.max_iterations!r}")
+        for name in ("iterations", "settle"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and v >= (1 if name == "iterations" else 0)):
+                raise InvalidInputError(f"IKOptions.{name} must be an int ≥ "
+                                        f"{1 if name == 'iterations' else 0}; got {v!r}")
+
+
+# ---------------------------------------------------------------------------- shared pieces
+def _check(demo: Motion, demonstrator: Robot, imitator: Robot) -> None:
+    if not isinstance(demo, Motion):
+        raise InvalidInputError(f"demo must be a gdimitate.Motion; got {type(demo).__name__}")
+    if tuple(demo.joint_names) != demonstrator.joint_names or \
+            demo.q.shape[1] != demonstrator.model.nq:
+        raise InvalidInputError(f"the demonstration's joints do not match the demonstrator "
+                                f"{demonstrator.name!r}: pass the Robot it was recorded on")
+    for r in (demonstrator, imitator):
+        if r.base != "free":
+            raise LegMatchError(f"{r.name} has a {r.base!r} base; the 3-D baselines need "
+                                "free-flyer robots (planar models: adapt(method='copy' | "
+                                "'analytic'))")
+        if set(r.legs) != set(SIDES):
+            raise LegMatchError(f"{r.name}: legs {sorted(r.legs)} cannot be matched to {SIDES}")
+    if any(s not in demo.contact for s in SIDES):
+        raise InvalidInputError("the demonstration needs a stance schedule demo.contact "
+                                "{'left': (T,) bool, 'right': (T,) bool}")
+    imitator.require_contacts()
+
+
+def _body_map(demonstrator: Robot, imitator: Robot, bmap):
+    from ..retarget.bodymap import UnmappedJointsWarning, body_map
+
+    with warnings.catch_warnings():  # unmapped joints stay at neutral: documented above
+        warnings.simplefilter("ignore", UnmappedJointsWarning)
+        return body_map(demonstrator, imitator, bmap)
+
+
+def leg_ratio(demonstrator: Robot, imitator: Robot) -> float:
+    """Imitator / demonstrator leg length (thigh + shank, mean of both legs) [-]."""
+    return float(np.mean([imitator.legs[s].length for s in SIDES])
+                 / np.mean([demonstrator.legs[s].length for s in SIDES]))
+
+
+def _frame_poses(robot: Robot, q: np.ndarray, frames: list[str]) -> dict[str, np.ndarray]:
+    """World placements ``{frame: (T, 4, 4)}`` of ``frames`` along ``q`` ``(T, nq)``."""
+    m, d = robot.model, robot.model.createData()
+    ids = {f: robot.frame_id(f) for f in frames}
+    out = {f: np.empty((len(q), 4, 4)) for f in frames}
+    for k, qk in enumerate(q):
+        pin.framesForwardKinematics(m, d, qk)
+        for f, i in ids.items():
+            out[f][k] = d.oMf[i].homogeneous
+    return out
+
+
+def _anchor_offsets(rel: dict[str, np.ndarray], contact: Mapping[str, np.ndarray]
+                    ) -> np.ndarray:
+    """Base translations ``(T, 3)`` that put the soles ``rel`` ``{side: (T, 3)}`` (positions
+    with the base translation at zero) on the floor by the anchor rule of :func:`anchor_base`."""
+    T = len(rel["left"])
+    c = {s: np.asarray(contact[s], bool) for s in SIDES}
+    z = np.full(T, np.nan)
+    for i in range(T):
+        down = [rel[s][i, 2] for s in SIDES if c[s][i]]
+        if down:
+            z[i] = -min(down)
+    if np.all(np.isnan(z)):
+        raise InvalidInputError("the demonstration has no stance knot: nothing to stand on")
+    ok = ~np.isnan(z)
+    z = np.interp(np.arange(T), np.flatnonzero(ok), z[ok])
+    xy = np.zeros((T, 2))
+    anchor, foot = None, np.zeros(2)
+    since = {s: -1 for s in SIDES}
+    for i in range(T):
+        for s in SIDES:
+            since[s] = (since[s] if since[s] >= 0 else i) if c[s][i] else -1
+        if anchor is None or not c[anchor][i]:
+            cands = [s for s in SIDES if c[s][i]]
+            if cands:
+                new = min(cands, key=lambda s: since[s])
+                if i == 0:
+                    foot = rel[new][0, :2].copy()
+                elif c[new][i - 1]:  # already down: it stays where it stood at i − 1
+                    foot = xy[i - 1] + rel[new][i - 1, :2]
+                else:  # just landed: where it touches down, the base continuing from i − 1
+                    foot = xy[i - 1] + rel[new][i, :2]
+                anchor = new
+        if anchor is not None and c[anchor][i]:
+            xy[i] = foot - rel[anchor][i, :2]
+        else:
+            xy[i] = xy[i - 1] if i > 0 else 0.0  # flight: keep (no ballistic model)
+    xy -= xy[0]
+    return np.column_stack([xy, z])
+
+
+def anchor_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray]) -> np.ndarray:
+    """``q`` ``(T, nq)`` of a free-flyer with its base translation replaced so the motion walks
+    on z = 0 without the anchor foot slipping — the 3-D form of
+    :func:`gdimitate.sagittal.ground_base`: the lowest stance sole (contact frame origin) on
+    z = 0 (interpolated through flight); in x and y the anchor foot (the stance foot down
+    longest) stays where it landed, and when it lifts off the other stance foot becomes the
+    anchor where it stands (a second stance foot may slide: the audit and the simulation
+    measure it). The base starts at x = y = 0. Returns a new array."""
+    q = np.array(q, dtype=float)
+    q[:, :3] = 0.0
+    contacts = robot.require_contacts()
+    frames = [contacts[s].frame for s in SIDES]
+    P = _frame_poses(robot, q, frames)
+    rel = {s: P[contacts[s].frame][:, :3, 3] for s in SIDES}
+    q[:, :3] = _anchor_offsets(rel, contact)
+    return q
+
+
+def kinematic_plan(robot: Robot, motion: Motion, method: str, seconds: float,
+                   residual: np.ndarray | None = None, relaxed: np.ndarray | None = None
+                   ) -> BaselinePlan:
+    """Wrap a kinematic ``motion`` (``q``, ``contact``) of ``robot`` as a :class:`BaselinePlan`:
+    ``v``, ``a`` by :func:`gdimitate.motion.differentiate` (no filter) and the minimum-norm
+    wrenches of :func:`gdimitate.wrenches.estimate_wrenches` (``method="lstsq"``)."""
+    from ..wrenches import estimate_wrenches
+
+    mo = differentiate(robot.model, motion)
+    contacts = dict(robot.require_contacts())
+    est = estimate_wrenches(robot, mo, contacts, method="lstsq")
+    T = mo.T
+    res = np.zeros(T) if residual is None else np.asarray(residual, float)
+    rel = np.zeros(T, bool) if relaxed is None else np.asarray(relaxed, bool)
+    return BaselinePlan(mo, {s: np.asarray(est.wrenches[s]) for s in SIDES}, contacts, method,
+                        float(seconds), T / max(float(seconds), 1e-12), res, rel)
+
+
+def _imitator_motion(imitator: Robot, demo: Motion, q: np.ndarray) -> Motion:
+    m = imitator.model
+    return Motion(t=demo.t.copy(), joint_names=imitator.joint_names, q=q,
+                  contact={s: np.asarray(demo.contact[s], bool).copy() for s in SIDES},
+                  base_nq=7, joint_nq=tuple(m.joints[j].nq for j in range(1, m.njoints)))
+
+
+def _relative_rotations(R: np.ndarray, R0: np.ndarray, R0_target: np.ndarray) -> np.ndarray:
+    """``R(t) · R0ᵀ · R0_target``: the rotation since the neutral pose, applied to the
+    target's neutral orientation. ``R`` ``(T, 3, 3)``."""
+    return np.einsum("tij,kj,kl->til", R, R0, R0_target)
+
+
+# ---------------------------------------------------------------------------- (a) joint copy
+def joint_copy(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None
+               ) -> BaselinePlan:
+    """The 3-D joint-angle copy of ``demo`` onto ``imitator`` (module docstring): mapped joints
+    ``scale · q_demo + offset`` [rad] (``body_map``: a :class:`~gdimitate.retarget.BodyMap`,
+    dict or JSON path; default the preset for the pair), unmapped joints at the neutral pose,
+    base orientation relative to the neutral pose as the demonstrator's pelvis, base position
+    by :func:`anchor_base`. ``demo``: ``(T, nq_demo)`` with ``contact``; free-flyer robots."""
+    _check(demo, demonstrator, imitator)
+    t0 = time.perf_counter()
+    bm = _body_map(demonstrator, imitator, body_map)
+    T = demo.T
+    q = np.tile(imitator.neutral, (T, 1))
+    for dj, (ij, scale, offset) in bm.joints.items():
+        q[:, imitator.idx_q(ij)] = scale * demo.q[:, demonstrator.idx_q(dj)] + offset
+    Rd = np.array([pin.Quaternion(x).normalized().matrix() for x in demo.q[:, 3:7]])
+    Rd0 = pin.Quaternion(demonstrator.neutral[3:7]).normalized().matrix()
+    Ri0 = pin.Quaternion(imitator.neutral[3:7]).normalized().matrix()
+    R = _relative_rotations(Rd, Rd0, Ri0)
+    q[:, 3:7] = np.array([pin.Quaternion(r).coeffs() for r in R])
+    q = anchor_base(imitator, q, demo.contact)
+    seconds = time.perf_counter() - t0
+    return kinematic_plan(imitator, _imitator_motion(imitator, demo, q), "copy", seconds)
+
+
+# ---------------------------------------------------------------------------- (c) diff IK
+@dataclass(frozen=True)
+class _Keypoints:
+    """Imitator frame names and their targets ``(T, 4, 4)`` (world placements)."""
+
+    frames: dict[str, str]  # role -> imitator frame
+    targets: dict[str, np.ndarray]  # role -> (T, 4, 4)
+
+
+def _flat(H: np.ndarray) -> np.ndarray:
+    """The placement ``H`` ``(4, 4)`` put flat on the floor: z = 0 and only its yaw kept."""
+    x = H[:3, 0]
+    yaw = np.arctan2(x[1], x[0])
+    out = np.eye(4)
+    out[:3, :3] = pin.utils.rpyToMatrix(0.0, 0.0, yaw)
+    out[:2, 3] = H[:2, 3]
+    return out
+
+
+def scaled_keypoints(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None
+                     ) -> _Keypoints:
+    """The demonstrator's keypoints as the imitator's targets, per frame: for the pelvis (root
+    body), the torso (the body map's segments), both knees (the legs' knee joints) and both
+    soles (contact frames) the world placement with its position scaled by
+    :func:`leg_ratio` about the point on the floor under the demonstrator's first pelvis
+    position, and its rotation since the neutral pose applied to the imitator frame's neutral
+    orientation (:func:`diff_ik` holds the stance feet)."""
+    bm = _body_map(demonstrator, imitator, body_map)
+    dc, ic = demonstrator.require_contacts(), imitator.require_contacts()
+    # segments: the one on the imitator's root body is "pelvis", the others keep their names
+    pairs = {("pelvis" if imitator.model.frames[imitator.frame_id(iseg)].parentJoint == 1
+              else dseg): (dseg, iseg) for dseg, iseg in bm.segments.items()}
+    for s in SIDES:
+        pairs[f"hip_{s}"] = (demonstrator.legs[s].hip, imitator.legs[s].hip)
+        pairs[f"knee_{s}"] = (demonstrator.legs[s].knee, imitator.legs[s].knee)
+        pairs[f"sole_{s}"] = (dc[s].frame, ic[s].frame)
+    dframes = [d for d, _ in pairs.values()]
+    P = _frame_poses(demonstrator, demo.q, dframes)
+    P0 = _frame_poses(demonstrator, demonstrator.neutral[None], dframes)
+    I0 = _frame_poses(imitator, imitator.neutral[None], [i for _, i in pairs.values()])
+    ratio = leg_ratio(demonstrator, imitator)
+    origin = np.r_[demo.q[0, :2], 0.0]
+    targets = {}
+    for role, (dn, iname) in pairs.items():
+        H = np.tile(np.eye(4), (demo.T, 1, 1))
+        H[:, :3, :3] = _relative_rotations(P[dn][:, :3, :3], P0[dn][0, :3, :3],
+                                           I0[iname][0, :3, :3])
+        H[:, :3, 3] = origin + ratio * (P[dn][:, :3, 3] - origin)
+        targets[role] = H
+    return _Keypoints({r: i for r, (_, i) in pairs.items()}, targets)
+
+
+def diff_ik(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None,
+            options: IKOptions | None = None) -> BaselinePlan:
+    """Per-frame differential inverse kinematics of ``demo`` onto ``imitator`` with Pink
+    (module docstring): frame tasks towards :func:`scaled_keypoints` (stance feet weighted
+    ``options.stance_foot``, swing feet ``swing_foot``; pelvis and torso orientation, hips and
+    knees position), a posture task towards the neutral pose, Pink's configuration (position)
+    and velocity limits; ``options.iterations`` QPs per frame. ``seconds`` in the result counts
+    the per-frame loop (not the keypoints or the first frame's settling). Raises
+    :class:`~gdimitate.errors.SolverError` when the QP solver fails."""
+    try:
+        import pink
+        from pink.exceptions import NoSolutionFound
+        from pink.limits import ConfigurationLimit, VelocityLimit
+        from pink.tasks import FrameTask, PostureTask
+    except ImportError as e:  # pragma: no cover - a declared dependency
+        raise SolverError(f"diff_ik needs the 'pin-pink' package: {e}") from None
+    _check(demo, demonstrator, imitator)
+    o = options or IKOptions()
+    if not isinstance(o, IKOptions):
+        raise InvalidInputError(f"options must be an IKOptions; got {type(o).__name__}")
+    kp = scaled_keypoints(demo, demonstrator, imitator, body_map)
+    m = imitator.model
+    tasks: dict[str, FrameTask] = {}
+    for role, frame in kp.frames.items():
+        if role.startswith(("hip", "knee")):
+            cost = o.hip if role.startswith("hip") else o.knee
+            tasks[role] = FrameTask(frame, position_cost=cost, orientation_cost=0.0)
+        elif role.startswith("sole"):
+            tasks[role] = FrameTask(frame, position_cost=o.swing_foot,
+                                    orientation_cost=o.swing_foot)
+        else:  # pelvis and torso: orientation only (their origins differ between bodies)
+            cost = o.pelvis if role == "pelvis" else o.torso
+            tasks[role] = FrameTask(frame, position_cost=0.0, orientation_cost=cost)
+    posture = PostureTask(cost=o.posture)
+    posture.set_target(imitator.neutral)
+    limits = [ConfigurationLimit(m)]
+    if o.velocity_limits:
+        vmax = np.where(np.isfinite(m.velocityLimit) & (m.velocityLimit > 0),
+                        m.velocityLimit, 1e3)
+        vmax[:6] = 1e3  # the free flyer has no velocity limit
+        limits.append(VelocityLimit(m, vmax))
+    q = imitator.neutral.copy()
+    q[:2] = np.mean([kp.targets[f"hip_{s}"][0, :2, 3] for s in SIDES], axis=0)
+    config = pink.Configuration(m, m.createData(), q)
+    period = np.diff(demo.t, prepend=demo.t[0] - (demo.t[1] - demo.t[0]))
+    qs = np.empty((demo.T, m.nq))
+    residual = np.empty(demo.T)
+    contact = {s: np.asarray(demo.contact[s], bool) for s in SIDES}
+
+    held: dict[str, np.ndarray] = {}
+    relaxed = np.zeros(demo.T, bool)
+
+    def iterate(k: int, n: int, dt: float) -> None:
+        hard, soft = [], [posture]
+        for role, task in tasks.items():
+            target = kp.targets[role][k]
+            if role.startswith("sole"):
+                side = role[5:]
+                stance = contact[side][k]
+                if stance and (k == 0 or not contact[side][k - 1]):  # touchdown: hold it here
+                    held[side] = _flat(target if k == 0 else
+                                       config.get_transform_frame_to_world(kp.frames[role])
+                                       .homogeneous)
+                target = held[side] if stance else target
+                c = o.stance_foot if stance else o.swing_foot
+                task.set_position_cost(c)
+                task.set_orientation_cost(c)
+                if stance and o.hard_stance and k > 0 and contact[side][k - 1]:
+                    hard.append(task)
+                    task.set_target(pin.SE3(target))
+                    continue
+            task.set_target(pin.SE3(target))
+            soft.append(task)
+        for i in range(max(o.max_iterations, n)):
+            if i >= n and held_error(k) <= o.tolerance:
+                break  # extra iterations only while a held foot is not there yet
+            config.integrate_inplace(solve(k, soft, hard, dt), dt)
+
+    def held_error(k: int) -> float:
+        return max((np.linalg.norm(pin.log6(config.get_transform_frame_to_world(
+            kp.frames[f"sole_{s}"]).actInv(pin.SE3(held[s]))).vector)
+            for s in SIDES if contact[s][k]), default=0.0)
+
+    def solve(k: int, soft: list, hard: list, dt: float) -> np.ndarray:
+        def qp(cost: list, equal: list) -> np.ndarray:
+            return pink.solve_ik(config, cost, dt, solver=o.solver, damping=o.damping,
+                                 limits=limits, constraints=equal or None, safety_break=False)
+        try:
+            return qp(soft, hard)
+        except NoSolutionFound as e:
+            if not hard:
+                raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
+                                  f"(t = {demo.t[k]:.3f} s): {e}") from None
+        relaxed[k] = True  # the held feet cannot be kept exactly: as costs instead
+        try:
+            return qp(soft + hard, [])
+        except NoSolutionFound as e:
+            raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
+                              f"(t = {demo.t[k]:.3f} s): {e}") from None
+
+    t_loop = 0.0
+    for k in range(demo.T):
+        if k == 0:
+            iterate(0, o.settle, float(period[0]))
+        else:
+            t0 = time.perf_counter()
+            iterate(k, o.iterations, period[k] / o.iterations)
+            t_loop += time.perf_counter() - t0
+        qs[k] = config.q
+        residual[k] = max(np.linalg.norm(config.get_transform_frame_to_world(kp.frames[r])
+                                         .translation - tasks[r].transform_target_to_world
+                                         .translation)
+                          for r in kp.frames if r.startswith(("hip", "knee", "sole")))
+    seconds = t_loop * demo.T / max(demo.T - 1, 1)
+    return kinematic_plan(imitator, _imitator_motion(imitator, demo, qs), "diff_ik", seconds,
+                          residual, relaxed)
