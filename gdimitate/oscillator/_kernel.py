@@ -59,8 +59,80 @@ def _deriv(sxe, sxf, sve, svf, gv, has_g, P, W, l0, m, n, ye, yf, dxe, dxf, dve,
             dvf[i, l] = (yf[i, l] - svf[i, l]) * ita
 
 
+def _gather(g, k0, k1, l0, m, n, gv):
+    """The chunk's input: ``g`` at step ``k0`` (``k1 == k0``) or midway between steps ``k0``
+    and ``k1`` (linear interpolation), into ``gv`` (n, L)."""
+    for i in range(n):
+        for l in range(m):
+            if k1 == k0:
+                gv[i, l] = g[k0, i, l0 + l]
+            else:
+                gv[i, l] = 0.5 * (g[k0, i, l0 + l] + g[k1, i, l0 + l])
+
+
+def _stage(first, c, x, d, acc, sx, m, n):
+    """One RK4 stage's bookkeeping on (4, n, L) arrays: ``acc`` collects the stage's
+    derivative ``d`` (weight 1 for the first stage, 2 for the middle two) and ``sx`` becomes
+    the next stage's state ``x + c·d``."""
+    for q in range(4):
+        for i in range(n):
+            for l in range(m):
+                if first:
+                    acc[q, i, l] = d[q, i, l]
+                else:
+                    acc[q, i, l] += 2.0 * d[q, i, l]
+                sx[q, i, l] = x[q, i, l] + c * d[q, i, l]
+
+
+def _deriv4(sx, gv, has_g, P, W, l0, m, n, y, d):
+    """:func:`_deriv` on (4, n, L) stage state ``sx`` and derivative ``d``, (2, n, L) ``y``."""
+    _deriv(sx[0], sx[1], sx[2], sx[3], gv, has_g, P, W, l0, m, n, y[0], y[1],
+           d[0], d[1], d[2], d[3])
+
+
+def _record(k, x, l0, m, n, rec_all, Y, XE, XF, VE, VF):
+    """Write the chunk's state ``x`` (4, n, L) at step ``k``: the output ``y = [x_e]+ − [x_f]+``
+    always, the four states when ``rec_all``."""
+    for i in range(n):
+        for l in range(m):
+            Y[k, i, l0 + l] = max(x[0, i, l], 0.0) - max(x[1, i, l], 0.0)
+            if rec_all:
+                XE[k, i, l0 + l] = x[0, i, l]
+                XF[k, i, l0 + l] = x[1, i, l]
+                VE[k, i, l0 + l] = x[2, i, l]
+                VF[k, i, l0 + l] = x[3, i, l]
+
+
+def _step(kk, t, g, has_g, P, W, l0, m, n, x, sx, acc, d, y, gv):
+    """One classical RK4 step of the chunk's state ``x`` (4, n, L) from ``t[kk]`` to
+    ``t[kk + 1]``; the input at the step's ends and linearly interpolated at its midpoint."""
+    h = t[kk + 1] - t[kk]
+    h2 = 0.5 * h
+    if has_g:
+        _gather(g, kk, kk, l0, m, n, gv)
+    _deriv4(x, gv, has_g, P, W, l0, m, n, y, d)
+    _stage(True, h2, x, d, acc, sx, m, n)
+    if has_g:  # stages 2 and 3: the input at the midpoint
+        _gather(g, kk, kk + 1, l0, m, n, gv)
+    _deriv4(sx, gv, has_g, P, W, l0, m, n, y, d)
+    _stage(False, h2, x, d, acc, sx, m, n)
+    _deriv4(sx, gv, has_g, P, W, l0, m, n, y, d)
+    _stage(False, h, x, d, acc, sx, m, n)
+    if has_g:
+        _gather(g, kk + 1, kk + 1, l0, m, n, gv)
+    _deriv4(sx, gv, has_g, P, W, l0, m, n, y, d)
+    h6 = h / 6.0
+    for q in range(4):
+        for i in range(n):
+            for l in range(m):
+                x[q, i, l] += h6 * (acc[q, i, l] + d[q, i, l])
+
+
 def _rk4(t, g, has_g, P, W, x0, rec_all, Y, XE, XF, VE, VF, final):
-    """Integrate; P = (1/tau_r, 1/tau_a, b, w, s, k) as (6, n, B); g (T, n, B) or dummy."""
+    """Integrate; P = (1/tau_r, 1/tau_a, b, w, s, k) as (6, n, B); g (T, n, B) or dummy.
+
+    Per chunk of ``CHUNK`` copies (in parallel): the state ``x`` (x_e, x_f, v_e, v_f) and the
+    scratch arrays of a step, each (4, n, L), stay in cache for all ``T`` steps."""
     T = t.shape[0]
     n = x0.shape[1]
     B = x0.shape[2]
@@ -69,101 +141,24 @@ def _rk4(t, g, has_g, P, W, x0, rec_all, Y, XE, XF, VE, VF, final):
     for ch in numba.prange(nchunks):
         l0 = ch * L
         m = min(L, B - l0)
-        xe = np.empty((n, L))
-        xf = np.empty((n, L))
-        ve = np.empty((n, L))
-        vf = np.empty((n, L))
-        sxe = np.empty((n, L))
-        sxf = np.empty((n, L))
-        sve = np.empty((n, L))
-        svf = np.empty((n, L))
-        axe = np.empty((n, L))
-        axf = np.empty((n, L))
-        ave = np.empty((n, L))
-        avf = np.empty((n, L))
-        dxe = np.empty((n, L))
-        dxf = np.empty((n, L))
-        dve = np.empty((n, L))
-        dvf = np.empty((n, L))
-        ye = np.empty((n, L))
-        yf = np.empty((n, L))
-        gv = np.zeros((n, L))
-        for i in range(n):
-            for l in range(m):
-                xe[i, l] = x0[0, i, l0 + l]
-                xf[i, l] = x0[1, i, l0 + l]
-                ve[i, l] = x0[2, i, l0 + l]
-                vf[i, l] = x0[3, i, l0 + l]
-                Y[0, i, l0 + l] = max(xe[i, l], 0.0) - max(xf[i, l], 0.0)
-                if rec_all:
-                    XE[0, i, l0 + l] = xe[i, l]
-                    XF[0, i, l0 + l] = xf[i, l]
-                    VE[0, i, l0 + l] = ve[i, l]
-                    VF[0, i, l0 + l] = vf[i, l]
+        x = np.empty((4, n, L))  # state
+        sx = np.empty((4, n, L))  # a stage's state
+        acc = np.empty((4, n, L))  # the weighted sum of the stages' derivatives
+        d = np.empty((4, n, L))  # a stage's derivative
+        y = np.empty((2, n, L))  # a stage's [x_e]+, [x_f]+
+        gv = np.zeros((n, L))  # a stage's input
+        for q in range(4):
+            for i in range(n):
+                for l in range(m):
+                    x[q, i, l] = x0[q, i, l0 + l]
+        _record(0, x, l0, m, n, rec_all, Y, XE, XF, VE, VF)
         for kk in range(T - 1):
-            h = t[kk + 1] - t[kk]
-            h2 = 0.5 * h
-            # stage 1
-            if has_g:
-                for i in range(n):
-                    for l in range(m):
-                        gv[i, l] = g[kk, i, l0 + l]
-            _deriv(xe, xf, ve, vf, gv, has_g, P, W, l0, m, n, ye, yf, dxe, dxf, dve, dvf)
+            _step(kk, t, g, has_g, P, W, l0, m, n, x, sx, acc, d, y, gv)
+            _record(kk + 1, x, l0, m, n, rec_all, Y, XE, XF, VE, VF)
+        for q in range(4):
             for i in range(n):
                 for l in range(m):
-                    axe[i, l] = dxe[i, l]
-                    axf[i, l] = dxf[i, l]
-                    ave[i, l] = dve[i, l]
-                    avf[i, l] = dvf[i, l]
-                    sxe[i, l] = xe[i, l] + h2 * dxe[i, l]
-                    sxf[i, l] = xf[i, l] + h2 * dxf[i, l]
-                    sve[i, l] = ve[i, l] + h2 * dve[i, l]
-                    svf[i, l] = vf[i, l] + h2 * dvf[i, l]
-            # stages 2 and 3 (input at the midpoint, linearly interpolated)
-            if has_g:
-                for i in range(n):
-                    for l in range(m):
-                        gv[i, l] = 0.5 * (g[kk, i, l0 + l] + g[kk + 1, i, l0 + l])
-            for stage in range(2):
-                _deriv(sxe, sxf, sve, svf, gv, has_g, P, W, l0, m, n, ye, yf, dxe, dxf, dve, dvf)
-                c = h2 if stage == 0 else h
-                for i in range(n):
-                    for l in range(m):
-                        axe[i, l] += 2.0 * dxe[i, l]
-                        axf[i, l] += 2.0 * dxf[i, l]
-                        ave[i, l] += 2.0 * dve[i, l]
-                        avf[i, l] += 2.0 * dvf[i, l]
-                        sxe[i, l] = xe[i, l] + c * dxe[i, l]
-                        sxf[i, l] = xf[i, l] + c * dxf[i, l]
-                        sve[i, l] = ve[i, l] + c * dve[i, l]
-                        svf[i, l] = vf[i, l] + c * dvf[i, l]
-            # stage 4
-            if has_g:
-                for i in range(n):
-                    for l in range(m):
-                        gv[i, l] = g[kk + 1, i, l0 + l]
-            _deriv(sxe, sxf, sve, svf, gv, has_g, P, W, l0, m, n, ye, yf, dxe, dxf, dve, dvf)
-            h6 = h / 6.0
-            for i in range(n):
-                for l in range(m):
-                    xe[i, l] += h6 * (axe[i, l] + dxe[i, l])
-                    xf[i, l] += h6 * (axf[i, l] + dxf[i, l])
-                    ve[i, l] += h6 * (ave[i, l] + dve[i, l])
-                    vf[i, l] += h6 * (avf[i, l] + dvf[i, l])
-                    Y[kk + 1, i, l0 + l] = max(xe[i, l], 0.0) - max(xf[i, l], 0.0)
-            if rec_all:
-                for i in range(n):
-                    for l in range(m):
-                        XE[kk + 1, i, l0 + l] = xe[i, l]
-                        XF[kk + 1, i, l0 + l] = xf[i, l]
-                        VE[kk + 1, i, l0 + l] = ve[i, l]
-                        VF[kk + 1, i, l0 + l] = vf[i, l]
-        for i in range(n):
-            for l in range(m):
-                final[0, i, l0 + l] = xe[i, l]
-                final[1, i, l0 + l] = xf[i, l]
-                final[2, i, l0 + l] = ve[i, l]
-                final[3, i, l0 + l] = vf[i, l]
+                    final[q, i, l0 + l] = x[q, i, l]
 
 
 def _f1(xe, xf, ve, vf, g, has_g, itr, ita, b, w, s, k):
@@ -260,6 +255,11 @@ def _rk4_uncoupled(t, g, has_g, P, x0, rec_all, Y, XE, XF, VE, VF, final):
 
 if HAVE_NUMBA:
     _deriv = numba.njit(cache=True, inline="always", fastmath=True)(_deriv)
+    _gather = numba.njit(cache=True, inline="always", fastmath=True)(_gather)
+    _stage = numba.njit(cache=True, inline="always", fastmath=True)(_stage)
+    _deriv4 = numba.njit(cache=True, inline="always", fastmath=True)(_deriv4)
+    _record = numba.njit(cache=True, inline="always", fastmath=True)(_record)
+    _step = numba.njit(cache=True, inline="always", fastmath=True)(_step)
     rk4_numba = numba.njit(cache=True, parallel=True, fastmath=True)(_rk4)
     _f1 = numba.njit(cache=True, inline="always", fastmath=True)(_f1)
     rk4_uncoupled_numba = numba.njit(cache=True, parallel=True, fastmath=True)(_rk4_uncoupled)

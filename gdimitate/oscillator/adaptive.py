@@ -112,21 +112,16 @@ def adapt_frequency(
         t_all = np.concatenate([t_all, t[keep]])
         y_all = np.concatenate([y_all, tr.y[keep]])
         t0 = t[-1]
-        periods = []
-        for j in range(n):
-            c = crossing_times(t_all, y_all[:, j])
-            if c.size >= 2:
-                periods.append(c[-1] - c[-2])
-        if len(periods) == n:
+        periods = _last_periods(t_all, y_all)
+        if periods is not None:
             omega += rate * (1.0 / float(np.mean(periods)) - omega)
         hist_t.append(t0)
         hist_f.append(omega)
     teach_until = t0
     final_teach = x.copy()
     if free_cycles > 0:
-        steps = int(round(free_cycles / (omega * dt)))
-        t = t0 + dt * np.arange(steps + 1)
         bank = MatsuokaBank(unit.time_scaled(unit_frequency / omega), coupling, shape=(n,))
+        t = t0 + dt * np.arange(int(round(free_cycles / (omega * dt))) + 1)
         tr = bank.simulate(t, None, x)
         ts.append(t[1:])
         st.append(tr.states()[:, 1:])
@@ -141,3 +136,14 @@ def adapt_frequency(
         teach_until=teach_until,
         final_teach_state=final_teach,
     )
+
+
+def _last_periods(t: np.ndarray, y: np.ndarray) -> list[float] | None:
+    """Per column of ``y`` ``(T, n)`` on ``t`` ``(T,)`` [s], the last period [s] (between its
+    last two upward zero crossings); None until every column has two crossings."""
+    periods = []
+    for j in range(y.shape[1]):
+        c = crossing_times(t, y[:, j])
+        if c.size >= 2:
+            periods.append(c[-1] - c[-2])
+    return periods if len(periods) == y.shape[1] else None

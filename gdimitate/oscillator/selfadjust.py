@@ -32,7 +32,7 @@ import dataclasses
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -330,6 +330,38 @@ def self_adjust(
             :data:`~gdimitate.safety.MAX_SIM_STEPS` steps (checked before integrating).
     """
     t, x = check_targets(t, targets)
+    names = _joint_names(joint_names, x)
+    _check_options(harmonics=harmonics, frequency=frequency, initial_frequency=initial_frequency,
+                   ratio=ratio, b=b, w=w, input_gain=input_gain, lock_margin=lock_margin,
+                   coupling_gain=coupling_gain, readout=readout, teach_cycles=teach_cycles,
+                   free_cycles=free_cycles, adapt_rate=adapt_rate, dt=dt, ridge=ridge)
+    teacher = fit_teacher(t, x, harmonics=harmonics, frequency=frequency)
+    fT = teacher.frequency
+    check_steps((22 + teach_cycles + free_cycles) / (min(fT, initial_frequency or fT) * dt),
+                f"self_adjust at {fT:.3g} Hz with dt = {dt:g} s")
+    net = _network(teacher, ratio=ratio, b=b, w=w, input_gain=input_gain,
+                   lock_margin=lock_margin, coupling_gain=coupling_gain)
+    run, f_unit = _entrain(net, teacher, initial_frequency=initial_frequency or fT,
+                           teach_cycles=teach_cycles, free_cycles=free_cycles,
+                           adapt_rate=adapt_rate, dt=dt)
+    fit = _fit_aligned_readout(run, teacher, readout, ridge)
+    if not (np.all(np.isfinite(fit.gain)) and np.all(np.isfinite(fit.offset))):
+        raise OscillatorError("the read-out fit overflowed (targets' amplitude up to "
+                              f"{np.max(net.amp):.3g}); rescale the targets (e.g. to radians)")
+    n = len(names)
+    result = SelfAdjustResult(
+        joint_names=names, params=net.unit.time_scaled(f_unit / run.frequency),
+        coupling=np.zeros((n, n)) if net.coupling is None else net.coupling,
+        gain=fit.gain, offset=fit.offset, readout=readout, frequency=run.frequency,
+        teacher=teacher, input_offset=net.mean, input_scale=net.amp, x0=run.final_teach_state,
+        frequency_history=run.history_f,
+    )
+    return dataclasses.replace(result, report=_report(result, run, fit, net.unit, fT))
+
+
+def _joint_names(joint_names: Sequence[str] | None, x: np.ndarray) -> tuple[str, ...]:
+    """The ``n`` joint names of targets ``x`` ``(T, n)`` (default ``joint0..``); refuses a
+    wrong count and targets whose scale overflows the fit (OscillatorError)."""
     n = x.shape[1]
     names = tuple(joint_names) if joint_names is not None else tuple(f"joint{j}" for j in range(n))
     if len(names) != n:
@@ -337,15 +369,26 @@ def self_adjust(
     if np.max(np.abs(x)) > MAX_TARGET:
         raise OscillatorError(f"targets reach {np.max(np.abs(x)):.3g}; beyond {MAX_TARGET:g} "
                               "the fit's float64 arithmetic overflows: rescale them (radians)")
-    _check_options(harmonics=harmonics, frequency=frequency, initial_frequency=initial_frequency,
-                   ratio=ratio, b=b, w=w, input_gain=input_gain, lock_margin=lock_margin,
-                   coupling_gain=coupling_gain, readout=readout, teach_cycles=teach_cycles,
-                   free_cycles=free_cycles, adapt_rate=adapt_rate, dt=dt, ridge=ridge)
-    teacher = fit_teacher(t, x, harmonics=harmonics, frequency=frequency)
+    return names
+
+
+class _Network(NamedTuple):
+    """The network before frequency adaptation (:func:`_network`)."""
+
+    unit: MatsuokaParams  # per joint: time constants for the teacher's frequency, s, k
+    s: np.ndarray  # (n,) tonic input: each oscillator's amplitude matches its joint's
+    coupling: np.ndarray | None  # (n, n) inhibition between anti-phase joints, None if none
+    mean: np.ndarray  # (n,) the teacher's mean over one period [rad]
+    amp: np.ndarray  # (n,) the teacher's half peak-to-peak over one period [rad]
+    phase: np.ndarray  # (n,) the teacher's fundamental phases [rad]
+
+
+def _network(teacher: FourierTeacher, *, ratio: float, b: float, w: float,
+             input_gain: float | None, lock_margin: float, coupling_gain: float) -> _Network:
+    """Steps 2–3 of the module docstring: per joint closed-form time constants for the
+    teacher's frequency and ``s`` for its amplitude, the input gain (Arnold tongue unless
+    given), and inhibition between anti-phase joints."""
     fT = teacher.frequency
-    slowest = min(fT, initial_frequency or fT)
-    check_steps((22 + teach_cycles + free_cycles) / (slowest * dt),
-                f"self_adjust at {fT:.3g} Hz with dt = {dt:g} s")
     one = teacher(np.linspace(0, 1 / fT, 2000, endpoint=False))
     mean = one.mean(axis=0)
     amp = np.ptp(one, axis=0) / 2
@@ -361,30 +404,55 @@ def self_adjust(
     anti = np.cos(phase[:, None] - phase[None, :]) < -0.5
     partners = np.maximum(anti.sum(axis=1), 1)[:, None]
     W = np.where(anti, coupling_gain * s[:, None] / (s[None, :] * partners), 0.0)
-    coupling = W if W.any() else None
+    return _Network(unit, s, W if W.any() else None, mean, amp, phase)
+
+
+def _entrain(net: _Network, teacher: FourierTeacher, *, initial_frequency: float,
+             teach_cycles: int, free_cycles: int, adapt_rate: float, dt: float):
+    """Step 4: the coupled network's free frequency on the taught phase pattern (at time
+    scale 1, per joint: groups not coupled to each other may run at different frequencies),
+    then the teacher driving it while its frequency adapts, then a free run. Returns
+    ``(run, f_unit)``: the :func:`adapt_frequency` run and the free frequencies [Hz]."""
+    fT = teacher.frequency
 
     def g_of(tt: np.ndarray) -> np.ndarray:
-        return (teacher(tt) - mean) / amp
+        return (teacher(tt) - net.mean) / net.amp
 
-    # free frequency of the coupled network on the taught phase pattern, at time scale 1
-    x0 = _x0_pattern(phase, s)
-    cal = adapt_frequency(unit, coupling, fT, g_of, initial_frequency=fT, teach_cycles=6,
-                          free_cycles=16, dt=dt, rate=1e-9, x0=x0)
-    # per joint: groups that are not coupled to each other may run at different frequencies
+    x0 = _x0_pattern(net.phase, net.s)
+    cal = adapt_frequency(net.unit, net.coupling, fT, g_of, initial_frequency=fT,
+                          teach_cycles=6, free_cycles=16, dt=dt, rate=1e-9, x0=x0)
     f_unit = measured_frequency(cal.t, cal.y, start=cal.teach_until + 4 / fT)
     if not np.all(np.isfinite(f_unit)):
         raise OscillatorError(f"the network did not oscillate freely (frequencies {f_unit})")
-    run = adapt_frequency(unit, coupling, f_unit, g_of,
-                          initial_frequency=initial_frequency or fT, teach_cycles=teach_cycles,
+    run = adapt_frequency(net.unit, net.coupling, f_unit, g_of,
+                          initial_frequency=initial_frequency, teach_cycles=teach_cycles,
                           free_cycles=free_cycles, dt=dt, rate=adapt_rate, x0=x0)
     if not np.all(np.isfinite(run.states)):
         raise OscillatorError("the network's states overflowed (s = "
-                              f"{np.max(s):.3g}); rescale the targets (e.g. to radians)")
-    # read-out: fit on the middle third of teaching; align the free run to the teacher by one
-    # common time shift; refit on both (entrained middle third + free cycles 2..6)
+                              f"{np.max(net.s):.3g}); rescale the targets (e.g. to radians)")
+    return run, f_unit
+
+
+class _Readout(NamedTuple):
+    """The read-out fitted on an adaptation run (:func:`_fit_aligned_readout`)."""
+
+    gain: np.ndarray  # (n, m)
+    offset: np.ndarray  # (n,)
+    shift: float  # [s] the free run's common time shift onto the teacher
+    ref: np.ndarray  # (T, n) the teacher on the run's time axis
+    ref_free: np.ndarray  # (T, n) the teacher shifted by ``shift``
+    ptp: np.ndarray  # (n,) the teacher's peak-to-peak in the fit window
+    entrained: np.ndarray  # (T,) bool: the evaluation window while entrained (last third)
+    free: np.ndarray  # (T,) bool: the free evaluation window (after free cycle 6)
+
+
+def _fit_aligned_readout(run, teacher: FourierTeacher, readout: Readout,
+                         ridge: float) -> _Readout:
+    """Step 5: fit on the middle third of teaching; align the free run to the teacher by one
+    common time shift; refit on both (entrained middle third + free cycles 2..6)."""
     tt = run.t
     T_end = run.teach_until
-    P = 1.0 / fT
+    P = 1.0 / teacher.frequency
     fit_w = (tt >= T_end / 3) & (tt < 2 * T_end / 3)
     ev_w = (tt >= 2 * T_end / 3) & (tt <= T_end)
     free_fit = (tt > T_end + 2 * P) & (tt <= T_end + 6 * P)
@@ -401,35 +469,32 @@ def self_adjust(
     both = fit_w | free_fit
     target = np.where(free_fit[:, None], ref_free, ref)
     gain, offset = _fit_readout(F[both], target[both], ridge)
-    if not (np.all(np.isfinite(gain)) and np.all(np.isfinite(offset))):
-        raise OscillatorError("the read-out fit overflowed (targets' amplitude up to "
-                              f"{np.max(amp):.3g}); rescale the targets (e.g. to radians)")
-    params = unit.time_scaled(f_unit / run.frequency)
-    result = SelfAdjustResult(
-        joint_names=names, params=params,
-        coupling=np.zeros((n, n)) if coupling is None else coupling,
-        gain=gain, offset=offset, readout=readout, frequency=run.frequency, teacher=teacher,
-        input_offset=mean, input_scale=amp, x0=run.final_teach_state,
-        frequency_history=run.history_f,
-    )
+    return _Readout(gain, offset, shift, ref, ref_free, ptp, ev_w, free_ev)
+
+
+def _report(result: SelfAdjustResult, run, fit: _Readout, unit: MatsuokaParams,
+            fT: float) -> dict[str, dict[str, float]]:
+    """Per joint: tracking nRMSE entrained and free, the frequency after the input stops,
+    the teacher's fit; OscillatorError where any of it is not finite."""
     q = result.read_out(run.states)
-    f_after = measured_frequency(tt, run.y, start=T_end + 2 / run.frequency)
+    f_after = measured_frequency(run.t, run.y, start=run.teach_until + 2 / run.frequency)
+    ev_w, free_ev, ref, ref_free, ptp = fit.entrained, fit.free, fit.ref, fit.ref_free, fit.ptp
     report = {}
-    for j, name in enumerate(names):
+    for j, name in enumerate(result.joint_names):
         report[name] = {
             "nrmse_entrained": float(np.sqrt(np.mean((q[ev_w, j] - ref[ev_w, j]) ** 2)) / ptp[j]),
             "nrmse_free": float(
                 np.sqrt(np.mean((q[free_ev, j] - ref_free[free_ev, j]) ** 2)) / ptp[j]
             ),
-            "shift_after_s": shift,
+            "shift_after_s": fit.shift,
             "freq_error_after": float(abs(f_after[j] / fT - 1)),
             "frequency_after_hz": float(f_after[j]),
             "teacher_frequency_hz": float(fT),
-            "teacher_fit_nrmse": float(teacher.fit_nrmse[j]),
+            "teacher_fit_nrmse": float(result.teacher.fit_nrmse[j]),
             "input_gain_k": float(unit.k[j]) if np.ndim(unit.k) else float(unit.k),
         }
     bad = [f"{j}.{k}" for j, r in report.items() for k, v in r.items() if not np.isfinite(v)]
     if bad:
         raise OscillatorError(f"the tuned network's output is not finite ({bad[:4]}); the "
                               "targets cannot be replayed as given")
-    return dataclasses.replace(result, report=report)
+    return report
