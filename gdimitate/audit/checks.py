@@ -250,6 +250,40 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
     base_check = add(_make("base_residual", res, tol.base_residual, "max", "N", weight))
 
     # joints
+    joints, unlimited = _joint_checks(robot, motion, tau, fd, tol, add)
+    vc = add(_velocity_consistency(motion, fd, tol))
+
+    # feet
+    feet, pen_all = {}, []
+    for side, c in contacts.items():
+        foot, foot_checks = _foot(side, c, motion.contact[side], W[side], pos[side], rot[side],
+                                  svel[side], targets.get(side), cone_half_angle, tol, weight)
+        for cm in foot_checks:
+            add(cm)
+        feet[side] = foot
+        pen_all.append(foot.penetration)
+    add(_penetration_check(contacts, pos, rot, T, tol))
+    pen = max(pen_all, key=lambda p: p.depth)
+    collision = _self_collision(robot, motion, collision_margin, tol, add)
+
+    failed = sorted((c for c in checks if not c.passed), key=lambda c: -c.violation)
+    return AuditReport(
+        feasible=not failed, binding=tuple(c.name for c in failed), checks=tuple(checks),
+        feet=feet, joints=tuple(joints), unlimited=tuple(unlimited),
+        base_residual=Worst(base_check.value, base_check.knot), penetration=pen,
+        velocity_consistency=Worst(vc.value, vc.knot),
+        knot_feasible=np.logical_and.reduce(masks), tau=tau, knot_checks=np.array(masks),
+        tolerances=tol,
+        cone_half_angle=float(cone_half_angle), self_collision=collision)
+
+
+def _joint_checks(robot, motion: Motion, tau: np.ndarray, fd: np.ndarray,
+                  tol: AuditTolerances, add) -> tuple[list[JointAudit], list[tuple[str, str]]]:
+    """Per actuated joint: torque and velocity against their limits (the velocity at a knot is
+    the larger of ``v`` and the forward difference of ``q``, ``fd`` ``(T-1, nv)``) and the
+    position range; each check is passed to ``add``. Returns the :class:`JointAudit` list and
+    the ``(joint, "effort" | "velocity")`` pairs without a limit."""
+    model = robot.model
     vmag = np.abs(motion.v)
     vmag[:-1] = np.maximum(vmag[:-1], np.abs(fd))
     joints, unlimited = [], []
@@ -286,9 +320,16 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
         joints.append(JointAudit(name, tw.value, tw.knot, eff, t_ratio, float(np.max(vj)),
                                  v_knot, vlim, v_ratio, pm.value, pm.knot))
 
-    # velocity consistency: the forward difference of a one-step scheme (explicit, implicit or
-    # semi-implicit Euler, trapezoid) lies between the velocities at its two knots; central
-    # differences leave a third-order term, of the size h·|a_k+1 − a_k| / 2, allowed for.
+    return joints, unlimited
+
+
+def _velocity_consistency(motion: Motion, fd: np.ndarray, tol: AuditTolerances):
+    """``velocity_consistency``: ``fd`` ``(T-1, nv)``, the forward difference of ``q``, against
+    the velocities at the two knots of each step."""
+    # the forward difference of a one-step scheme (explicit, implicit or semi-implicit Euler,
+    # trapezoid) lies between the velocities at its two knots; central differences leave a
+    # third-order term, of the size h·|a_k+1 − a_k| / 2, allowed for.
+    T = motion.T
     cons = np.zeros(T)
     if T > 1:
         h = np.diff(motion.t)[:, None]
@@ -297,36 +338,19 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
         hi = np.maximum(motion.v[:-1], motion.v[1:]) + slack
         cons[:-1] = np.max(np.maximum(np.maximum(lo - fd, fd - hi), 0.0), axis=1)
     vscale = max(1.0, float(np.max(np.abs(motion.v))))
-    vc = add(_make("velocity_consistency", cons, tol.velocity_consistency, "max", "rad/s",
-                   vscale))
+    return _make("velocity_consistency", cons, tol.velocity_consistency, "max", "rad/s",
+                 vscale)
 
-    # feet
-    feet, pen_all = {}, []
-    for side, c in contacts.items():
-        foot, foot_checks = _foot(side, c, motion.contact[side], W[side], pos[side], rot[side],
-                                  svel[side], targets.get(side), cone_half_angle, tol, weight)
-        for cm in foot_checks:
-            add(cm)
-        feet[side] = foot
-        pen_all.append(foot.penetration)
+
+def _penetration_check(contacts: dict[str, SoleContact], pos: dict, rot: dict, T: int,
+                       tol: AuditTolerances):
+    """``penetration``: the deepest sole corner below the floor at each knot (both feet)."""
     depth = np.full(T, -np.inf)
     for side, c in contacts.items():
         corners = pos[side][:, None, :] + np.einsum("tij,cj->tci", rot[side], c.corners())
         depth = np.maximum(depth, np.max(-corners[:, :, 2], axis=1))
     half = min(min(c.half_length, c.half_width) for c in contacts.values())
-    add(_make("penetration", depth, tol.penetration, "max", "m", half))
-    pen = max(pen_all, key=lambda p: p.depth)
-    collision = _self_collision(robot, motion, collision_margin, tol, add)
-
-    failed = sorted((c for c in checks if not c.passed), key=lambda c: -c.violation)
-    return AuditReport(
-        feasible=not failed, binding=tuple(c.name for c in failed), checks=tuple(checks),
-        feet=feet, joints=tuple(joints), unlimited=tuple(unlimited),
-        base_residual=Worst(base_check.value, base_check.knot), penetration=pen,
-        velocity_consistency=Worst(vc.value, vc.knot),
-        knot_feasible=np.logical_and.reduce(masks), tau=tau, knot_checks=np.array(masks),
-        tolerances=tol,
-        cone_half_angle=float(cone_half_angle), self_collision=collision)
+    return _make("penetration", depth, tol.penetration, "max", "m", half)
 
 
 def _self_collision(robot, motion, margin, tol, add) -> SelfCollisionAudit | None:
@@ -345,6 +369,32 @@ def _self_collision(robot, motion, margin, tol, add) -> SelfCollisionAudit | Non
     c = add(_make("self_collision", closest, margin - tol.self_collision, "min", "m", 0.05))
     return SelfCollisionAudit(c.value, c.knot, sc.pairs[int(np.argmin(D[c.knot]))],
                               float(margin), len(sc.pairs), sc.excluded)
+
+
+def _force_direction(side: str, stance: np.ndarray, w: np.ndarray, rot: np.ndarray,
+                     target: np.ndarray, half_angle: float, tol: AuditTolerances):
+    """``force_direction:<side>``: the angle [rad] between the foot's push on the ground (its
+    wrench ``w`` ``(T, 6)`` reversed, turned by the sole rotations ``rot`` ``(T, 3, 3)`` into
+    the world) and the unit ``target`` ``(T, 3)`` at stance knots with a normal force; its
+    sagittal and frontal parts. Returns the check and its :class:`ForceDirectionAudit`."""
+    push = -np.einsum("tij,tj->ti", rot, w[:, :3])  # the foot's push on the ground, world
+    norm = np.linalg.norm(push, axis=1)
+    use = stance & ~np.isnan(target[:, 0]) & (norm > max(tol.normal, 1e-9))
+    u = push / np.where(norm > 0, norm, 1.0)[:, None]
+    err = np.where(use, np.arccos(np.clip(np.sum(u * np.nan_to_num(target), axis=1),
+                                          -1, 1)), np.nan)
+    tg = np.nan_to_num(target)
+    sag = np.where(use, np.abs(_wrap(np.arctan2(u[:, 0], -u[:, 2])
+                                     - np.arctan2(tg[:, 0], -tg[:, 2]))), np.nan)
+    fro = np.where(use, np.abs(_wrap(np.arctan2(u[:, 1], -u[:, 2])
+                                     - np.arctan2(tg[:, 1], -tg[:, 2]))), np.nan)
+    chk = _make(f"force_direction:{side}", err, half_angle + tol.force_direction, "max",
+                "rad", 1.0)
+    sw, fw = _worst(sag), _worst(fro)
+    rms = float(np.sqrt(np.nanmean(err**2))) if use.any() else float("nan")
+    fda = ForceDirectionAudit(side, chk[0].value, chk[0].knot, rms, sw.value, sw.knot,
+                              fw.value, fw.knot, int(use.sum()))
+    return chk, fda
 
 
 def _foot(side, c: SoleContact, stance, w, pos, rot, svel, target, half_angle, tol, weight):
@@ -401,24 +451,8 @@ def _foot(side, c: SoleContact, stance, w, pos, rot, svel, target, half_angle, t
     # force direction
     fda = None
     if target is not None:
-        push = -np.einsum("tij,tj->ti", rot, w[:, :3])  # the foot's push on the ground, world
-        norm = np.linalg.norm(push, axis=1)
-        use = stance & ~np.isnan(target[:, 0]) & (norm > max(tol.normal, 1e-9))
-        u = push / np.where(norm > 0, norm, 1.0)[:, None]
-        err = np.where(use, np.arccos(np.clip(np.sum(u * np.nan_to_num(target), axis=1),
-                                              -1, 1)), np.nan)
-        tg = np.nan_to_num(target)
-        sag = np.where(use, np.abs(_wrap(np.arctan2(u[:, 0], -u[:, 2])
-                                         - np.arctan2(tg[:, 0], -tg[:, 2]))), np.nan)
-        fro = np.where(use, np.abs(_wrap(np.arctan2(u[:, 1], -u[:, 2])
-                                         - np.arctan2(tg[:, 1], -tg[:, 2]))), np.nan)
-        chk = _make(f"force_direction:{side}", err, half_angle + tol.force_direction, "max",
-                    "rad", 1.0)
+        chk, fda = _force_direction(side, stance, w, rot, target, half_angle, tol)
         out.append(chk)
-        sw, fw = _worst(sag), _worst(fro)
-        rms = float(np.sqrt(np.nanmean(err**2))) if use.any() else float("nan")
-        fda = ForceDirectionAudit(side, chk[0].value, chk[0].knot, rms, sw.value, sw.knot,
-                                  fw.value, fw.knot, int(use.sum()))
     get = {ch.name.split(":")[0]: ch for ch, _ in out}
     foot = FootAudit(
         side=side, stance_knots=int(stance.sum()), mu=c.mu,
