@@ -35,7 +35,7 @@ _CHILD = textwrap.dedent("""
     warnings.simplefilter("ignore")
     import gdimitate as gd
     from gdimitate.audit import audit
-    from gdimitate.sagittal import robot_motion
+    from gdimitate.kinematics import robot_motion
     name, frames, force, warm = sys.argv[1], int(sys.argv[2]), sys.argv[3], 5
     h, m, f = gd.gait.human_walk_3d()
     robot = gd.Robot.from_library(name)

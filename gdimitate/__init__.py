@@ -73,7 +73,7 @@ if TYPE_CHECKING:
     from .retarget import Limits, StreamingAdaptor, Weights
     from .robot import Leg, Robot
     from .walk import walk
-    from .walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
+    from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
 __version__ = "0.1.0"
 
@@ -102,10 +102,10 @@ _LAZY_NAMES: dict[str, str] = {
     "Weights": ".retarget",
     "Leg": ".robot",
     "Robot": ".robot",
-    "HUMAN_GAIT": ".walking",
-    "ROBOT_GAIT": ".walking",
-    "GaitSpec": ".walking",
-    "walking_motion": ".walking",
+    "HUMAN_GAIT": ".planar.walking",
+    "ROBOT_GAIT": ".planar.walking",
+    "GaitSpec": ".planar.walking",
+    "walking_motion": ".planar.walking",
     "walk": ".walk",
 }
 

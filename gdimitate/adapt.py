@@ -10,9 +10,9 @@ used, the solver's account and the independent physical audit (:func:`gdimitate.
 
 from __future__ import annotations
 
-from .analytic import adapt_planar, check_pair
 from .errors import InvalidInputError, UnknownNameError
 from .motion import Motion
+from .planar.analytic import adapt_planar, check_pair
 from .result import AdaptationReport, AdaptedMotion, compare
 from .robot import Robot
 from .types import AdaptMethod, ForceModel

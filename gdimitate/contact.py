@@ -47,6 +47,7 @@ __all__ = [
     "centre_of_pressure",
     "geometry_vertices",
     "measure_sole",
+    "sole_contacts",
     "sole_frame_name",
 ]
 
@@ -295,3 +296,62 @@ def measure_sole(model: pin.Model, data: pin.Data, geometry: list, q: np.ndarray
     name = sole_frame_name(side)
     new = pin.Frame(name, parent, fid, placement, pin.FrameType.OP_FRAME)
     return contact.replace(frame=name), new
+
+
+def _given_contact(robot, s: str, g: Mapping, measured: SoleContact | None) -> SoleContact:
+    """A ``contacts=`` mapping for side ``s`` over the measured contact (or none)."""
+    g = dict(g)
+    unknown = set(g) - {"frame", "half_length", "half_width", "mu"}
+    if unknown:
+        raise InvalidInputError(
+            f"contacts[{s!r}] has unknown keys {sorted(unknown)}; valid: frame, "
+            "half_length, half_width, mu")
+    frame = g.get("frame") or (measured.frame if measured else robot.legs[s].sole)
+    robot.frame_id(frame)
+    hl = g.get("half_length", measured.half_length if measured else None)
+    hw = g.get("half_width", measured.half_width if measured else None)
+    if hl is None or hw is None:
+        raise InvalidInputError(
+            f"contacts[{s!r}] needs half_length and half_width [m] (the foot has no "
+            "geometry to measure them from)")
+    return SoleContact(s, frame, hl, hw, g.get("mu", measured.mu if measured else DEFAULT_MU))
+
+
+def sole_contacts(robot, given: Mapping[str, SoleContact | Mapping] | None = None
+                  ) -> tuple[dict[str, SoleContact], dict[str, str]]:
+    """``(contacts, problems)`` of a robot under construction (``model``, ``data``, ``legs``,
+    ``neutral``, ``collision_model``, ``visual_model``, ``frame_id``): per side the sole
+    measured from the feet's geometry at the grounded neutral pose (:func:`measure_sole`; its
+    frame ``<side>_sole_contact`` is added to the model where the sole frame is not at the
+    rectangle's centre, and ``robot.data`` made anew), then overridden by ``given`` (a
+    :class:`SoleContact` or a mapping with ``half_length``, ``half_width`` [m] and optionally
+    ``frame`` and ``mu``). Point-footed legs (no ankle) get none; ``problems`` says why a
+    foot has no contact. :class:`InvalidInputError` for bad ``given``."""
+    given = dict(given or {})
+    problems: dict[str, str] = {}
+    bad = [k for k in given if k not in ("left", "right")]
+    if bad:
+        raise InvalidInputError(f"contacts= keys must be 'left'/'right'; got {bad}")
+    out: dict[str, SoleContact] = {}
+    for s in ("left", "right"):
+        g = given.get(s)
+        if isinstance(g, SoleContact):
+            robot.frame_id(g.frame)
+            out[s] = g.replace(side=s)
+            continue
+        if robot.legs[s].ankle is None and g is None:
+            continue  # point foot
+        measured = None
+        try:
+            measured, frame = measure_sole(
+                robot.model, robot.data, [robot.collision_model, robot.visual_model],
+                robot.neutral, s, robot.legs[s].sole)
+            if frame is not None:
+                robot.model.addFrame(frame)
+                robot.data = robot.model.createData()
+        except ContactError as e:
+            if g is None:
+                problems[s] = str(e)
+                continue
+        out[s] = measured if g is None else _given_contact(robot, s, g, measured)
+    return out, problems

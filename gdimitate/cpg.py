@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InvalidInputError, ResourceLimitError
+from .kinematics import kinematic_contact, robot_motion
 from .motion import Motion
 from .oscillator import OscillatorWarning, SelfAdjustResult, self_adjust
 from .robot import PLANAR_BASE, Robot
@@ -35,7 +36,6 @@ from .safety import (
     check_positive,
     check_time_axis,
 )
-from .sagittal import kinematic_contact, robot_motion
 
 __all__ = ["CPGReplay", "ReplayCheck", "entrain", "BodySignals", "body_signals",
            "stride_frequency"]

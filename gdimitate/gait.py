@@ -135,8 +135,9 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     measured body motion, whose centre-of-mass acceleration reproduces the measured GRF
     direction (see ``tests/test_gait.py``).
     """
+    from .kinematics import kinematic_contact, robot_motion
+    from .planar.sagittal import compose_q, ground_base
     from .robot import Robot
-    from .sagittal import compose_q, ground_base, kinematic_contact, robot_motion
     from .urdfgen import human_spec
 
     d = read_mot(path)
@@ -196,7 +197,7 @@ def _refuse_full_body(path, d: dict) -> None:
 
 
 def _measured_base(robot, q, contact, d, t, belt_speed):
-    from .sagittal import frame_paths
+    from .kinematics import frame_paths
 
     for c in ("pelvis_tx", "pelvis_ty"):
         if c not in d:

@@ -1,6 +1,9 @@
-"""Which joints and frame are a robot's legs: :func:`resolve_leg_names` (used by
-:class:`~gdimitate.Robot`) and :func:`legs_example` (the ``--legs FILE.json`` a user writes
-when detection needs help).
+"""A robot's legs: which joints and frame they are (:func:`resolve_leg_names`, the presets
+:data:`LEG_PRESETS`, :func:`legs_example` — the ``--legs FILE.json`` a user writes when
+detection needs help) and what they measure (:class:`Leg`, :func:`measure_leg`,
+:func:`measure_orientation`, :func:`sole_from_geometry`), for any joint axes: nothing here asks
+a leg to move in the sagittal plane (the paper's planar measurements — joint signs and offsets
+— are :mod:`gdimitate.planar`'s, computed when asked).
 
 Detection, per side:
 
@@ -21,15 +24,93 @@ from __future__ import annotations
 
 import json
 import re
+import warnings
+import weakref
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
-from .errors import LegDetectionError, UnknownNameError
+from .errors import GdimitateError, LegDetectionError, UnknownNameError
+from .types import SIDES, Side
 
-__all__ = ["SIDES", "legs_example", "resolve_leg_names", "side_of"]
+if TYPE_CHECKING:
+    from .planar.sagittal import SagittalLeg
 
-SIDES = ("left", "right")
+__all__ = ["LEG_PRESETS", "Leg", "SIDES", "legs_example", "measure_leg", "measure_orientation",
+           "resolve_leg_names", "side_of", "sole_from_geometry"]
+
+#: Explicit legs for library robots whose joint names don't say hip/knee/ankle.
+LEG_PRESETS: dict[str, dict[str, dict[str, str | None]]] = {
+    "talos": {
+        s: {"hip": f"leg_{s}_3_joint", "knee": f"leg_{s}_4_joint", "ankle": f"leg_{s}_5_joint",
+            "sole": f"{s}_sole_link"} for s in SIDES
+    },
+    "human": {
+        s: {"hip": f"{s}_hip_Z", "knee": f"{s}_knee_Z", "ankle": f"{s}_ankle_Z",
+            "sole": f"{s}_foot"} for s in SIDES
+    },
+    "bolt": {
+        s: {"hip": f"F{s[0].upper()}_HFE", "knee": f"F{s[0].upper()}_KFE", "ankle": None,
+            "sole": f"F{s[0].upper()}_FOOT"} for s in SIDES
+    },
+}
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg of a robot, whatever its joint axes.
+
+    ``hip``, ``knee``, ``ankle``: joint names (``ankle`` is ``None`` for point-footed robots
+    such as Bolt); ``sole``: frame name of the contact point. Measured at the neutral pose (the
+    robot turned to face +x with z up): ``thigh``, ``shank`` [m], the hip→knee and knee→ankle
+    extents in the robot's own x–z plane (its reach: the scale walks are normalised by);
+    ``segments`` [m], the same two segments' 3-D lengths (rigid: constant over any motion);
+    ``foot`` [m], the ankle's height above the sole.
+
+    ``signs`` and ``offsets`` — the paper's planar angle = sign·q + offset of the hip, knee and
+    ankle — are deprecated here: :func:`gdimitate.planar.sagittal_leg` measures them, and only
+    for legs whose joints turn about the lateral axis.
+    """
+
+    side: Side
+    hip: str
+    knee: str
+    ankle: str | None
+    sole: str
+    thigh: float
+    shank: float
+    foot: float
+    segments: tuple[float, float] = (0.0, 0.0)
+    owner: Any = field(default=None, repr=False, compare=False)  # weakref to the Robot
+
+    @property
+    def length(self) -> float:
+        """Thigh + shank [m] (x–z extents, see the class docstring)."""
+        return self.thigh + self.shank
+
+    def _sagittal(self, name: str) -> SagittalLeg:
+        warnings.warn(f"Leg.{name} is deprecated: use gdimitate.planar.sagittal_leg(robot, "
+                      f"{self.side!r}).{name} (the planar measurements moved to "
+                      "gdimitate.planar)", DeprecationWarning, stacklevel=3)
+        robot = self.owner() if self.owner is not None else None
+        if robot is None:
+            raise GdimitateError(f"Leg.{name}: the leg's robot is gone; measure it with "
+                                 "gdimitate.planar.sagittal_leg(robot, side)")
+        from .planar.sagittal import sagittal_leg
+
+        return sagittal_leg(robot, self.side)
+
+    @property
+    def signs(self) -> tuple[float, float, float]:
+        """Deprecated: :attr:`gdimitate.planar.SagittalLeg.signs`."""
+        return self._sagittal("signs").signs
+
+    @property
+    def offsets(self) -> tuple[float, float, float]:
+        """Deprecated: :attr:`gdimitate.planar.SagittalLeg.offsets`."""
+        return self._sagittal("offsets").offsets
 _ROLE_PATTERNS = {
     "hip": r"hip|hfe",
     "knee": r"knee|kfe",
@@ -229,3 +310,95 @@ def resolve_leg_names(robot, legs=None) -> dict[str, dict[str, str | None]]:
         d["sole"] = _lowest_frame(robot, soles)
         out[s] = d
     return out
+
+
+# ---------------------------------------------------------------------- measurements
+def _turned_neutral(robot) -> np.ndarray:
+    """Pinocchio's neutral pose with a free-flyer turned by ``robot.base_rotation``."""
+    q0 = pin.neutral(robot.model)
+    if robot.base == "free":
+        q0[3:7] = pin.Quaternion(robot.base_rotation).coeffs()
+    return q0
+
+
+def _position(robot, joint: str | None = None, frame: str | None = None) -> np.ndarray:
+    """World position of a joint's origin or a frame after forward kinematics (``robot.data``)."""
+    if joint is not None:
+        return robot.data.oMi[robot.model.getJointId(joint)].translation.copy()
+    return robot.data.oMf[robot.model.getFrameId(frame)].translation.copy()
+
+
+def measure_orientation(robot, spec: dict[str, dict[str, str | None]]) -> np.ndarray:
+    """The constant base rotation ``(3, 3)`` that turns ``robot`` to face +x with z up: rows
+    are the world x, y, z axes in model coordinates, with up from the soles to the hips and
+    left from the right hip to the left one (at Pinocchio's neutral pose). Identity for a
+    non-floating model, which must already face +x with z up (:class:`LegDetectionError`)."""
+    pin.framesForwardKinematics(robot.model, robot.data, pin.neutral(robot.model))
+    up = np.mean([_position(robot, spec[s]["hip"]) - _position(robot, frame=spec[s]["sole"])
+                  for s in SIDES], axis=0)
+    up /= np.linalg.norm(up)
+    left = _position(robot, spec["left"]["hip"]) - _position(robot, spec["right"]["hip"])
+    left -= (left @ up) * up
+    if np.linalg.norm(left) < 1e-6:
+        raise LegDetectionError(f"{robot.name}: the left and right hips coincide; "
+                                "cannot tell left from right")
+    left /= np.linalg.norm(left)
+    fwd = np.cross(left, up)
+    R0 = np.vstack([fwd, left, up])
+    if robot.base != "free" and not np.allclose(R0, np.eye(3), atol=1e-6):
+        raise LegDetectionError(
+            f"{robot.name}: a non-floating model must face +x with z up (found forward "
+            f"{np.round(fwd, 3)}, up {np.round(up, 3)})")
+    return R0 if robot.base == "free" else np.eye(3)
+
+
+def sole_from_geometry(robot, side: str, names: dict[str, str | None],
+                       min_gap: float = 0.01) -> str:
+    """The sole frame to use: where the foot's visual geometry reaches more than ``min_gap``
+    [m] below the named sole frame (e.g. example-robot-data's ``human``, whose "foot" frame
+    sits at the ankle), a frame ``<side>_sole_auto`` is added directly below the sole frame at
+    the geometry's lowest point (neutral pose) and its name returned (``robot.data`` is made
+    anew). Legs without an ankle (point feet) keep their frame."""
+    sole_name = str(names["sole"])
+    if robot.visual_model is None or names["ankle"] is None:
+        return sole_name
+    m = robot.model
+    fid = m.getFrameId(sole_name)
+    parent = m.frames[fid].parentJoint
+    pin.framesForwardKinematics(m, robot.data, _turned_neutral(robot))
+    sole = robot.data.oMf[fid].translation
+    low = sole[2]
+    for g in robot.visual_model.geometryObjects:
+        if g.parentJoint != parent or not hasattr(g.geometry, "vertices"):
+            continue
+        v = np.asarray(g.geometry.vertices())
+        if v.size == 0:
+            continue
+        M = robot.data.oMi[parent] * g.placement
+        low = min(low, float((v @ M.rotation.T + M.translation)[:, 2].min()))
+    if sole[2] - low <= min_gap:
+        return sole_name
+    target = sole - np.array([0.0, 0.0, sole[2] - low])
+    placement = pin.SE3(np.eye(3), robot.data.oMi[parent].actInv(target))
+    name = f"{side}_sole_auto"
+    m.addFrame(pin.Frame(name, parent, fid, placement, pin.FrameType.OP_FRAME))
+    robot.data = m.createData()
+    return name
+
+
+def measure_leg(robot, side: Side, names: dict[str, str | None]) -> Leg:
+    """A :class:`Leg` of ``robot`` (``model``, ``data``, ``base``, ``base_rotation``) from its
+    joint and sole names, measured at the turned neutral pose. Any joint axes."""
+    pin.framesForwardKinematics(robot.model, robot.data, _turned_neutral(robot))
+    hip, knee = _position(robot, names["hip"]), _position(robot, names["knee"])
+    sole = _position(robot, frame=names["sole"])
+    ankle = _position(robot, names["ankle"]) if names["ankle"] else sole
+    return Leg(
+        side=side, hip=str(names["hip"]), knee=str(names["knee"]), ankle=names["ankle"],
+        sole=str(names["sole"]),
+        thigh=float(np.hypot(*(knee - hip)[[0, 2]])),
+        shank=float(np.hypot(*(ankle - knee)[[0, 2]])),
+        foot=float(ankle[2] - sole[2]),
+        segments=(float(np.linalg.norm(knee - hip)), float(np.linalg.norm(ankle - knee))),
+        owner=weakref.ref(robot),
+    )

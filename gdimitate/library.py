@@ -16,7 +16,8 @@ from pathlib import Path
 
 from .errors import UnknownRobotError, URDFError
 
-__all__ = ["LibraryEntry", "LIBRARY", "erd_robots_dir", "library_entry", "list_robots"]
+__all__ = ["LibraryEntry", "LIBRARY", "MASSLESS_PRESETS", "erd_robots_dir", "library_entry",
+           "list_robots"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,12 @@ LIBRARY: dict[str, LibraryEntry] = {
         LibraryEntry("g1_hands", "g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf",
                      "Unitree G1, 29 DoF with three-finger hands"),
     ]
+}
+
+#: Joints of library robots whose subtrees are massless on purpose (Romeo's hands: every
+#: finger link has mass 0); see :func:`gdimitate.urdfcheck.check_urdf_physics`.
+MASSLESS_PRESETS: dict[str, tuple[str, ...]] = {
+    "romeo": tuple(f"{s}{j}" for s in "LR" for j in ("Hand", "Finger21", "Finger31", "Thumb1")),
 }
 
 

@@ -9,13 +9,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from .contact import ContactForces
 from .errors import InvalidInputError, UnknownNameError
+from .kinematics import frame_paths, frame_rotations, joint_paths
 from .motion import Motion
 from .robot import PLANAR_BASE, SIDES, Robot
-from .sagittal import frame_paths, joint_paths
 
 __all__ = ["FORCE_MODELS", "angle_down", "hip_path", "hip_height", "ankle_paths", "sole_paths",
            "foot_heights", "foot_distance", "com_path", "force_direction", "joint_limit_margins",
@@ -217,16 +216,6 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
             R = frame_rotations(robot, m.q, contacts[s].frame)
             push[s] = -np.einsum("tij,tj->ti", R, est.wrenches[s][:, :3])
     return {s: ForceDirection.from_vectors(push[s], stance[s], model) for s in SIDES}
-
-
-def frame_rotations(robot: Robot, q: np.ndarray, frame: str) -> np.ndarray:
-    """World rotation ``(T, 3, 3)`` of a frame along configurations ``q`` ``(T, nq)``."""
-    fid = robot.frame_id(frame)
-    out = np.empty((len(q), 3, 3))
-    for i, qi in enumerate(np.asarray(q, dtype=float)):
-        pin.framesForwardKinematics(robot.model, robot.data, qi)
-        out[i] = robot.data.oMf[fid].rotation
-    return out
 
 
 def joint_limit_margins(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:

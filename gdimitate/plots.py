@@ -16,8 +16,8 @@ from . import metrics
 from .contact import SoleContact, centre_of_pressure
 from .metrics import ForceDirection
 from .motion import Motion
+from .planar.sagittal import leg_angles
 from .robot import Robot
-from .sagittal import leg_angles
 
 __all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
            "plot_force_directions", "plot_sole_cop"]

@@ -11,7 +11,7 @@ from gdimitate import (
 )
 from gdimitate.metrics import force_direction, hip_height_ratio
 from gdimitate.planar import eq1
-from gdimitate.sagittal import leg_angles
+from gdimitate.planar.sagittal import leg_angles
 
 
 @pytest.fixture(scope="module", params=["I", "II", "humanoid"])

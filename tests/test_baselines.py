@@ -27,7 +27,7 @@ from gdimitate.apps.baselines import (
 )
 from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
-from gdimitate.sagittal import leg_angles
+from gdimitate.planar.sagittal import leg_angles
 
 SIDES = ("left", "right")
 

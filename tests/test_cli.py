@@ -82,7 +82,7 @@ def test_paper_summary_matches_eq1_on_the_same_inputs(tmp_path):
     assert s["I"]["hip_height_ratio_error_max"]["without_adaptor"] > 0.01
     # an independent recount of Case II's infeasible share straight from Eq. (1)
     from gdimitate import paper_case
-    from gdimitate.sagittal import leg_angles
+    from gdimitate.planar.sagittal import leg_angles
 
     demo, imit, motion = paper_case("II")
     _, ang = leg_angles(demo, motion.q)

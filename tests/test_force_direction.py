@@ -12,8 +12,9 @@ import gdimitate as gd
 from gdimitate.contact import ContactForces, FootForces
 from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.gait import human_walk_path, read_mot, read_opensim
+from gdimitate.kinematics import joint_paths
 from gdimitate.metrics import ForceDirection, angle_between, force_direction
-from gdimitate.sagittal import joint_paths, leg_angles
+from gdimitate.planar.sagittal import leg_angles
 
 GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
 

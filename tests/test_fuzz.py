@@ -447,7 +447,7 @@ def test_fuzz_user_numbers_that_size_arrays(rate, fps, shape):
     import time
 
     from gdimitate.export import export_motion
-    from gdimitate.sagittal import kinematic_contact
+    from gdimitate.kinematics import kinematic_contact
 
     hoap2 = HOAP2
     t = np.arange(40) / 60

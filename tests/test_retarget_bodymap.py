@@ -166,8 +166,8 @@ def test_following_report(armed):
     ranges (the demonstrator's mapped and clipped to the imitator's limits), against NumPy on
     a synthetic pair of motions."""
     import gdimitate as gd
+    from gdimitate.kinematics import robot_motion
     from gdimitate.retarget.bodymap import following
-    from gdimitate.sagittal import robot_motion
 
     g1 = gd.Robot.from_library("g1")
     bm = body_map(armed, g1)

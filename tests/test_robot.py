@@ -10,9 +10,10 @@ import yourdfpy
 
 import gdimitate
 from gdimitate import LegDetectionError, UnknownNameError, UnknownRobotError, URDFError
+from gdimitate.kinematics import frame_paths, joint_paths
 from gdimitate.library import library_entry
+from gdimitate.planar.sagittal import compose_q, leg_angles
 from gdimitate.robot import Robot
-from gdimitate.sagittal import compose_q, frame_paths, joint_paths, leg_angles
 from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -501,7 +501,7 @@ def test_bvh_frame_time_is_bounded(tmp_path, frame_time):
 
 
 def _walk_with_contacts(t: np.ndarray) -> tuple[Robot, gd.Motion]:
-    from gdimitate.sagittal import kinematic_contact
+    from gdimitate.kinematics import kinematic_contact
 
     robot, motion = _hoap2_walk(t)
     return robot, motion.replace(contact=kinematic_contact(robot, motion.q))

@@ -20,6 +20,7 @@ import umsgpack
 
 from gdimitate.errors import InvalidInputError, ViewerError
 from gdimitate.metrics import force_direction
+from gdimitate.planar.walking import GaitSpec, walking_motion
 from gdimitate.robot import Robot
 from gdimitate.viz import (
     BrowserNotFoundError,
@@ -34,7 +35,6 @@ from gdimitate.viz import (
 )
 from gdimitate.viz.animate import arrow_pose, frame_indices, push_vectors
 from gdimitate.viz.scene import shapes
-from gdimitate.walking import GaitSpec, walking_motion
 
 GAIT = GaitSpec(cycles=1, rate=50.0)
 # the wall-clock limit is generous: a render takes ~8 s on an idle 2-core machine, but one

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from ..errors import UnknownNameError
 from ..motion import Motion
+from ..planar.walking import HUMAN_GAIT, GaitSpec, walking_motion
 from ..robot import Robot
-from ..walking import HUMAN_GAIT, GaitSpec, walking_motion
 
 __all__ = ["PAPER_CASES", "paper_case"]
 

@@ -13,8 +13,8 @@ from ..adapt import adapt
 from ..metrics import sole_paths
 from ..motion import Motion
 from ..planar import eq1
+from ..planar.sagittal import leg_angles
 from ..robot import SIDES, Robot
-from ..sagittal import leg_angles
 from .cases import PAPER_CASES, paper_case
 
 __all__ = ["step_length", "case_summary", "run_paper"]

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..analytic import adapt_planar
 from ..errors import GdimitateError
+from ..planar.analytic import adapt_planar
 from ..robot import SIDES, Robot
 from .targets import Targets
 

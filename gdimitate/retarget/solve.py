@@ -12,10 +12,10 @@ import numpy as np
 
 from ..contact import ContactForces, SoleContact
 from ..errors import InvalidInputError, SolverError, UnknownNameError
+from ..kinematics import robot_motion
 from ..metrics import FORCE_MODELS
 from ..motion import Motion
 from ..robot import SIDES, Robot
-from ..sagittal import robot_motion
 from . import limits
 from . import problem as pb
 from .bodymap import body_map

@@ -24,10 +24,10 @@ import numpy as np
 
 from ..contact import ContactForces, FootForces, SoleContact
 from ..errors import InvalidInputError, UnknownNameError
+from ..kinematics import robot_motion
 from ..motion import Motion
 from ..result import AdaptedMotion, compare
 from ..robot import SIDES, Robot
-from ..sagittal import robot_motion
 from . import limits as limits_mod
 from . import problem as pb
 from .bodymap import BodyMap, body_map

@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 __all__ = ["Eq1Result", "eq1", "fk2", "ik2", "ROUNDOFF"]
 
