@@ -432,8 +432,6 @@ def _simulate(a: argparse.Namespace, demo, wrenches, forces) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for docs and tests)."""
-    from .apps.demo import DEFAULT_IMITATOR
-
     p = argparse.ArgumentParser(
         prog="gdimitate",
         description="Goal-directed imitation of rhythmic motion between robots of different "
@@ -443,25 +441,48 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="exit status: " + "; ".join(f"{k} {v}" for k, v in EXIT_STATUS.items()),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
-    methods = ["optimal", "analytic", "copy"]
-    method_help = ("adaptor: optimal (whole-body, contact-consistent, within the imitator's "
-                   "limits), analytic (the paper's Eq. 1, sagittal), copy (joint angles; the "
-                   "baseline) (default: %(default)s)")
+    for add in (_add_demo, _add_paper, _add_adapt, _add_walk, _add_view, _add_entrain,
+                _add_export, _add_simulate, _add_batch):
+        add(sub)
+    return p
+
+
+#: the adaptor methods of demo, adapt, view and entrain, and their help
+_METHODS = ["optimal", "analytic", "copy"]
+_METHOD_HELP = ("adaptor: optimal (whole-body, contact-consistent, within the imitator's "
+                "limits), analytic (the paper's Eq. 1, sagittal), copy (joint angles; the "
+                "baseline) (default: %(default)s)")
+
+
+def _add_demo(sub) -> None:
+    """``gdimitate demo``: the main job (:mod:`gdimitate.apps.demo`)."""
+    from .apps.demo import DEFAULT_IMITATOR
+
     d = sub.add_parser("demo", help="the main job: the real 3-D walk → G1 (whole-body adaptor, "
                                     "MuJoCo physics check, oscillator replay)")
     d.add_argument("--out", default="gdimitate-demo", help="output folder (default: %(default)s)")
     _add_robot_args(d, "--imitator", DEFAULT_IMITATOR, "imitator robot (e.g. hoap2, talos)")
-    d.add_argument("--method", default="optimal", choices=methods, help=method_help)
+    d.add_argument("--method", default="optimal", choices=_METHODS, help=_METHOD_HELP)
     d.set_defaults(func=_cmd_demo)
+
+
+def _add_paper(sub) -> None:
+    """``gdimitate paper``: the paper's figures (:mod:`gdimitate.apps.paper`)."""
     pp = sub.add_parser("paper", help="the paper's Figs. 4–13 (in spirit) + summary.json")
     pp.add_argument("--out", default="paper-out", help="output folder (default: %(default)s)")
     pp.set_defaults(func=_cmd_paper)
+
+
+def _add_adapt(sub) -> None:
+    """``gdimitate adapt``: adapt a demonstration file, write the result and its verdict."""
+    from .apps.demo import DEFAULT_IMITATOR
+
     ad = sub.add_parser("adapt", help="adapt a demonstration file for an imitator",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: {EXIT_STATUS[3]}")
     _add_demonstration_args(ad, "demonstration",
                             "one stride of the shipped real 3-D walk, as demo")
     _add_robot_args(ad, "--imitator", DEFAULT_IMITATOR, "imitator robot")
-    ad.add_argument("--method", default="optimal", choices=methods, help=method_help)
+    ad.add_argument("--method", default="optimal", choices=_METHODS, help=_METHOD_HELP)
     ad.add_argument("--force", default="segment", choices=["segment", "com", "dynamics",
                                                             "measured"],
                     help="force-direction model of the goal: segment (hip→sole), com "
@@ -473,6 +494,12 @@ def build_parser() -> argparse.ArgumentParser:
                          "(method optimal)")
     ad.add_argument("--out", default="gdimitate-adapt", help="output folder (default: %(default)s)")
     ad.set_defaults(func=_cmd_adapt)
+
+
+def _add_walk(sub) -> None:
+    """``gdimitate walk``: a periodic cycle walked in MuJoCo under an oscillator network."""
+    from .apps.demo import DEFAULT_IMITATOR
+
     wk = sub.add_parser("walk", help="a periodic cycle, a whole-body oscillator network and N "
                                      "steps in MuJoCo (walk.json, plots, trajectory, HTML)",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the robot fell, fewer steps "
@@ -486,6 +513,11 @@ def build_parser() -> argparse.ArgumentParser:
     wk.add_argument("--no-html", action="store_true", help="skip walk.html")
     wk.add_argument("--out", default="gdimitate-walk", help="output folder (default: %(default)s)")
     wk.set_defaults(func=_cmd_walk)
+
+
+def _add_view(sub) -> None:
+    """``gdimitate view``: the meshcat preview, live or as a self-contained HTML file."""
+    from .apps.demo import DEFAULT_IMITATOR
     from .apps.examples import EXAMPLES
 
     vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE",
@@ -498,7 +530,7 @@ def build_parser() -> argparse.ArgumentParser:
     vw.add_argument("--example", default=None, choices=EXAMPLES,
                     help="a built-in example instead of the default walk (human-walk: the "
                          "sagittal walk on HOAP-2; case-I, case-II, humanoid: the paper's)")
-    vw.add_argument("--method", default="optimal", choices=methods, help=method_help)
+    vw.add_argument("--method", default="optimal", choices=_METHODS, help=_METHOD_HELP)
     vw.add_argument("--layout", default="side", choices=["side", "ghost"],
                     help="example: robots side by side or overlaid (default: %(default)s)")
     vw.add_argument("--html", default=None, help="write a self-contained HTML file and exit")
@@ -508,6 +540,12 @@ def build_parser() -> argparse.ArgumentParser:
     vw.add_argument("--seconds", type=_seconds, default=None,
                     help="stop the live viewer after this many seconds (default: Ctrl-C)")
     vw.set_defaults(func=_cmd_view)
+
+
+def _add_entrain(sub) -> None:
+    """``gdimitate entrain``: a Matsuoka network tuned to a motion, and its replay."""
+    from .apps.demo import DEFAULT_IMITATOR
+
     en = sub.add_parser("entrain", help="tune a Matsuoka network to a motion and replay it",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the free-running replay "
                                "misses the stride frequency or amplitude (the replay check)")
@@ -515,12 +553,16 @@ def build_parser() -> argparse.ArgumentParser:
                                           "to --robot, as demo")
     _add_robot_args(en, "--robot", DEFAULT_IMITATOR, "robot the shipped walk is adapted to "
                     "when no motion is given")
-    en.add_argument("--method", default="optimal", choices=methods, help=method_help)
+    en.add_argument("--method", default="optimal", choices=_METHODS, help=_METHOD_HELP)
     en.add_argument("--duration", type=_seconds, default=None,
                     help="seconds of free-running replay (default: the motion's duration)")
     en.add_argument("--out", default="gdimitate-entrain",
                     help="output folder (default: %(default)s)")
     en.set_defaults(func=_cmd_entrain)
+
+
+def _add_export(sub) -> None:
+    """``gdimitate export``: a motion written in another file format."""
     from .export import FORMATS
 
     ex = sub.add_parser("export", help="write a motion as CSV, NPZ, MuJoCo qpos, or what "
@@ -546,6 +588,10 @@ def build_parser() -> argparse.ArgumentParser:
                        ("--demonstrator", "robot of a .npz that records none")):
         ex.add_argument(flag, default=None, help=what)
     ex.set_defaults(func=_cmd_export, treadmill=False)
+
+
+def _add_simulate(sub) -> None:
+    """``gdimitate simulate``: a plan executed in MuJoCo and measured."""
     si = sub.add_parser("simulate", help="execute an adapted plan in MuJoCo under the whole-body "
                         "tracking controller and measure it (falls, slip, push directions, CoP)")
     si.add_argument("motion", help="a plan: a gdimitate .npz with v, a and wrenches (written by "
@@ -562,6 +608,10 @@ def build_parser() -> argparse.ArgumentParser:
                        ("--demonstrator", "robot of a .npz that records none")):
         si.add_argument(flag, default=None, help=what)
     si.set_defaults(func=_cmd_simulate, treadmill=False, markers=None)
+
+
+def _add_batch(sub) -> None:
+    """``gdimitate batch``: every demonstration file of a folder adapted, in parallel."""
     ba = sub.add_parser("batch", help="adapt every demonstration file in a folder, in parallel "
                         "(process pool or a Dask cluster), resumable, with a summary table")
     ba.add_argument("input_dir", help="folder of demonstration files (.mot, .sto, .bvh, .npz)")
@@ -585,7 +635,6 @@ def build_parser() -> argparse.ArgumentParser:
     ba.add_argument("--pattern", default="*", help="file-name glob in INPUT_DIR (default: *)")
     ba.add_argument("--quiet", action="store_true", help="no progress bar")
     ba.set_defaults(func=_cmd_batch)
-    return p
 
 
 def _on_signal(signum: int, frame: object) -> None:

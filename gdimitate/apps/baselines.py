@@ -356,10 +356,7 @@ def diff_ik(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None,
     the per-frame loop (not the keypoints or the first frame's settling). Raises
     :class:`~gdimitate.errors.SolverError` when the QP solver fails."""
     try:
-        import pink
-        from pink.exceptions import NoSolutionFound
-        from pink.limits import ConfigurationLimit, VelocityLimit
-        from pink.tasks import FrameTask, PostureTask
+        import pink  # noqa: F401  (a declared dependency; checked before any work)
     except ImportError as e:  # pragma: no cover - a declared dependency
         raise SolverError(f"diff_ik needs the 'pin-pink' package: {e}") from None
     _check(demo, demonstrator, imitator)
@@ -367,49 +364,77 @@ def diff_ik(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None,
     if not isinstance(o, IKOptions):
         raise InvalidInputError(f"options must be an IKOptions; got {type(o).__name__}")
     kp = scaled_keypoints(demo, demonstrator, imitator, body_map)
-    m = imitator.model
-    tasks: dict[str, FrameTask] = {}
-    for role, frame in kp.frames.items():
-        if role.startswith(("hip", "knee")):
-            cost = o.hip if role.startswith("hip") else o.knee
-            tasks[role] = FrameTask(frame, position_cost=cost, orientation_cost=0.0)
-        elif role.startswith("sole"):
-            tasks[role] = FrameTask(frame, position_cost=o.swing_foot,
-                                    orientation_cost=o.swing_foot)
-        else:  # pelvis and torso: orientation only (their origins differ between bodies)
-            cost = o.pelvis if role == "pelvis" else o.torso
-            tasks[role] = FrameTask(frame, position_cost=0.0, orientation_cost=cost)
-    posture = PostureTask(cost=o.posture)
-    posture.set_target(imitator.neutral)
-    limits = [ConfigurationLimit(m)]
-    if o.velocity_limits:
-        vmax = np.where(np.isfinite(m.velocityLimit) & (m.velocityLimit > 0),
-                        m.velocityLimit, 1e3)
-        vmax[:6] = 1e3  # the free flyer has no velocity limit
-        limits.append(VelocityLimit(m, vmax))
-    q = imitator.neutral.copy()
-    q[:2] = np.mean([kp.targets[f"hip_{s}"][0, :2, 3] for s in SIDES], axis=0)
-    config = pink.Configuration(m, m.createData(), q)
+    ik = _PinkIK(demo, imitator, kp, o)
     period = np.diff(demo.t, prepend=demo.t[0] - (demo.t[1] - demo.t[0]))
-    qs = np.empty((demo.T, m.nq))
+    qs = np.empty((demo.T, imitator.model.nq))
     residual = np.empty(demo.T)
-    contact = {s: np.asarray(demo.contact[s], bool) for s in SIDES}
+    t_loop = 0.0
+    for k in range(demo.T):
+        if k == 0:
+            ik.iterate(0, o.settle, float(period[0]))
+        else:
+            t0 = time.perf_counter()
+            ik.iterate(k, o.iterations, period[k] / o.iterations)
+            t_loop += time.perf_counter() - t0
+        qs[k] = ik.config.q
+        residual[k] = ik.residual()
+    seconds = t_loop * demo.T / max(demo.T - 1, 1)
+    return kinematic_plan(imitator, _imitator_motion(imitator, demo, qs), "diff_ik", seconds,
+                          residual, ik.relaxed)
 
-    held: dict[str, np.ndarray] = {}
-    relaxed = np.zeros(demo.T, bool)
 
-    def iterate(k: int, n: int, dt: float) -> None:
-        hard, soft = [], [posture]
-        for role, task in tasks.items():
-            target = kp.targets[role][k]
+class _PinkIK:
+    """:func:`diff_ik`'s per-frame solver: Pink's configuration, the frame tasks (one per
+    keypoint role), the posture task and the limits; the feet held since their touchdown."""
+
+    def __init__(self, demo: Motion, imitator: Robot, kp: _Keypoints, o: IKOptions) -> None:
+        import pink
+        from pink.limits import ConfigurationLimit, VelocityLimit
+        from pink.tasks import FrameTask, PostureTask
+
+        m = imitator.model
+        self.demo, self.kp, self.o = demo, kp, o
+        self.tasks: dict[str, FrameTask] = {}
+        for role, frame in kp.frames.items():
+            if role.startswith(("hip", "knee")):
+                cost = o.hip if role.startswith("hip") else o.knee
+                self.tasks[role] = FrameTask(frame, position_cost=cost, orientation_cost=0.0)
+            elif role.startswith("sole"):
+                self.tasks[role] = FrameTask(frame, position_cost=o.swing_foot,
+                                             orientation_cost=o.swing_foot)
+            else:  # pelvis and torso: orientation only (their origins differ between bodies)
+                cost = o.pelvis if role == "pelvis" else o.torso
+                self.tasks[role] = FrameTask(frame, position_cost=0.0, orientation_cost=cost)
+        self.posture = PostureTask(cost=o.posture)
+        self.posture.set_target(imitator.neutral)
+        self.limits = [ConfigurationLimit(m)]
+        if o.velocity_limits:
+            vmax = np.where(np.isfinite(m.velocityLimit) & (m.velocityLimit > 0),
+                            m.velocityLimit, 1e3)
+            vmax[:6] = 1e3  # the free flyer has no velocity limit
+            self.limits.append(VelocityLimit(m, vmax))
+        q = imitator.neutral.copy()
+        q[:2] = np.mean([kp.targets[f"hip_{s}"][0, :2, 3] for s in SIDES], axis=0)
+        self.config = pink.Configuration(m, m.createData(), q)
+        self.contact = {s: np.asarray(demo.contact[s], bool) for s in SIDES}
+        self.held: dict[str, np.ndarray] = {}
+        self.relaxed = np.zeros(demo.T, bool)
+
+    def iterate(self, k: int, n: int, dt: float) -> None:
+        """``n`` QPs of step ``dt`` [s] towards frame ``k``'s targets (more, up to
+        ``max_iterations``, while a held foot is farther than ``tolerance`` from its hold)."""
+        o, contact = self.o, self.contact
+        hard, soft = [], [self.posture]
+        for role, task in self.tasks.items():
+            target = self.kp.targets[role][k]
             if role.startswith("sole"):
                 side = role[5:]
                 stance = contact[side][k]
                 if stance and (k == 0 or not contact[side][k - 1]):  # touchdown: hold it here
-                    held[side] = _flat(target if k == 0 else
-                                       config.get_transform_frame_to_world(kp.frames[role])
-                                       .homogeneous)
-                target = held[side] if stance else target
+                    self.held[side] = _flat(target if k == 0 else
+                                            self.config.get_transform_frame_to_world(
+                                                self.kp.frames[role]).homogeneous)
+                target = self.held[side] if stance else target
                 c = o.stance_foot if stance else o.swing_foot
                 task.set_position_cost(c)
                 task.set_orientation_cost(c)
@@ -420,45 +445,44 @@ def diff_ik(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None,
             task.set_target(pin.SE3(target))
             soft.append(task)
         for i in range(max(o.max_iterations, n)):
-            if i >= n and held_error(k) <= o.tolerance:
+            if i >= n and self.held_error(k) <= o.tolerance:
                 break  # extra iterations only while a held foot is not there yet
-            config.integrate_inplace(solve(k, soft, hard, dt), dt)
+            self.config.integrate_inplace(self.solve(k, soft, hard, dt), dt)
 
-    def held_error(k: int) -> float:
-        return max((np.linalg.norm(pin.log6(config.get_transform_frame_to_world(
-            kp.frames[f"sole_{s}"]).actInv(pin.SE3(held[s]))).vector)
-            for s in SIDES if contact[s][k]), default=0.0)
+    def held_error(self, k: int) -> float:
+        """The largest pose error (SE(3) log norm) of a stance foot from its hold at frame k."""
+        return max((np.linalg.norm(pin.log6(self.config.get_transform_frame_to_world(
+            self.kp.frames[f"sole_{s}"]).actInv(pin.SE3(self.held[s]))).vector)
+            for s in SIDES if self.contact[s][k]), default=0.0)
 
-    def solve(k: int, soft: list, hard: list, dt: float) -> np.ndarray:
+    def solve(self, k: int, soft: list, hard: list, dt: float) -> np.ndarray:
+        """One QP's velocity: the held feet as equality constraints, as costs where the QP
+        has no solution with them (frame ``k`` marked relaxed); SolverError otherwise."""
+        import pink
+        from pink.exceptions import NoSolutionFound
+
+        o = self.o
+
         def qp(cost: list, equal: list) -> np.ndarray:
-            return pink.solve_ik(config, cost, dt, solver=o.solver, damping=o.damping,
-                                 limits=limits, constraints=equal or None, safety_break=False)
+            return pink.solve_ik(self.config, cost, dt, solver=o.solver, damping=o.damping,
+                                 limits=self.limits, constraints=equal or None,
+                                 safety_break=False)
         try:
             return qp(soft, hard)
         except NoSolutionFound as e:
             if not hard:
                 raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
-                                  f"(t = {demo.t[k]:.3f} s): {e}") from None
-        relaxed[k] = True  # the held feet cannot be kept exactly: as costs instead
+                                  f"(t = {self.demo.t[k]:.3f} s): {e}") from None
+        self.relaxed[k] = True  # the held feet cannot be kept exactly: as costs instead
         try:
             return qp(soft + hard, [])
         except NoSolutionFound as e:
             raise SolverError(f"diff_ik: the {o.solver} QP failed at frame {k} "
-                              f"(t = {demo.t[k]:.3f} s): {e}") from None
+                              f"(t = {self.demo.t[k]:.3f} s): {e}") from None
 
-    t_loop = 0.0
-    for k in range(demo.T):
-        if k == 0:
-            iterate(0, o.settle, float(period[0]))
-        else:
-            t0 = time.perf_counter()
-            iterate(k, o.iterations, period[k] / o.iterations)
-            t_loop += time.perf_counter() - t0
-        qs[k] = config.q
-        residual[k] = max(np.linalg.norm(config.get_transform_frame_to_world(kp.frames[r])
-                                         .translation - tasks[r].transform_target_to_world
-                                         .translation)
-                          for r in kp.frames if r.startswith(("hip", "knee", "sole")))
-    seconds = t_loop * demo.T / max(demo.T - 1, 1)
-    return kinematic_plan(imitator, _imitator_motion(imitator, demo, qs), "diff_ik", seconds,
-                          residual, relaxed)
+    def residual(self) -> float:
+        """The largest distance [m] of a hip, knee or sole frame from its task's target."""
+        return max(np.linalg.norm(self.config.get_transform_frame_to_world(self.kp.frames[r])
+                                  .translation - self.tasks[r].transform_target_to_world
+                                  .translation)
+                   for r in self.kp.frames if r.startswith(("hip", "knee", "sole")))

@@ -15,12 +15,13 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..motion import Motion
-from ..robot import Robot
+if TYPE_CHECKING:  # the command line reads DEFAULT_IMITATOR without loading Pinocchio
+    from ..motion import Motion
+    from ..robot import Robot
 
 __all__ = ["DEFAULT_IMITATOR", "default_demonstration", "run_demo"]
 
@@ -77,9 +78,8 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     from .. import sim
     from ..adapt import adapt
     from ..cpg import entrain
-    from ..plots import plot_force_directions
+    from ..robot import Robot
     from ..safety import prepare_output_dir
-    from ..sim import plots as sim_plots
     from ..verdict import solver_record, verdict
     from .baselines import joint_copy, kinematic_plan
 
@@ -109,20 +109,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     stride = float(adapted.motion.t[-1] - adapted.motion.t[0])
     cpg = entrain(imit, adapted.motion, duration=3 * stride, frequency=1.0 / stride)
     log("[5/7] writing motions and plots …")
-    adapted.save(out / "imitator_motion.npz")
-    adapted.save(out / "imitator_motion.csv", format="csv")
-    (out / "oscillator_params.json").write_text(cpg.result.to_json())
-    cpg.replay.to_csv(out / "cpg_replay_joints.csv")
-    from ..metrics import force_direction
-
-    dirs = {"demonstrator (measured)": force_direction(demo_robot, demo, "measured",
-                                                      forces=forces)}
-    if adapted.wrenches is not None:
-        dirs[f"{imit.name} plan"] = _plan_directions(imit, adapted)
-    plot_force_directions(demo.t, dirs, demo.contact, f"push on the ground → {imit.name}",
-                          out / "force_directions.png",
-                          times={f"{imit.name} plan": adapted.motion.t})
-    sim_plots.plot_summary(plan_sim, out / "simulation.png")
+    _write_files(out, demo_robot, demo, forces, imit, adapted, plan_sim, cpg)
     log("[6/7] writing demo.html (meshcat: demonstrator, plan, simulation) …")
     html = _write_html(out / "demo.html", demo_robot, demo, imit, plan_sim, L)
     aud = adapted.audit
@@ -148,6 +135,28 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     log("[7/7] done.\n")
     log(_table(_rows(summary, adapted, plan_sim, copy_sim, cpg, out)))
     return summary
+
+
+def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot, adapted,
+                 plan_sim, cpg) -> None:
+    """The adapted motion (NPZ, CSV), the oscillator parameters and replay, the push
+    directions (demonstrator measured vs plan) and the simulation's summary plot."""
+    from ..metrics import force_direction
+    from ..plots import plot_force_directions
+    from ..sim import plots as sim_plots
+
+    adapted.save(out / "imitator_motion.npz")
+    adapted.save(out / "imitator_motion.csv", format="csv")
+    (out / "oscillator_params.json").write_text(cpg.result.to_json())
+    cpg.replay.to_csv(out / "cpg_replay_joints.csv")
+    dirs = {"demonstrator (measured)": force_direction(demo_robot, demo, "measured",
+                                                      forces=forces)}
+    if adapted.wrenches is not None:
+        dirs[f"{imit.name} plan"] = _plan_directions(imit, adapted)
+    plot_force_directions(demo.t, dirs, demo.contact, f"push on the ground → {imit.name}",
+                          out / "force_directions.png",
+                          times={f"{imit.name} plan": adapted.motion.t})
+    sim_plots.plot_summary(plan_sim, out / "simulation.png")
 
 
 def _plan_directions(robot: Robot, adapted):

@@ -7,15 +7,16 @@ library robot name (the real walk retargeted onto it, e.g. ``talos``, ``g1``).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
-from ..adapt import AdaptedMotion, adapt
 from ..errors import UnknownNameError
-from ..gait import human_walk
 from ..library import list_robots
-from ..motion import Motion
-from ..robot import Robot
-from .cases import PAPER_CASES, paper_case
+from .cases import PAPER_CASES
+
+if TYPE_CHECKING:  # the command line reads EXAMPLES without loading Pinocchio
+    from ..motion import Motion
+    from ..result import AdaptedMotion
+    from ..robot import Robot
 
 __all__ = ["Example", "EXAMPLES", "example"]
 
@@ -39,6 +40,11 @@ EXAMPLES = _names()
 
 def example(name: str = "human-walk", method: str = "analytic") -> Example:
     """Build a named example (see the module docstring) with the given adaptor method."""
+    from ..adapt import adapt
+    from ..gait import human_walk
+    from ..robot import Robot
+    from .cases import paper_case
+
     if name not in EXAMPLES:
         raise UnknownNameError("example", name, EXAMPLES)
     if name.startswith("case-") or name == "humanoid":
