@@ -125,6 +125,12 @@ class FileFormatError(InvalidInputError):
     wrong with it."""
 
 
+class OpenSimFormatError(OpenSimDataError, FileFormatError):
+    """An OpenSim ``.mot``/``.sto`` file that is not a table at all (not UTF-8 text, no column
+    names, repeated column names): both an :class:`OpenSimDataError` and a
+    :class:`FileFormatError`, whichever reader it came through."""
+
+
 class ResourceLimitError(InvalidInputError):
     """An input whose size would exhaust memory or time (a URDF too large or too deep, a
     motion whose time axis is implausible, too many harmonics or cycles); the message states

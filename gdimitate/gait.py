@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .contact import ContactForces, FootForces
-from .errors import FileFormatError, InvalidInputError, ResourceLimitError, UnitsWarning
+from .errors import InvalidInputError, UnitsWarning
 from .motion import Motion
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
@@ -24,7 +24,8 @@ def human_walk_path() -> Path:
 
 
 def read_mot(path: str | Path) -> dict[str, np.ndarray]:
-    """Read an OpenSim ``.mot``/``.sto`` table into ``{column: (T,) array}``, values as stored.
+    """Read an OpenSim ``.mot``/``.sto`` table into ``{column: (T,) array}``, values as stored
+    (read by :func:`gdimitate.opensim.read_table`, whose errors it raises; one row suffices).
 
     Column names are shortened to their coordinate name (``/jointset/hip_r/hip_flexion_r/value``
     → ``hip_flexion_r``). Angles stay in the file's unit (the header's ``inDegrees`` tells);
@@ -33,45 +34,24 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
     angle within ±π°) gives a :class:`~gdimitate.errors.UnitsWarning`.
 
     Raises:
-        FileFormatError: not text (a binary file), no column names, no rows, repeated column
-            names; InvalidInputError: no ``endheader``, a malformed numeric table.
+        OpenSimFormatError (a FileFormatError): not text (a binary file), no column names,
+            repeated column names (also after shortening); OpenSimDataError (an
+            InvalidInputError): no such file, no ``endheader``, a malformed numeric table.
     """
-    from .safety import MAX_TABLE_BYTES, read_text_bounded
+    from .errors import OpenSimFormatError
+    from .opensim._table import read_table
 
-    path = Path(path)
-    if not path.is_file():
-        raise InvalidInputError(f"no such OpenSim file: {path}")
-    lines = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", FileFormatError,
-                              ResourceLimitError).splitlines()
-    try:
-        end = next(i for i, line in enumerate(lines) if line.strip().lower() == "endheader")
-    except StopIteration:
-        raise InvalidInputError(f"{path}: no 'endheader' line; not an OpenSim .mot/.sto") from None
-    flags = {line.replace(" ", "").strip().lower() for line in lines[:end]}
-    in_degrees = "indegrees=yes" in flags
-    if end + 1 >= len(lines) or not lines[end + 1].strip():
-        raise FileFormatError(f"{path}: no column names after 'endheader'")
-    names = lines[end + 1].split("\t") if "\t" in lines[end + 1] else lines[end + 1].split()
-    names = [n.strip() for n in names if n.strip()]
-    short = [n.split("/")[-2] if n.endswith("/value") else n.split("/")[-1] for n in names]
+    table = read_table(path, min_rows=1)
+    short = [n.split("/")[-2] if n.endswith("/value") else n.split("/")[-1]
+             for n in table.names]
     twice = sorted({n for n in short if short.count(n) > 1})
     if twice:
-        raise FileFormatError(f"{path}: repeated column names {twice}")
-    rows = [line for line in lines[end + 2:] if line.strip()]
-    if not rows:
-        raise FileFormatError(f"{path}: no rows of numbers after the column names")
-    try:
-        data = np.loadtxt(rows, ndmin=2)
-    except ValueError as e:
-        raise InvalidInputError(f"{path}: malformed numeric table ({e})") from None
-    if data.shape[1] != len(short):
-        raise InvalidInputError(
-            f"{path}: {len(short)} column names but {data.shape[1]} columns of numbers"
-        )
-    out = {n: data[:, i].copy() for i, n in enumerate(short)}
-    if "indegrees=yes" in flags or "indegrees=no" in flags:
-        _check_degrees_flag(path, out, in_degrees)
-    out["__in_degrees__"] = np.asarray(in_degrees)
+        raise OpenSimFormatError(f"{table.path}: repeated column names {twice}")
+    out = {n: table.data[:, i].copy() for i, n in enumerate(short)}
+    flag = table.header.get("indegrees", "").strip().lower()
+    if flag in ("yes", "no"):
+        _check_degrees_flag(table.path, out, flag == "yes")
+    out["__in_degrees__"] = np.asarray(flag == "yes")
     return out
 
 

@@ -26,6 +26,7 @@ Data files (:mod:`.coordinates`, :mod:`.grf`, :mod:`.trc`, :mod:`.treadmill`)::
                                              forces)        # belt speed added back
 """
 
+from ._table import Table, read_table
 from .coordinates import read_coordinates
 from .grf import CONTACT_THRESHOLD, ExternalForceSpec, read_external_loads, read_grf
 from .ik import IKResult, inverse_kinematics
@@ -36,6 +37,8 @@ from .treadmill import belt_speed, treadmill_to_overground
 from .urdf import EFFORT_LIMIT, VELOCITY_LIMIT, OsimConversion, convert_osim, opensim_to_urdf
 
 __all__ = [
+    "Table",
+    "read_table",
     "follow_coordinates",
     "CONTACT_THRESHOLD",
     "EFFORT_LIMIT",

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OpenSimDataError, ResourceLimitError, TimeGridError
+from ..errors import OpenSimDataError, OpenSimFormatError, ResourceLimitError, TimeGridError
 from ..safety import MAX_TABLE_BYTES, read_text_bounded
 
 __all__ = ["Table", "read_table"]
@@ -68,20 +68,24 @@ def _in_degrees(header: Mapping[str, str], text: list[str], path: Path) -> bool 
     return None
 
 
-def read_table(path: str | Path) -> Table:
-    """Read an OpenSim ``.mot``/``.sto`` file → :class:`Table`.
+def read_table(path: str | Path, *, min_rows: int = 2) -> Table:
+    """Read an OpenSim ``.mot``/``.sto`` file → :class:`Table` (the package's one reader of
+    OpenSim tables: coordinates, forces and :func:`gdimitate.gait.read_mot` read through it).
 
-    Raises :class:`~gdimitate.errors.OpenSimDataError` (no such file, not UTF-8 text, no
-    ``endheader``, no
-    ``time`` column, rows of the wrong length, non-numeric or NaN/inf values — with the row and
-    column), :class:`~gdimitate.errors.ResourceLimitError` (a file over
+    ``min_rows``: the fewest data rows accepted (2: a motion needs a time step).
+    Raises :class:`~gdimitate.errors.OpenSimFormatError` (not UTF-8 text, no column names,
+    repeated column names: an :class:`~gdimitate.errors.OpenSimDataError` and a
+    :class:`~gdimitate.errors.FileFormatError`), :class:`~gdimitate.errors.OpenSimDataError`
+    (no such file, no ``endheader``, no ``time`` column, too few rows, rows of the wrong
+    length, non-numeric or NaN/inf values — with the row and column),
+    :class:`~gdimitate.errors.ResourceLimitError` (a file over
     :data:`~gdimitate.safety.MAX_TABLE_BYTES`) and :class:`~gdimitate.errors.TimeGridError`
     (time not strictly increasing).
     """
     path = Path(path)
     if not path.is_file():
         raise OpenSimDataError(f"no such OpenSim file: {path}")
-    lines = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", OpenSimDataError,
+    lines = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", OpenSimFormatError,
                               ResourceLimitError).splitlines()
     try:
         end = next(i for i, ln in enumerate(lines) if ln.strip().lower() == "endheader")
@@ -96,8 +100,11 @@ def read_table(path: str | Path) -> Table:
             header[k.strip().lower()] = v.strip()
     body = [(i, ln) for i, ln in enumerate(lines[end + 1:], start=end + 2) if ln.strip()]
     if not body:
-        raise OpenSimDataError(f"{path}: no column names after 'endheader'")
+        raise OpenSimFormatError(f"{path}: no column names after 'endheader'")
     names = tuple(n for n in _split(body[0][1]) if n)
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise OpenSimFormatError(f"{path}: repeated column names {twice}")
     if not names or names[0].lower() != "time":
         raise OpenSimDataError(f"{path}: the first column must be 'time'; got "
                                f"{names[0] if names else 'nothing'!r}")
@@ -111,8 +118,9 @@ def read_table(path: str | Path) -> Table:
             rows.append([float(v) for v in vals])
         except ValueError as e:
             raise OpenSimDataError(f"{path}, line {lineno}: not a number ({e})") from None
-    if len(rows) < 2:
-        raise OpenSimDataError(f"{path}: {len(rows)} data rows; at least 2 are needed")
+    if len(rows) < max(min_rows, 1):
+        raise OpenSimDataError(f"{path}: {len(rows)} data rows; at least {max(min_rows, 1)} "
+                               "are needed")
     data = np.array(rows)
     bad = np.argwhere(~np.isfinite(data))
     if bad.size:
