@@ -24,6 +24,7 @@ import pinocchio as pin
 
 from .contact import ContactForces, SoleContact, wrench_cone
 from .errors import InvalidInputError, SolverError, UnknownNameError
+from .kinematics import PLANAR_BASE, base_joint_id, base_v_indices, frame_placements
 from .motion import Motion
 
 __all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS", "measured_wrenches"]
@@ -69,24 +70,16 @@ class WrenchEstimate:
 
 def base_dofs(robot) -> list[int]:
     """Indices in ``v`` of the unactuated base: free-flyer 0–5, planar ``base_x``, ``base_z``,
-    ``base_pitch``; ``[]`` for a fixed base."""
-    if robot.base == "free":
-        return list(range(6))
-    if robot.base == "planar":
-        from .robot import PLANAR_BASE
-
-        return [robot.idx_v(j) for j in PLANAR_BASE]
-    return []
+    ``base_pitch``; ``[]`` for a fixed base (:func:`gdimitate.kinematics.base_v_indices`)."""
+    return [int(i) for i in base_v_indices(robot)]
 
 
 def _base_wrench(robot, data, rows: np.ndarray) -> np.ndarray:
     """Base rows ``(nb,)`` → a 6-D wrench at the base origin (see :class:`WrenchEstimate`)."""
     if robot.base == "free":
         return rows
-    from .robot import PLANAR_BASE
-
-    jid = robot.model.getJointId(PLANAR_BASE[-1])
-    S = pin.getJointJacobian(robot.model, data, jid, pin.LOCAL_WORLD_ALIGNED)[:, base_dofs(robot)]
+    S = pin.getJointJacobian(robot.model, data, base_joint_id(robot),
+                             pin.LOCAL_WORLD_ALIGNED)[:, base_dofs(robot)]
     return np.linalg.pinv(S.T) @ rows
 
 
@@ -219,8 +212,6 @@ def _moment_rows(robot, bd: list[int]) -> np.ndarray:
     """Which base rows are moments (rotational dofs) rather than forces."""
     if robot.base == "free":
         return np.array([False] * 3 + [True] * 3)
-    from .robot import PLANAR_BASE
-
     return np.array([j == "base_pitch" for j in PLANAR_BASE])
 
 
@@ -282,15 +273,13 @@ def measured_wrenches(robot, motion: Motion, forces: ContactForces,
     if forces.t.shape != motion.t.shape or not np.allclose(forces.t, motion.t, atol=1e-9):
         raise InvalidInputError("forces must be on the motion's time grid (read_grf(..., t="
                                 "motion.t) resamples them)")
-    data = robot.model.createData()
+    P = frame_placements(robot, motion.q, [c.frame for c in contacts.values()])
     out = {s: np.zeros((motion.T, 6)) for s in contacts}
-    for k, qk in enumerate(motion.q):
-        pin.framesForwardKinematics(robot.model, data, qk)
-        for s, c in contacts.items():
-            f = forces[s]
-            if not f.contact[k]:
-                continue
-            M = data.oMf[robot.frame_id(c.frame)]
-            tau = np.cross(f.cop[k] - M.translation, f.force[k]) + f.torque[k]
-            out[s][k] = np.r_[M.rotation.T @ f.force[k], M.rotation.T @ tau]
+    for s, c in contacts.items():
+        f, R, p = forces[s], P[c.frame].rotation, P[c.frame].translation
+        tau = np.cross(f.cop - p, f.force) + f.torque
+        Rt = R.transpose(0, 2, 1)
+        w = np.concatenate([np.einsum("tij,tj->ti", Rt, f.force),
+                            np.einsum("tij,tj->ti", Rt, tau)], axis=1)
+        out[s] = np.where(np.asarray(f.contact, bool)[:, None], w, 0.0)
     return out

@@ -15,9 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from ..errors import InvalidInputError
+from ..kinematics import frame_placements
 
 __all__ = ["ContactRule", "detect_contacts", "estimate_floor", "sole_corners", "close_gaps"]
 
@@ -63,14 +63,11 @@ def close_gaps(mask: np.ndarray, max_gap: int, min_run: int = 0) -> np.ndarray:
 
 def sole_corners(robot, q: np.ndarray) -> dict[str, np.ndarray]:
     """World positions ``(T, 4, 3)`` [m] of each foot's sole corners for q ``(T, nq)``."""
-    out = {s: np.empty((q.shape[0], 4, 3)) for s in robot.contacts}
-    fids = {s: robot.frame_id(c.frame) for s, c in robot.contacts.items()}
-    corners = {s: c.corners() for s, c in robot.contacts.items()}
-    for k, qk in enumerate(q):
-        pin.framesForwardKinematics(robot.model, robot.data, qk)
-        for s, f in fids.items():
-            M = robot.data.oMf[f]
-            out[s][k] = corners[s] @ M.rotation.T + M.translation
+    P = frame_placements(robot, q, [c.frame for c in robot.contacts.values()])
+    out = {}
+    for s, c in robot.contacts.items():
+        M = P[c.frame]
+        out[s] = np.einsum("cj,tij->tci", c.corners(), M.rotation) + M.translation[:, None]
     return out
 
 

@@ -13,10 +13,10 @@ plates' mean surface height, the free moment about it.
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from ..contact import ContactForces, FootForces
 from ..errors import ForceDataError
+from ..kinematics import frame_paths
 from ..opensim.grf import CONTACT_THRESHOLD, _cop_on_plane
 
 __all__ = ["MAJORITY", "MAX_DISTANCE", "assign_plates"]
@@ -39,14 +39,8 @@ def _feet(robot, motion) -> dict[str, np.ndarray]:
     """World positions ``(T, 3)`` of each foot's sole centre along ``motion``."""
     frames = {s: (robot.contacts[s].frame if s in robot.contacts else robot.legs[s].sole)
               for s in ("left", "right")}
-    ids = {s: robot.model.getFrameId(f) for s, f in frames.items()}
-    d = robot.model.createData()
-    out = {s: np.empty((motion.T, 3)) for s in ids}
-    for k, q in enumerate(motion.q):
-        pin.framesForwardKinematics(robot.model, d, q)
-        for s, i in ids.items():
-            out[s][k] = d.oMf[i].translation
-    return out
+    paths = frame_paths(robot, motion.q, list(frames.values()))
+    return {s: paths[f] for s, f in frames.items()}
 
 
 def _resample(plate, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

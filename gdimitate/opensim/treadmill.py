@@ -11,10 +11,10 @@ unchanged: a belt at constant speed is an inertial frame).
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from ..contact import ContactForces, FootForces
 from ..errors import InvalidInputError
+from ..kinematics import frame_paths
 from ..motion import Motion
 
 __all__ = ["belt_speed", "treadmill_to_overground"]
@@ -37,17 +37,13 @@ def _sole(robot, side: str) -> str:
 def belt_speed(robot, motion: Motion, contact: dict[str, np.ndarray]) -> float:
     """Belt speed [m/s] (positive when the belt carries the feet backwards, −x): the median of
     −ẋ of each foot's sole frame over its stance frames ``contact[side]`` ``(T,)``."""
-    m, d = robot.model, robot.model.createData()
     speeds = []
     for side in ("left", "right"):
         c = np.asarray(contact[side], dtype=bool)
         if c.shape != motion.t.shape:
             raise InvalidInputError(f"contact[{side!r}] must have shape {motion.t.shape}")
-        fid = robot.frame_id(_sole(robot, side))
-        x = np.empty(motion.T)
-        for k, q in enumerate(motion.q):
-            pin.framesForwardKinematics(m, d, q)
-            x[k] = d.oMf[fid].translation[0]
+        sole = _sole(robot, side)
+        x = frame_paths(robot, motion.q, [sole])[sole][:, 0]
         speeds.append(-np.gradient(x, motion.t)[c])
     v = np.concatenate(speeds)
     if v.size == 0:
