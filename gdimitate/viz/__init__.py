@@ -11,7 +11,9 @@ Typical use::
 
 Modules: :mod:`~.server` (our own meshcat server process, connection with timeouts),
 :mod:`~.scene` (static drawing), :mod:`~.animate` (kinematics → animation tracks),
-:mod:`~.export` (HTML files, notebook snippet), :mod:`~.viewer` (:class:`Viewer`),
+:mod:`~.export` (HTML files, notebook snippet), :mod:`~.track` (a robot over a motion: what
+:meth:`Viewer.show` checks), :mod:`~.camera` (camera and ground framing), :mod:`~.viewer`
+(:class:`Viewer`: the scene's lifecycle, drawing and animation),
 :mod:`~.compare` (:func:`compare`), :mod:`~.browser` (headless Chromium screenshots).
 """
 

@@ -10,12 +10,14 @@ from __future__ import annotations
 import html as _html
 import os
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import OutputError, ViewerError
 from ..safety import atomic_write
 
-__all__ = ["check_writable", "inline_html", "network_references", "write_html"]
+__all__ = ["check_writable", "inline_html", "network_references", "notebook_display",
+           "write_html"]
 
 # Attributes and JS/CSS constructs that make a browser fetch a URL when the page loads.
 _FETCHING = re.compile(
@@ -82,3 +84,33 @@ def inline_html(html: str, height: int = 480) -> str:
         f'<iframe srcdoc="{_html.escape(html, quote=True)}" '
         'style="width: 100%; height: 100%; border: none"></iframe></div>'
     )
+
+
+def notebook_display(html: Callable[[], str], url: str, height: int = 480,
+                     live: bool = False) -> object:
+    """Show a scene in a Jupyter cell and return the ``IPython.display.HTML`` object.
+
+    ``live=False``: the self-contained page ``html()`` embedded (works with a remote kernel
+    and offline, frozen at this moment); ``live=True``: the server's page ``url`` in an iframe
+    (follows later changes; the browser must reach it). Outside a notebook nothing is
+    displayed and nothing blocks; the object is just returned."""
+    from IPython.display import HTML
+
+    if live:
+        obj = HTML(
+            f'<div style="height: {int(height)}px; width: 100%; resize: both; '
+            f'overflow: hidden"><iframe src="{url}" style="width: 100%; '
+            'height: 100%; border: none"></iframe></div>')
+    else:
+        obj = HTML(inline_html(html(), height))
+    try:
+        from IPython import get_ipython
+
+        shell = get_ipython()
+    except ImportError:  # pragma: no cover
+        shell = None
+    if shell is not None and getattr(shell, "kernel", None) is not None:
+        from IPython.display import display
+
+        display(obj)
+    return obj

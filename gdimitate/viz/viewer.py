@@ -20,26 +20,22 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import meshcat
 import numpy as np
-import pinocchio as pin
 from meshcat.animation import Animation
 
 from ..errors import ViewerError
 from .animate import (
     Frames,
-    MotionMismatchError,
     arrow_pose,
-    check_motion,
     place_frame,
-    push_vectors,
     record_frames,
     sample_frames,
 )
-from .export import check_writable, inline_html, write_html
+from .camera import framing, ground_extent, place_camera
+from .export import check_writable, notebook_display, write_html
 from .scene import (
     Style,
     draw_arrow,
@@ -47,72 +43,11 @@ from .scene import (
     draw_ground,
     draw_marker,
     draw_polyline,
-    has_visuals,
-    skeleton_geometry,
 )
 from .server import MeshcatServer, connect
+from .track import Track, leg_length, track_inputs
 
 __all__ = ["Track", "Viewer", "leg_length"]
-
-
-@dataclass
-class Track:
-    """One robot shown over one motion (what :meth:`Viewer.show` records).
-
-    Attributes:
-        name: meshcat node name under ``/meshcat``.
-        model: the robot's Pinocchio model.
-        visual_model: the geometry drawn (the robot's, or a skeleton).
-        t, q: ``(T,)`` [s] and ``(T, nq)``, validated.
-        soles: leg name → sole frame name.
-        force_directions: leg name → ``(T, 3)`` unit push vectors (may be empty).
-        com: ``(T, 3)`` [m] given by the caller, ``None`` for Pinocchio's, ``False`` for none.
-        offset: ``(3,)`` [m] translation of the whole track; scale: its uniform scale.
-        nodes: meshcat node names of the visual objects.
-        size: the robot's leg length [m], the unit of :class:`Style` sizes.
-        foot_paths: whether the soles' paths are drawn.
-        frames: sampled kinematics of the last animation (or of frame 0).
-    """
-
-    name: str
-    model: pin.Model
-    visual_model: pin.GeometryModel
-    t: np.ndarray
-    q: np.ndarray
-    soles: dict[str, str]
-    force_directions: dict[str, np.ndarray]
-    com: np.ndarray | None | bool
-    offset: np.ndarray
-    scale: float
-    nodes: list[str]
-    size: float = 1.0
-    foot_paths: bool = True
-    frames: Frames | None = field(default=None, repr=False)
-
-
-def leg_length(robot: object) -> float:
-    """Hip-to-sole distance [m] of the robot's first leg (``.legs[...]`` with ``.hip`` joint
-    and ``.sole`` frame) in its neutral configuration; ``nan`` if it has no such leg."""
-    model: pin.Model = robot.model
-    for leg in (getattr(robot, "legs", None) or {}).values():
-        hip, sole = getattr(leg, "hip", None), getattr(leg, "sole", None)
-        if hip and sole and model.existJointName(hip) and model.existFrame(sole):
-            data = model.createData()
-            pin.framesForwardKinematics(model, data, pin.neutral(model))
-            a = data.oMi[model.getJointId(hip)].translation
-            b = data.oMf[model.getFrameId(sole)].translation
-            return float(np.linalg.norm(a - b))
-    return float("nan")
-
-
-def _soles(robot: object) -> dict[str, str]:
-    legs = getattr(robot, "legs", None) or {}
-    out = {}
-    for name, leg in legs.items():
-        sole = getattr(leg, "sole", None)
-        if sole:
-            out[str(name)] = str(sole)
-    return out
 
 
 def _root_transform(offset: np.ndarray, scale: float) -> np.ndarray:
@@ -256,56 +191,19 @@ class Viewer:
                 fit the robot (:class:`~gdimitate.viz.animate.MotionMismatchError`), a bad
                 force-direction or CoM array, a server that does not answer.
         """
-        model = getattr(robot, "model", None)
-        if not isinstance(model, pin.Model):
-            raise ViewerError(f"robot must have a Pinocchio .model; got {type(robot)!r}")
-        rname = str(getattr(robot, "name", None) or model.name or "robot")
-        visual = getattr(robot, "visual_model", None)
-        if not has_visuals(visual):
-            if not skeleton:
-                raise ViewerError(
-                    f"robot {rname!r} has no visual geometry; pass skeleton=True to draw its "
-                    "joints and links as a stick figure"
-                )
-            visual = skeleton_geometry(model)
-        t, q = check_motion(model, motion)
-        if not np.isfinite(scale) or scale <= 0:
-            raise ViewerError(f"scale must be a positive number, got {scale}")
-        off = np.asarray(offset, dtype=float).reshape(-1)
-        if off.shape != (3,) or not np.all(np.isfinite(off)):
-            raise ViewerError(f"offset must be 3 finite numbers [m], got {offset!r}")
-        track_name = self._unique(name or rname)
-        size = leg_length(robot)
-        size = size if np.isfinite(size) and size > 1e-3 else 1.0
-        com_arg: np.ndarray | None | bool = com
-        if com is True:
-            com_arg = None
-        elif com is None or com is False:
-            com_arg = False
-        soles = _soles(robot)
-        force = {str(k): push_vectors(v) for k, v in (force_directions or {}).items()}
-        unknown = [leg for leg in force if leg not in soles]
-        if unknown:
-            raise ViewerError(f"force directions given for legs {unknown} but robot {rname!r} "
-                              f"has sole frames only for legs {sorted(soles)}")
-        for leg, a in force.items():
-            if a.shape != (t.size, 3):
-                raise MotionMismatchError(f"force direction of leg {leg!r} has {a.shape[0]} "
-                                          f"samples; expected {t.size} (one per motion frame)")
-        if isinstance(com_arg, np.ndarray):
-            com_arg = np.asarray(com_arg, dtype=float)
-            if com_arg.shape != (len(t), 3):
-                raise MotionMismatchError(f"com has shape {com_arg.shape}; expected "
-                                          f"({len(t)}, 3)")
+        inp = track_inputs(robot, motion, offset=offset, scale=scale,
+                           force_directions=force_directions, com=com, skeleton=skeleton)
+        track_name = self._unique(name or inp.name)
         # Frame 0 only (cheap): the pose drawn until the animation is set.
-        frames = sample_frames(model, visual, t[:1], q[:1], 1.0, soles,
-                               {k: v[:1] for k, v in force.items()},
-                               com_arg[:1] if isinstance(com_arg, np.ndarray) else None)
+        frames = sample_frames(inp.model, inp.visual, inp.t[:1], inp.q[:1], 1.0, inp.soles,
+                               {k: v[:1] for k, v in inp.force.items()},
+                               inp.com[:1] if isinstance(inp.com, np.ndarray) else None)
         root = self.vis[track_name]
-        root.set_transform(_root_transform(off, float(scale)))
-        nodes = draw_geometry(root["robot"], visual, color, opacity)
-        track = Track(track_name, model, visual, t, q, soles, force, com_arg, off,
-                      float(scale), nodes, size, bool(foot_paths), frames)
+        root.set_transform(_root_transform(inp.offset, float(scale)))
+        nodes = draw_geometry(root["robot"], inp.visual, color, opacity)
+        track = Track(track_name, inp.model, inp.visual, inp.t, inp.q, inp.soles, inp.force,
+                      inp.com, inp.offset, float(scale), nodes, inp.size, bool(foot_paths),
+                      frames)
         self.tracks[track_name] = track
         self._draw_decorations(track, opacity)
         self._place(track, frames, 0)
@@ -390,25 +288,14 @@ class Viewer:
         self._animated = True
 
     def _draw_ground(self) -> None:
-        lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
-        for track in self.tracks.values():
-            pts = [track.frames.placements[:, :, :3, 3].reshape(-1, 3)]
-            pts += list(track.frames.sole_paths.values())
-            xy = np.concatenate(pts)[:, :2] * track.scale + track.offset[:2]
-            lo, hi = np.minimum(lo, xy.min(axis=0)), np.maximum(hi, xy.max(axis=0))
-        m = self.style.ground_margin
-        draw_ground(self.vis["ground"], lo - m, hi + m, self.style.ground_color)
+        lo, hi = ground_extent(self.tracks.values(), self.style.ground_margin)
+        draw_ground(self.vis["ground"], lo, hi, self.style.ground_color)
         # meshcat's own grid and axes would poke through and clutter the view.
         self.vis["/Grid"].set_property("visible", False)
         self.vis["/Axes"].set_property("visible", False)
 
     def _frame_camera(self) -> None:
-        coms = [tr.frames.com * tr.scale + tr.offset for tr in self.tracks.values()]
-        pts = np.concatenate(coms)
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        target = (lo + hi) / 2.0
-        span = float(max(hi[0] - lo[0], hi[1] - lo[1], 2.0 * hi[2], 0.5))
-        self._place_camera(target + np.array([0.3, -1.0, 0.2]) * (span + 0.4), target)
+        place_camera(self.vis, *framing(self.tracks.values()))
 
     def look_at_track(self, name: str, position: Sequence[float]) -> None:
         """Place the camera at ``position`` (3,) [m], looking at the mean centre of mass (x, z;
@@ -427,17 +314,8 @@ class Viewer:
         mouse then orbits around ``target``. Without a call, :meth:`animate` frames all
         centres of mass from the front left.
         """
-        self._place_camera(position, target)
+        place_camera(self.vis, position, target)
         self._camera_set = True
-
-    def _place_camera(self, position: Sequence[float], target: Sequence[float]) -> None:
-        p = np.asarray(position, dtype=float) - np.asarray(target, dtype=float)
-        T = np.eye(4)
-        T[:3, 3] = -np.asarray(target, dtype=float)
-        self.vis.set_transform(T)
-        self.vis["/Cameras/default"].set_transform(np.eye(4))
-        self.vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", [float(p[0]), float(p[2]), float(-p[1])])
 
     # -- output --------------------------------------------------------------------------
     def _ensure_animated(self) -> None:
@@ -469,26 +347,7 @@ class Viewer:
         iframe (follows later changes; the browser must reach :attr:`url`). Outside a
         notebook nothing is displayed and nothing blocks; the object is just returned.
         """
-        from IPython.display import HTML
-
-        if live:
-            obj = HTML(
-                f'<div style="height: {int(height)}px; width: 100%; resize: both; '
-                f'overflow: hidden"><iframe src="{self.url}" style="width: 100%; '
-                'height: 100%; border: none"></iframe></div>')
-        else:
-            obj = HTML(inline_html(self.html(), height))
-        try:
-            from IPython import get_ipython
-
-            shell = get_ipython()
-        except ImportError:  # pragma: no cover
-            shell = None
-        if shell is not None and getattr(shell, "kernel", None) is not None:
-            from IPython.display import display
-
-            display(obj)
-        return obj
+        return notebook_display(self.html, self.url, height, live)
 
     def __repr__(self) -> str:
         return f"Viewer({self.url!r}, tracks={list(self.tracks)})"
