@@ -43,6 +43,7 @@ __all__ = [
     "FootForces",
     "ContactForces",
     "wrench_cone",
+    "wrench_cone_rows",
     "cone_margin",
     "centre_of_pressure",
     "geometry_vertices",
@@ -95,25 +96,40 @@ class SoleContact:
         return SoleContact(**d)
 
 
+def wrench_cone_rows(w, half_length, half_width, mu, cop_length=None, cop_width=None) -> list:
+    """The 16 rows of the contact wrench cone, each ``≤ 0`` inside it (Caron et al. 2015,
+    Eq. 4-6): friction (4), centre of pressure (4), yaw moment (8), for a wrench
+    ``w = [f_x, f_y, f_z, τ_x, τ_y, τ_z]`` (at the sole centre, in the sole frame).
+
+    Written with ``+``, ``−`` and ``·`` only, so ``w`` and the parameters may be numbers, NumPy
+    arrays or symbolic expressions (CasADi): the one formula of the cone in the package.
+    ``cop_length``/``cop_width``: the half-lengths of the centre-of-pressure rows (default the
+    sole's; smaller ones keep the centre of pressure a margin inside the sole)."""
+    fx, fy, fz, tx, ty, tz = (w[i] for i in range(6))
+    X, Y, m = half_length, half_width, mu
+    Xc = X if cop_length is None else cop_length
+    Yc = Y if cop_width is None else cop_width
+    rows = [fx - m * fz, -fx - m * fz, fy - m * fz, -fy - m * fz,
+            tx - Yc * fz, -tx - Yc * fz, ty - Xc * fz, -ty - Xc * fz]
+    for s1 in (1.0, -1.0):
+        for s2 in (1.0, -1.0):
+            # τ_z ≥ τ_min:  −τ_z − μ(X+Y) f_z + s1 (Y f_x − μ τ_x) + s2 (X f_y − μ τ_y) ≤ 0
+            rows.append(s1 * Y * fx + s2 * X * fy - m * (X + Y) * fz - s1 * m * tx
+                        - s2 * m * ty - tz)
+            # τ_z ≤ τ_max:  +τ_z − μ(X+Y) f_z + s1 (Y f_x + μ τ_x) + s2 (X f_y + μ τ_y) ≤ 0
+            rows.append(s1 * Y * fx + s2 * X * fy - m * (X + Y) * fz + s1 * m * tx
+                        + s2 * m * ty + tz)
+    return rows
+
+
 def wrench_cone(half_length: float, half_width: float, mu: float) -> np.ndarray:
     """The contact wrench cone of a rectangular sole, ``A`` ``(16, 6)`` with ``A @ w <= 0``
     exactly when the wrench ``w = [f_x, f_y, f_z, τ_x, τ_y, τ_z]`` (at the sole centre, in the
     sole frame) is produced by four corner forces inside their friction cones (Caron et al.
-    2015, Eq. 4-6). Rows: friction (4), centre of pressure (4), yaw moment (8)."""
-    X, Y, m = float(half_length), float(half_width), float(mu)
-    rows = [
-        [1, 0, -m, 0, 0, 0], [-1, 0, -m, 0, 0, 0],
-        [0, 1, -m, 0, 0, 0], [0, -1, -m, 0, 0, 0],
-        [0, 0, -Y, 1, 0, 0], [0, 0, -Y, -1, 0, 0],
-        [0, 0, -X, 0, 1, 0], [0, 0, -X, 0, -1, 0],
-    ]
-    for s1 in (1.0, -1.0):
-        for s2 in (1.0, -1.0):
-            # τ_z ≥ τ_min:  −τ_z − μ(X+Y) f_z + s1 (Y f_x − μ τ_x) + s2 (X f_y − μ τ_y) ≤ 0
-            rows.append([s1 * Y, s2 * X, -m * (X + Y), -s1 * m, -s2 * m, -1.0])
-            # τ_z ≤ τ_max:  +τ_z − μ(X+Y) f_z + s1 (Y f_x + μ τ_x) + s2 (X f_y + μ τ_y) ≤ 0
-            rows.append([s1 * Y, s2 * X, -m * (X + Y), s1 * m, s2 * m, 1.0])
-    return np.asarray(rows, dtype=float)
+    2015, Eq. 4-6). Rows: friction (4), centre of pressure (4), yaw moment (8) — the
+    coefficients of :func:`wrench_cone_rows` (which are linear in ``w``)."""
+    return np.array(wrench_cone_rows(np.eye(6), float(half_length), float(half_width),
+                                     float(mu)), dtype=float) + 0.0
 
 
 def cone_margin(contact: SoleContact, w: np.ndarray) -> dict[str, np.ndarray]:
