@@ -14,6 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from ..contact import SoleContact, sole_frame_name
 from ..errors import BVHError, InvalidInputError
+from ..kinematics import robot_motion
 from ..motion import Motion
 from ..robot import Robot
 from .contacts import ContactRule, detect_contacts, estimate_floor, sole_corners
@@ -178,6 +179,31 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
     C = world_turn(up)
     if not (isinstance(mass, (int, float, np.floating)) and np.isfinite(mass) and mass > 0):
         raise InvalidInputError(f"mass must be a positive number of kg; got {mass!r}")
+    scale, unit, hip_height = _scale(bvh, C, scale)
+    robot, xml, cmap, unmatched = _skeleton_robot(bvh, name or Path(path).stem, C, scale,
+                                                  mass, hip_height, legs, urdf_path)
+    skip = is_reference_frame(bvh) if skip_first_frame is None else bool(skip_first_frame)
+    frames = bvh.frames[1:] if skip else bvh.frames
+    if frames.shape[0] < 2:
+        raise BVHError(f"{bvh.path}: a motion needs at least 2 frames; the file has "
+                       f"{bvh.frames.shape[0]}" + (" and the first (a reference pose) is skipped"
+                                                   if skip else ""))
+    q = bvh_to_q(bvh, robot.model, cmap, C, scale, frames)
+    t = np.arange(frames.shape[0]) * bvh.frame_time
+    corners = sole_corners(robot, q)
+    floor = estimate_floor(corners)
+    if ground:
+        q[:, 2] -= floor
+        corners = {s: c - np.array([0.0, 0.0, floor]) for s, c in corners.items()}
+    contact = _stance(contacts, corners, t, hip_height, 0.0 if ground else floor)
+    motion = robot_motion(robot, t, q, contact)
+    robot.bvh_info = BVHInfo(str(path), float(scale), unit, float(hip_height), up, C, skip,
+                             bvh.frame_time, floor, bool(ground), unmatched, xml, cmap)
+    return robot, motion
+
+
+def _scale(bvh: BVHFile, C: np.ndarray, scale: float | None) -> tuple[float, str, float]:
+    """``(metres per file unit, how it was found, hip height [m])``."""
     if scale is None:
         scale, unit, h_units = detect_scale(bvh, C)
         log.info("%s: units detected as %s (hip height %.3g m)", bvh.path, unit, h_units * scale)
@@ -187,13 +213,19 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
             raise BVHError(f"scale={scale!r} must be a positive number of metres per file unit")
         unit = "given"
         h_units = hip_height_units(bvh, C)
-    hip_height = h_units * scale
+    return float(scale), unit, h_units * scale
+
+
+def _skeleton_robot(bvh: BVHFile, name: str, C: np.ndarray, scale: float, mass: float,
+                    hip_height: float, legs, urdf_path
+                    ) -> tuple[Robot, str, tuple[ChannelJoint, ...], list]:
+    """The skeleton as a :class:`Robot` (legs and sole rectangles given), with its URDF text,
+    channel map and the segments de Leva's table does not name."""
     chains, leg_spec = _robot_legs(bvh, legs, C)
     soles = {s: (ch.ankle, measure_sole(bvh, ch, C, scale)) for s, ch in chains.items()}
     n_extra = sum(max(len(j.channels) - 1, 0) for j in bvh.joints[1:])
     inertias, unmatched = segment_inertias(bvh, C, scale, mass, n_extra)
-    robot_name = name or Path(path).stem
-    xml, cmap = skeleton_urdf(bvh, robot_name, C, scale, inertias, soles, hip_height)
+    xml, cmap = skeleton_urdf(bvh, name, C, scale, inertias, soles, hip_height)
     model = pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
     visual = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.VISUAL)
     collision = pin.buildGeomFromUrdfString(model, xml, pin.GeometryType.COLLISION)
@@ -201,33 +233,19 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
                      for s, (_, sole) in soles.items()}
     if urdf_path is not None:
         Path(urdf_path).write_text(xml)
-    robot = Robot(robot_name, model, visual, leg_spec, urdf_path=Path(urdf_path) if urdf_path
+    robot = Robot(name, model, visual, leg_spec, urdf_path=Path(urdf_path) if urdf_path
                   else None, contacts=sole_contacts, collision_model=collision)
-    skip = is_reference_frame(bvh) if skip_first_frame is None else bool(skip_first_frame)
-    frames = bvh.frames[1:] if skip else bvh.frames
-    if frames.shape[0] < 2:
-        raise BVHError(f"{bvh.path}: a motion needs at least 2 frames; the file has "
-                       f"{bvh.frames.shape[0]}" + (" and the first (a reference pose) is skipped"
-                                                   if skip else ""))
-    q = bvh_to_q(bvh, model, cmap, C, scale, frames)
-    t = np.arange(frames.shape[0]) * bvh.frame_time
-    corners = sole_corners(robot, q)
-    floor = estimate_floor(corners)
-    if ground:
-        q[:, 2] -= floor
-        corners = {s: c - np.array([0.0, 0.0, floor]) for s, c in corners.items()}
+    return robot, xml, cmap, unmatched
+
+
+def _stance(contacts, corners: dict[str, np.ndarray], t: np.ndarray, hip_height: float,
+            floor: float) -> dict[str, np.ndarray]:
+    """The stance masks: detected from the sole corners by a rule, or the ones given."""
     if contacts is None or isinstance(contacts, ContactRule):
-        contact = detect_contacts(corners, t, hip_height, contacts or ContactRule(),
-                                  0.0 if ground else floor)
-    else:
-        contact = {s: np.asarray(contacts[s], dtype=bool) for s in contacts}
-        if set(contact) != {"left", "right"} or any(c.shape != t.shape for c in contact.values()):
-            raise InvalidInputError(
-                f"contacts= must map 'left' and 'right' to ({t.size},) bool arrays (one per "
-                f"kept frame); got {({k: np.shape(v) for k, v in contacts.items()})}")
-    names = tuple(model.names)[1:]
-    motion = Motion(t=t, joint_names=names, q=q, contact=contact, base_nq=7,
-                    joint_nq=tuple(model.joints[i].nq for i in range(1, model.njoints)))
-    robot.bvh_info = BVHInfo(str(path), float(scale), unit, float(hip_height), up, C, skip,
-                             bvh.frame_time, floor, bool(ground), unmatched, xml, cmap)
-    return robot, motion
+        return detect_contacts(corners, t, hip_height, contacts or ContactRule(), floor)
+    contact = {s: np.asarray(contacts[s], dtype=bool) for s in contacts}
+    if set(contact) != {"left", "right"} or any(c.shape != t.shape for c in contact.values()):
+        raise InvalidInputError(
+            f"contacts= must map 'left' and 'right' to ({t.size},) bool arrays (one per "
+            f"kept frame); got {({k: np.shape(v) for k, v in contacts.items()})}")
+    return contact
