@@ -46,6 +46,7 @@ import pinocchio as pin
 
 from ..contact import SoleContact
 from ..errors import InvalidInputError, LegMatchError, SolverError
+from ..kinematics import anchored_base_offsets, frame_placements
 from ..motion import Motion, differentiate
 from ..robot import SIDES, Robot
 
@@ -170,13 +171,10 @@ def leg_ratio(demonstrator: Robot, imitator: Robot) -> float:
 
 def _frame_poses(robot: Robot, q: np.ndarray, frames: list[str]) -> dict[str, np.ndarray]:
     """World placements ``{frame: (T, 4, 4)}`` of ``frames`` along ``q`` ``(T, nq)``."""
-    m, d = robot.model, robot.model.createData()
-    ids = {f: robot.frame_id(f) for f in frames}
-    out = {f: np.empty((len(q), 4, 4)) for f in frames}
-    for k, qk in enumerate(q):
-        pin.framesForwardKinematics(m, d, qk)
-        for f, i in ids.items():
-            out[f][k] = d.oMf[i].homogeneous
+    out = {}
+    for f, P in frame_placements(robot, q, frames).items():
+        out[f] = np.tile(np.eye(4), (len(P.translation), 1, 1))
+        out[f][:, :3, :3], out[f][:, :3, 3] = P.rotation, P.translation
     return out
 
 
@@ -184,40 +182,10 @@ def _anchor_offsets(rel: dict[str, np.ndarray], contact: Mapping[str, np.ndarray
                     ) -> np.ndarray:
     """Base translations ``(T, 3)`` that put the soles ``rel`` ``{side: (T, 3)}`` (positions
     with the base translation at zero) on the floor by the anchor rule of :func:`anchor_base`."""
-    T = len(rel["left"])
-    c = {s: np.asarray(contact[s], bool) for s in SIDES}
-    z = np.full(T, np.nan)
-    for i in range(T):
-        down = [rel[s][i, 2] for s in SIDES if c[s][i]]
-        if down:
-            z[i] = -min(down)
-    if np.all(np.isnan(z)):
+    off = anchored_base_offsets(rel, contact)
+    if np.all(np.isnan(off[:, 2])):
         raise InvalidInputError("the demonstration has no stance knot: nothing to stand on")
-    ok = ~np.isnan(z)
-    z = np.interp(np.arange(T), np.flatnonzero(ok), z[ok])
-    xy = np.zeros((T, 2))
-    anchor, foot = None, np.zeros(2)
-    since = {s: -1 for s in SIDES}
-    for i in range(T):
-        for s in SIDES:
-            since[s] = (since[s] if since[s] >= 0 else i) if c[s][i] else -1
-        if anchor is None or not c[anchor][i]:
-            cands = [s for s in SIDES if c[s][i]]
-            if cands:
-                new = min(cands, key=lambda s: since[s])
-                if i == 0:
-                    foot = rel[new][0, :2].copy()
-                elif c[new][i - 1]:  # already down: it stays where it stood at i − 1
-                    foot = xy[i - 1] + rel[new][i - 1, :2]
-                else:  # just landed: where it touches down, the base continuing from i − 1
-                    foot = xy[i - 1] + rel[new][i, :2]
-                anchor = new
-        if anchor is not None and c[anchor][i]:
-            xy[i] = foot - rel[anchor][i, :2]
-        else:
-            xy[i] = xy[i - 1] if i > 0 else 0.0  # flight: keep (no ballistic model)
-    xy -= xy[0]
-    return np.column_stack([xy, z])
+    return off
 
 
 def anchor_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray]) -> np.ndarray:
