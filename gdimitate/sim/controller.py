@@ -130,6 +130,27 @@ class _Layout:
     sense: np.ndarray
 
 
+@dataclass(frozen=True)
+class _Kinematics:
+    """Pinocchio's quantities at one simulated state: base rotation ``Rb``, angular velocity
+    ``wb`` and drift (world); base Jacobian ``Jb`` (angular rows, world-aligned); per foot
+    (placement, LWA velocity, local velocity, local drift, classical LWA drift, local and LWA
+    Jacobians); centre of mass, its velocity, drift and Jacobian; mass matrix ``M`` and
+    non-linear effects ``h``."""
+
+    Rb: np.ndarray
+    wb: np.ndarray
+    base_drift: np.ndarray
+    Jb: np.ndarray
+    feet: dict
+    com: np.ndarray
+    vcom: np.ndarray
+    com_drift: np.ndarray
+    Jcom: np.ndarray
+    M: np.ndarray
+    h: np.ndarray
+
+
 class TrackingController:
     """The QP tracking controller of the module docstring for one robot and its MuJoCo model.
 
@@ -197,12 +218,19 @@ class TrackingController:
     # ------------------------------------------------------------------ the QP
     def step(self, q: np.ndarray, v: np.ndarray, ref: Sample) -> ControlOutput:
         """Torques for the simulated state ``(q, v)`` tracking the plan sample ``ref``."""
-        m, d, g = self.model, self.data, self.gains
+        k = self._kinematics(q, v)
+        stance = [s for s in SIDES if ref.stance[s]]
+        rows, rhs, wts = self._tasks(q, v, ref, k)
+        return self._solve(stance, rows, rhs, wts, ref, k)
+
+    def _kinematics(self, q: np.ndarray, v: np.ndarray) -> _Kinematics:
+        """Pinocchio's quantities at the simulated state (the drifts J̇v from a pass with zero
+        acceleration, read before crba/nle overwrite the data)."""
+        m, d = self.model, self.data
         nv = self.nv
         pin.forwardKinematics(m, d, q, v, np.zeros(nv))
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
-        # drifts need d.v/d.a of the zero-acceleration pass: read them before crba/nle
         Rb = d.oMi[self.base_id].rotation.copy()
         wb = Rb @ d.v[self.base_id].angular
         base_drift = Rb @ d.a[self.base_id].angular
@@ -223,7 +251,13 @@ class TrackingController:
         M = np.triu(M)
         M = M + np.triu(M, 1).T
         h = pin.nonLinearEffects(m, d, q, v)
+        return _Kinematics(Rb, wb, base_drift, Jb, feet, com, vcom, com_drift, Jcom, M, h)
 
+    def _tasks(self, q: np.ndarray, v: np.ndarray, ref: Sample,
+               k: _Kinematics) -> tuple[list, list, list]:
+        """The task rows ``J``, right-hand sides ``a* − J̇v`` and weights (module docstring);
+        updates the stance anchors."""
+        m, g = self.model, self.gains
         rows, rhs, wts = [], [], []
 
         def task(J: np.ndarray, drift: np.ndarray, target: np.ndarray, w: float) -> None:
@@ -232,14 +266,14 @@ class TrackingController:
             wts.append(np.full(J.shape[0], w))
 
         kp, kd = self.pd["com"]
-        task(Jcom, com_drift, ref.com_acc + kp * (ref.com - com) + kd * (ref.com_vel - vcom),
-             g.w_com)
+        task(k.Jcom, k.com_drift,
+             ref.com_acc + kp * (ref.com - k.com) + kd * (ref.com_vel - k.vcom), g.w_com)
         kp, kd = self.pd["base"]
-        err = pin.log3(ref.base_rot @ Rb.T)
-        task(Jb, base_drift, ref.base_alpha + kp * err + kd * (ref.base_omega - wb), g.w_base)
-        stance = [s for s in SIDES if ref.stance[s]]
+        err = pin.log3(ref.base_rot @ k.Rb.T)
+        task(k.Jb, k.base_drift, ref.base_alpha + kp * err + kd * (ref.base_omega - k.wb),
+             g.w_base)
         for s in SIDES:
-            oMf, v_lwa, v_loc, a_loc, a_cls, J_loc, J_lwa = feet[s]
+            oMf, v_lwa, v_loc, a_loc, a_cls, J_loc, J_lwa = k.feet[s]
             if ref.stance[s]:
                 if self.anchor[s] is None:
                     self.anchor[s] = oMf.copy()
@@ -258,7 +292,13 @@ class TrackingController:
         task(self.select, np.zeros(self.act.size),
              ref.a[self.act] + kp * dq[self.act] + kd * (ref.v[self.act] - v[self.act]),
              g.w_posture)
+        return rows, rhs, wts
 
+    def _solve(self, stance: list[str], rows: list, rhs: list, wts: list, ref: Sample,
+               k: _Kinematics) -> ControlOutput:
+        """Assemble the QP (cost of the tasks and the wrench regularisation; the unactuated
+        dynamics, torque limits and cones) and solve it with DAQP."""
+        nv = self.nv
         ns = len(stance)
         n = nv + 6 * ns
         lay = self._layout(tuple(stance))
@@ -272,9 +312,10 @@ class TrackingController:
             f[nv + 6 * i: nv + 6 * i + 6] = -self.wrench_weight * ref.wrench[s]
         # dynamics: the full generalised force M a + h - Σ Jc^T w = Dyn x + h
         Dyn = np.empty((nv, n))
-        Dyn[:, :nv] = M
+        Dyn[:, :nv] = k.M
         for i, s in enumerate(stance):
-            Dyn[:, nv + 6 * i: nv + 6 * i + 6] = -feet[s][5].T
+            Dyn[:, nv + 6 * i: nv + 6 * i + 6] = -k.feet[s][5].T
+        h = k.h
         A, up, lo = lay.A.copy(), lay.up.copy(), lay.lo.copy()
         nu_, nl = self.unact.size, self.lim_idx.size
         A[:nu_] = Dyn[self.unact]

@@ -241,6 +241,27 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
     if set(contacts) != set(SIDES) or not all(isinstance(c, SoleContact)
                                               for c in contacts.values()):
         raise SimModelError(f"{robot.name}: simulation needs flat-foot contacts on both feet")
+    spec, mu, solref = _world_spec(robot, options, contacts)
+    b = _Builder(robot, spec, options.min_inertia)
+    for k in b.children[0]:
+        b.add(k, spec.worldbody, [])
+    _add_soles(robot, b, options, contacts, mu, solref)
+    actuated = _add_actuators(robot.model, spec, b)
+    try:
+        mjm = spec.compile()
+    except ValueError as e:
+        raise SimModelError(f"{robot.name}: MuJoCo rejected the model built from its "
+                            f"Pinocchio model: {e}") from None
+    sim = SimModel(robot, spec, mjm, {s: contacts[s] for s in SIDES}, actuated, options,
+                   frozen=sorted(b.frozen))
+    sim.inertia_changes = dict(b.inertia_changes)
+    return sim
+
+
+def _world_spec(robot: Robot, options: ModelOptions,
+                contacts: dict[str, SoleContact]) -> tuple[mujoco.MjSpec, float, list[float]]:
+    """A new spec with the simulation options and the floor; returns it, the floor's
+    friction ``mu`` (the soles' one) and the contacts' ``solref``."""
     m = robot.model
     spec = mujoco.MjSpec()
     spec.modelname = str(robot.name)
@@ -266,9 +287,14 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1],
                             friction=[mu, 0.0, 0.0], contype=1, conaffinity=2, condim=3,
                             solref=solref)
-    b = _Builder(robot, spec, options.min_inertia)
-    for k in b.children[0]:
-        b.add(k, spec.worldbody, [])
+    return spec, mu, solref
+
+
+def _add_soles(robot: Robot, b: _Builder, options: ModelOptions,
+               contacts: dict[str, SoleContact], mu: float, solref: list[float]) -> None:
+    """Each foot's collision box (the sole rectangle, ``box_height`` thick, above the sole
+    frame) and a site at the sole frame."""
+    m = robot.model
     for s in SIDES:
         c = contacts[s]
         fr = m.frames[robot.frame_id(c.frame)]
@@ -284,6 +310,11 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
                       quat=_quat_wxyz(P.rotation), friction=[mu, 0.0, 0.0], contype=2,
                       conaffinity=1, condim=3, solref=solref, mass=0.0, density=0.0)
         body.add_site(name=f"{s}_sole", pos=P.translation, quat=_quat_wxyz(P.rotation))
+
+
+def _add_actuators(m: pin.Model, spec: mujoco.MjSpec, b: _Builder) -> list[int]:
+    """A motor on every 1-DoF joint with a positive effort limit (ctrl and force ranges ±
+    the limit where finite); returns their Pinocchio joint ids in actuator order."""
     actuated = []
     for j in range(1, m.njoints):
         if _is_base(m, j) or m.joints[j].nv != 1 or j in b.frozen:
@@ -302,15 +333,7 @@ def build_model(robot: Robot, options: ModelOptions = ModelOptions(),
         else:
             act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
         actuated.append(j)
-    try:
-        mjm = spec.compile()
-    except ValueError as e:
-        raise SimModelError(f"{robot.name}: MuJoCo rejected the model built from its "
-                            f"Pinocchio model: {e}") from None
-    sim = SimModel(robot, spec, mjm, {s: contacts[s] for s in SIDES}, actuated, options,
-                   frozen=sorted(b.frozen))
-    sim.inertia_changes = dict(b.inertia_changes)
-    return sim
+    return actuated
 
 
 class SimModel:
