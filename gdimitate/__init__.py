@@ -69,11 +69,11 @@ if TYPE_CHECKING:
     from .metrics import ForceDirection
     from .motion import Motion
     from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
+    from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
     from .result import AdaptationReport, AdaptedMotion
     from .retarget import Limits, StreamingAdaptor, Weights
     from .robot import Leg, Robot
     from .walk import walk
-    from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
 
 __version__ = "0.1.0"
 

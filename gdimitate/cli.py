@@ -25,10 +25,14 @@ import json
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
-from .errors import GdimitateError, LegDetectionError
+from .errors import GdimitateError, LegDetectionError, OscillatorError
 from .safety import atomic_write, prepare_output_dir, removed_on_failure
 from .verdict import EXIT_NOT_FEASIBLE
+
+if TYPE_CHECKING:
+    from .types import ForceModel
 
 __all__ = ["EXIT_STATUS", "main"]
 
@@ -197,7 +201,7 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
         robot, motion, forces = demo.robot, demo.motion, demo.forces
         print(f"read {demo.source}: {demo.note}", flush=True)
         imitator = _robot(a.imitator, a)
-    force = getattr(a, "force", "segment")
+    force = cast(ForceModel, getattr(a, "force", "segment"))  # one of argparse's choices
     print(f"adapting {motion.T} frames of {robot.name} → {imitator.name} "
           f"(method={a.method}, force={force}) …", flush=True)
     options = {"forces": forces} if a.method == "optimal" and forces is not None else {}
@@ -316,6 +320,9 @@ def _cmd_entrain(a: argparse.Namespace) -> int:
               f"({motion.T} frames) and replaying {a.duration or motion.t[-1]:.2f} s free …",
               flush=True)
         cpg = entrain(robot, motion, duration=a.duration, **options)
+        check = cpg.check
+        if check is None:  # entrain always checks its replay
+            raise OscillatorError("entrain returned no replay check")
         with atomic_write(out / "oscillator_params.json") as tmp:
             tmp.write_text(cpg.result.to_json())
         with atomic_write(out / "replay_joints.csv") as tmp:
@@ -325,17 +332,17 @@ def _cmd_entrain(a: argparse.Namespace) -> int:
         with atomic_write(out / "report.json") as tmp:
             tmp.write_text(json.dumps(
                 {"robot": robot.name, "learned_frequency_hz": float(cpg.result.frequency),
-                 "replay_check": cpg.check.to_dict(), "constant_angles_rad": cpg.constant,
+                 "replay_check": check.to_dict(), "constant_angles_rad": cpg.constant,
                  "per_joint": cpg.report}, indent=2, default=float))
     print(f"wrote {out}/oscillator_params.json, replay_joints.csv, replay_motion.npz, "
           f"report.json\n  learned frequency {cpg.result.frequency:.4f} Hz")
     for j, r in cpg.report.items():
-        c = cpg.check.signals[j]
+        c = check.signals[j]
         print(f"  {j:<12} nRMSE entrained {r['nrmse_entrained'] * 100:5.2f} %   teacher fit "
               f"{r['teacher_fit_nrmse'] * 100:5.2f} %   free-running frequency "
               f"{c['frequency_hz']:.3f} Hz   amplitude ratio {c['amplitude_ratio']:.2f}")
-    print(f"  {cpg.check.line()}")
-    if not cpg.check.passed:
+    print(f"  {check.line()}")
+    if not check.passed:
         print(f"  result written, but the replay check failed: exit status {EXIT_NOT_FEASIBLE}")
         return EXIT_NOT_FEASIBLE
     return 0

@@ -169,6 +169,14 @@ def _joint_columns(robot: Robot, q: np.ndarray) -> tuple[list[str], np.ndarray]:
     return names, np.column_stack(cols) if cols else np.zeros((len(q), 0))
 
 
+def _require_pose(pose: np.ndarray | None, robot: Robot, where: object) -> np.ndarray:
+    """The base pose ``(T, 7)``, or FileFormatError: a moving base needs one."""
+    if pose is None:
+        raise FileFormatError(f"{where}: no base pose columns for robot {robot.name!r}, whose "
+                              f"base is {robot.base!r}")
+    return pose
+
+
 def _q_from_columns(robot: Robot, pose: np.ndarray | None, joints: np.ndarray,
                     names: list[str], where: object) -> np.ndarray:
     """Pinocchio q ``(T, nq)`` from a base pose ``(T, 7)`` and joint columns."""
@@ -182,9 +190,11 @@ def _q_from_columns(robot: Robot, pose: np.ndarray | None, joints: np.ndarray,
         else:
             q[:, jm.idx_q] = joints[:, k]
     if robot.base == "free":
+        pose = _require_pose(pose, robot, where)
         check_base_quaternion(pose, 7, where)
         q[:, :7] = pose
     elif robot.base == "planar":
+        pose = _require_pose(pose, robot, where)
         R = [pin.Quaternion(*p[[6, 3, 4, 5]]).normalized().matrix() for p in pose]
         q[:, robot.idx_q("base_x")] = pose[:, 0]
         q[:, robot.idx_q("base_z")] = pose[:, 2]

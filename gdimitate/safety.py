@@ -32,6 +32,7 @@ import xml.etree.ElementTree as ET
 import zipfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 
@@ -116,9 +117,9 @@ def check_positive(name: str, value: object, *, upper: float | None = None,
     """``value`` as a float if it is a finite real number > 0 (≥ 0 with ``zero=True``);
     else ``error`` naming ``name``. Above ``upper``: :class:`ResourceLimitError` stating the
     limit."""
-    bad = isinstance(value, bool | str | bytes) or np.iscomplexobj(value)
+    bad = isinstance(value, bool | str | bytes) or np.iscomplexobj(cast(Any, value))
     try:
-        v = float(value)  # type: ignore[arg-type]
+        v = float(cast(Any, value))  # anything float() takes; the rest is refused below
     except (TypeError, ValueError):
         bad = True
     if bad:
@@ -138,7 +139,7 @@ def check_count(name: str, value: object, lo: int, hi: int,
         isinstance(value, float | np.floating) and float(value).is_integer())
     if isinstance(value, bool) or not integral:
         raise error(f"{name} must be an integer; got {value!r}")
-    v = int(value)  # type: ignore[arg-type]
+    v = int(cast(Any, value))  # an integral int, numpy integer or float (checked above)
     if v < lo:
         raise error(f"{name} must be >= {lo}; got {v}")
     if v > hi:

@@ -88,7 +88,8 @@ def solver_record(solver: Any) -> dict[str, Any] | None:
     iterations, time, elastic, knots, variables, constraints, unmet) as plain JSON types."""
     if solver is None:
         return None
-    d = asdict(solver) if is_dataclass(solver) else dict(solver)
+    d = asdict(solver) if is_dataclass(solver) and not isinstance(solver, type) \
+        else dict(solver)
     d["unmet"] = [{"name": u["name"] if isinstance(u, dict) else u.name,
                    "violation": float(u["violation"] if isinstance(u, dict) else u.violation),
                    "knot": int(u["knot"] if isinstance(u, dict) else u.knot)}

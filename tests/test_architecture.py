@@ -15,8 +15,8 @@ import gdimitate
 
 PKG = Path(gdimitate.__file__).resolve().parent
 
-#: cycles left inside the optimal adaptor's own package (another issue's files; see the xfail)
-KNOWN_CYCLES = [["gdimitate.retarget.solve", "gdimitate.retarget.streaming"]]
+#: cycles allowed for now (none: the last one, retarget.solve <-> retarget.streaming, is gone)
+KNOWN_CYCLES: list[list[str]] = []
 
 ENGINES = ("mujoco", "meshcat", "dask", "numba", "pink", "matplotlib")
 
@@ -161,9 +161,6 @@ def test_no_import_cycle_besides_the_listed_ones():
         " | ".join(_describe(graph, c) for c in found)
 
 
-@pytest.mark.xfail(strict=True, reason="retarget/solve.py imports retarget/streaming.py "
-                   "(adapt_per_frame) and streaming imports solve's functions: inside the "
-                   "optimal adaptor's package (issue 17's files), left for its redesign")
 def test_no_import_cycle_at_all():
     graph = gdimitate_graph()
     found = cycles(graph)
@@ -232,10 +229,10 @@ MOVED = {"gdimitate.demo": "gdimitate.apps.demo", "gdimitate.paper": "gdimitate.
 
 def test_scenario_code_is_imported_only_by_the_command_line():
     """``gdimitate.apps`` (scenario code, not API) is imported inside the package only by the
-    CLI, by itself, by the deprecated aliases of its old paths and by ``gdimitate/__init__``
-    (the documented name ``paper_case``, lazily)."""
+    CLI, by itself, by the deprecated aliases of its old paths (``python -m gdimitate.viz``
+    included) and by ``gdimitate/__init__`` (the documented name ``paper_case``, lazily)."""
     graph = gdimitate_graph()
-    allowed = {"gdimitate", "gdimitate.cli", *MOVED}
+    allowed = {"gdimitate", "gdimitate.cli", "gdimitate.viz.__main__", *MOVED}
     users = {m: sorted(t for t in deps if t == "gdimitate.apps" or
                        t.startswith("gdimitate.apps."))
              for m, deps in graph.items()
@@ -269,12 +266,11 @@ def test_old_scenario_paths_warn_and_are_the_moved_modules():
 #: the longest function (or method) body, signature and docstring included [lines]
 MAX_FUNCTION_LINES = 80
 
-#: functions still over MAX_FUNCTION_LINES, each in a file another engineer is splitting (issue
-#: 19); the coordinator empties this list as they land. Keys: "path:qualified.name".
-LONG_FUNCTIONS_ALLOWED = {
-    "gdimitate/bvh/reader.py:read_bvh": "model layer (loaders)",
-    "gdimitate/sim/controller.py:TrackingController.step": "gdimitate/sim/",
-    "gdimitate/sim/model.py:build_model": "gdimitate/sim/",
+#: functions allowed over MAX_FUNCTION_LINES for now, each with its owner (issue 19 listed the
+#: ones being split elsewhere; a stale entry warns). Keys: "path:qualified.name".
+LONG_FUNCTIONS_ALLOWED: dict[str, str] = {
+    # emptied: read_bvh (97 lines), TrackingController.step (97) and build_model (86) were
+    # split by their owners
 }
 
 
@@ -334,3 +330,57 @@ def test_no_function_over_80_lines_besides_the_allowed_ones():
                       f"LONG_FUNCTIONS_ALLOWED: {stale}", UserWarning, stacklevel=1)
     over = {k: n for k, n in long.items() if k not in LONG_FUNCTIONS_ALLOWED}
     assert not over, f"functions over {MAX_FUNCTION_LINES} lines: {over}"
+
+
+# ------------------------------------------------------------------ static types
+#: files mypy still finds errors in, each being rewritten by another engineer (issue 19); the
+#: test prints them with their error counts. An error in any other file fails the test; a file
+#: listed here that has become clean warns so that it is removed. The coordinator empties it.
+MYPY_PENDING: tuple[str, ...] = (
+    "gdimitate/audit/periodic.py", "gdimitate/bvh/reader.py", "gdimitate/bvh/skeleton.py",
+    "gdimitate/c3d/plates.py", "gdimitate/contact.py", "gdimitate/demonstration.py",
+    "gdimitate/kinematics.py", "gdimitate/legs.py", "gdimitate/library.py",
+    "gdimitate/loading.py", "gdimitate/meshes.py", "gdimitate/metrics.py",
+    "gdimitate/motion.py", "gdimitate/opensim/functions.py", "gdimitate/opensim/grf.py",
+    "gdimitate/opensim/joints.py", "gdimitate/opensim/model.py",
+    "gdimitate/opensim/treadmill.py", "gdimitate/opensim/trc.py", "gdimitate/opensim/urdf.py",
+    "gdimitate/planar/analytic.py", "gdimitate/planar/sagittal.py",
+    "gdimitate/planar/walking.py", "gdimitate/result.py", "gdimitate/retarget/codegen.py",
+    "gdimitate/retarget/frameref.py", "gdimitate/retarget/knot.py",
+    "gdimitate/retarget/limits.py", "gdimitate/retarget/parts/body.py",
+    "gdimitate/retarget/problem.py", "gdimitate/retarget/receding.py",
+    "gdimitate/retarget/solve.py", "gdimitate/retarget/streaming.py",
+    "gdimitate/retarget/targets.py", "gdimitate/retarget/threads.py",
+    "gdimitate/sim/animation.py", "gdimitate/sim/controller.py", "gdimitate/sim/model.py",
+    "gdimitate/sim/periodic.py", "gdimitate/sim/reference.py", "gdimitate/sim/simulate.py",
+    "gdimitate/symbolic.py", "gdimitate/urdfcheck.py", "gdimitate/urdfgen.py",
+    "gdimitate/walk/__init__.py", "gdimitate/walk/loop.py", "gdimitate/walk/plots.py",
+    "gdimitate/walk/result.py", "gdimitate/wrenches.py",
+)
+
+
+def test_mypy_passes_on_the_package():
+    """``python -m mypy`` (configured in pyproject.toml: ``files = ["gdimitate"]``, untyped
+    dependencies ignored by name) finds no error outside the printed pending files."""
+    pytest.importorskip("mypy", reason="mypy is in the [test] extra")
+    root = PKG.parent
+    run = subprocess.run([sys.executable, "-m", "mypy", "--no-error-summary",
+                          "--cache-dir", str(root / ".mypy_cache")],
+                         cwd=root, capture_output=True, text=True, timeout=900)
+    assert run.returncode in (0, 1), run.stderr + run.stdout  # 2: mypy itself failed
+    errors = [line for line in run.stdout.splitlines() if ": error: " in line]
+    per_file: dict[str, int] = {}
+    for line in errors:
+        path = line.split(":", 1)[0]
+        per_file[path] = per_file.get(path, 0) + 1
+    print(f"mypy: {len(errors)} errors; files pending (errors):")
+    for path in MYPY_PENDING:
+        print(f"  {path} ({per_file.get(path, 0)})")
+    clean = [p for p in MYPY_PENDING if p not in per_file]
+    if clean:
+        import warnings
+
+        warnings.warn(f"mypy finds no error in {clean}: remove them from MYPY_PENDING",
+                      UserWarning, stacklevel=1)
+    new = [line for line in errors if line.split(":", 1)[0] not in MYPY_PENDING]
+    assert not new, "mypy errors:\n" + "\n".join(new)

@@ -4,7 +4,8 @@
 numbers), ``cases`` (the paper's three planar cases: robots and the generated walk),
 ``examples`` (named demonstration/adaptation pairs for ``gdimitate view`` and the notebooks),
 ``baselines`` (the kinematic retargeters the benchmarks compare against) and ``scenarios``
-(small plans for the physics check's tests). Their names may change between releases without
+(small plans for the physics check's tests), ``viewer_picture`` (the README's picture of the
+viewer). Their names may change between releases without
 a deprecation period.
 
 Only the command line (:mod:`gdimitate.cli`), ``benchmarks/``, ``notebooks/``, ``docs/`` and

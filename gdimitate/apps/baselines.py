@@ -201,7 +201,7 @@ def anchor_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray]) 
     contacts = robot.require_contacts()
     frames = [contacts[s].frame for s in SIDES]
     P = _frame_poses(robot, q, frames)
-    rel = {s: P[contacts[s].frame][:, :3, 3] for s in SIDES}
+    rel: dict[str, np.ndarray] = {s: P[contacts[s].frame][:, :3, 3] for s in SIDES}
     q[:, :3] = _anchor_offsets(rel, contact)
     return q
 
@@ -384,7 +384,8 @@ class _PinkIK:
         q = imitator.neutral.copy()
         q[:2] = np.mean([kp.targets[f"hip_{s}"][0, :2, 3] for s in SIDES], axis=0)
         self.config = pink.Configuration(m, m.createData(), q)
-        self.contact = {s: np.asarray(demo.contact[s], bool) for s in SIDES}
+        self.contact: dict[str, np.ndarray] = {s: np.asarray(demo.contact[s], bool)
+                                               for s in SIDES}
         self.held: dict[str, np.ndarray] = {}
         self.relaxed = np.zeros(demo.T, bool)
 
@@ -419,9 +420,9 @@ class _PinkIK:
 
     def held_error(self, k: int) -> float:
         """The largest pose error (SE(3) log norm) of a stance foot from its hold at frame k."""
-        return max((np.linalg.norm(pin.log6(self.config.get_transform_frame_to_world(
+        return float(max((np.linalg.norm(pin.log6(self.config.get_transform_frame_to_world(
             self.kp.frames[f"sole_{s}"]).actInv(pin.SE3(self.held[s]))).vector)
-            for s in SIDES if self.contact[s][k]), default=0.0)
+            for s in SIDES if self.contact[s][k]), default=0.0))
 
     def solve(self, k: int, soft: list, hard: list, dt: float) -> np.ndarray:
         """One QP's velocity: the held feet as equality constraints, as costs where the QP
@@ -450,7 +451,6 @@ class _PinkIK:
 
     def residual(self) -> float:
         """The largest distance [m] of a hip, knee or sole frame from its task's target."""
-        return max(np.linalg.norm(self.config.get_transform_frame_to_world(self.kp.frames[r])
-                                  .translation - self.tasks[r].transform_target_to_world
-                                  .translation)
-                   for r in self.kp.frames if r.startswith(("hip", "knee", "sole")))
+        return float(max(np.linalg.norm(self.config.get_transform_frame_to_world(
+            self.kp.frames[r]).translation - self.tasks[r].transform_target_to_world.translation)
+            for r in self.kp.frames if r.startswith(("hip", "knee", "sole"))))

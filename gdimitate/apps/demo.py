@@ -22,6 +22,7 @@ import numpy as np
 if TYPE_CHECKING:  # the command line reads DEFAULT_IMITATOR without loading Pinocchio
     from ..motion import Motion
     from ..robot import Robot
+    from ..types import AdaptMethod
 
 __all__ = ["DEFAULT_IMITATOR", "default_demonstration", "run_demo"]
 
@@ -69,7 +70,8 @@ def _write_html(path: Path, demo_robot: Robot, demo: Motion, imit: Robot, sim, L
 
 
 def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT_IMITATOR,
-             method: str = "optimal", log=print, rate: float = DEMO_RATE) -> dict[str, Any]:
+             method: AdaptMethod = "optimal", log=print, rate: float = DEMO_RATE
+             ) -> dict[str, Any]:
     """Run the main job and write its files into ``out``; return the summary dict.
 
     ``imitator``: a library name or a :class:`Robot` (``"hoap2"`` for the planar HOAP-2-sized

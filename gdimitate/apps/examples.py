@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 from ..errors import UnknownNameError
 from ..library import list_robots
+from ..types import AdaptMethod
 from .cases import PAPER_CASES
 
 if TYPE_CHECKING:  # the command line reads EXAMPLES without loading Pinocchio
@@ -38,7 +39,7 @@ def _names() -> list[str]:
 EXAMPLES = _names()
 
 
-def example(name: str = "human-walk", method: str = "analytic") -> Example:
+def example(name: str = "human-walk", method: AdaptMethod = "analytic") -> Example:
     """Build a named example (see the module docstring) with the given adaptor method."""
     from ..adapt import adapt
     from ..gait import human_walk

@@ -94,7 +94,7 @@ def run_paper(out: str | Path, log=print) -> dict[str, Any]:
         plots.plot_com(tracks, title, out / f"case_{name}_com.png")
         _, ang = leg_angles(o["demo"], o["motion"].q)
         dl, il = o["demo"].legs["left"], o["imit"].legs["left"]
-        args = {sd: eq1(ang[sd][:, 0], ang[sd][:, 1], (dl.thigh, dl.shank),
+        args: dict[str, np.ndarray] = {sd: eq1(ang[sd][:, 0], ang[sd][:, 1], (dl.thigh, dl.shank),
                         (il.thigh, il.shank)).argument for sd in SIDES}
         plots.plot_eq1_argument(o["motion"].t, args, title, out / f"case_{name}_eq1_argument.png")
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

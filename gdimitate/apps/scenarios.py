@@ -42,14 +42,18 @@ def split_wrenches(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
     ``rnea(q, v, a)``. The norm is Σ ‖f‖² + ‖τ‖²/r², r = 10 % of the narrowest sole
     half-width: moments are dear, so a centre of mass over one foot shifts the normal forces
     onto that foot rather than loading the soles' edges. ``motion`` needs ``v`` and ``a``."""
+    if motion.v is None or motion.a is None:
+        raise SimulationError("split_wrenches needs the motion's v and a "
+                              "(gdimitate.motion.differentiate)")
+    V, A = motion.v, motion.a
     m, d = robot.model, robot.model.createData()
     contacts = robot.require_contacts()
     fids = {s: m.getFrameId(contacts[s].frame) for s in SIDES}
     un = _unactuated(robot)
-    out = {s: np.zeros((motion.T, 6)) for s in SIDES}
+    out: dict[str, np.ndarray] = {s: np.zeros((motion.T, 6)) for s in SIDES}
     lever = 0.1 * min(c.half_width for c in contacts.values())
     for k in range(motion.T):
-        q, v, a = motion.q[k], motion.v[k], motion.a[k]
+        q, v, a = motion.q[k], V[k], A[k]
         tau = pin.rnea(m, d, q, v, a)
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)

@@ -250,8 +250,8 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
     base_check = add(_make("base_residual", res, tol.base_residual, "max", "N", weight))
 
     # joints
-    joints, unlimited = _joint_checks(robot, motion, tau, fd, tol, add)
-    vc = add(_velocity_consistency(motion, fd, tol))
+    joints, unlimited = _joint_checks(robot, motion, motion.v, tau, fd, tol, add)
+    vc = add(_velocity_consistency(motion.t, motion.v, motion.a, fd, tol))
 
     # feet
     feet, pen_all = {}, []
@@ -277,14 +277,14 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
         cone_half_angle=float(cone_half_angle), self_collision=collision)
 
 
-def _joint_checks(robot, motion: Motion, tau: np.ndarray, fd: np.ndarray,
+def _joint_checks(robot, motion: Motion, v: np.ndarray, tau: np.ndarray, fd: np.ndarray,
                   tol: AuditTolerances, add) -> tuple[list[JointAudit], list[tuple[str, str]]]:
     """Per actuated joint: torque and velocity against their limits (the velocity at a knot is
-    the larger of ``v`` and the forward difference of ``q``, ``fd`` ``(T-1, nv)``) and the
-    position range; each check is passed to ``add``. Returns the :class:`JointAudit` list and
-    the ``(joint, "effort" | "velocity")`` pairs without a limit."""
+    the larger of ``v`` ``(T, nv)`` and the forward difference of ``q``, ``fd`` ``(T-1, nv)``)
+    and the position range; each check is passed to ``add``. Returns the :class:`JointAudit`
+    list and the ``(joint, "effort" | "velocity")`` pairs without a limit."""
     model = robot.model
-    vmag = np.abs(motion.v)
+    vmag = np.abs(v)
     vmag[:-1] = np.maximum(vmag[:-1], np.abs(fd))
     joints, unlimited = [], []
     for j in _actuated_joints(robot):
@@ -323,21 +323,23 @@ def _joint_checks(robot, motion: Motion, tau: np.ndarray, fd: np.ndarray,
     return joints, unlimited
 
 
-def _velocity_consistency(motion: Motion, fd: np.ndarray, tol: AuditTolerances):
+def _velocity_consistency(t: np.ndarray, v: np.ndarray, a: np.ndarray, fd: np.ndarray,
+                          tol: AuditTolerances):
     """``velocity_consistency``: ``fd`` ``(T-1, nv)``, the forward difference of ``q``, against
-    the velocities at the two knots of each step."""
+    the velocities ``v`` ``(T, nv)`` at the two knots of each step (``a`` ``(T, nv)``, knot times
+    ``t`` ``(T,)`` [s])."""
     # the forward difference of a one-step scheme (explicit, implicit or semi-implicit Euler,
     # trapezoid) lies between the velocities at its two knots; central differences leave a
     # third-order term, of the size h·|a_k+1 − a_k| / 2, allowed for.
-    T = motion.T
+    T = t.size
     cons = np.zeros(T)
     if T > 1:
-        h = np.diff(motion.t)[:, None]
-        slack = 0.5 * h * np.abs(motion.a[1:] - motion.a[:-1])
-        lo = np.minimum(motion.v[:-1], motion.v[1:]) - slack
-        hi = np.maximum(motion.v[:-1], motion.v[1:]) + slack
+        h = np.diff(t)[:, None]
+        slack = 0.5 * h * np.abs(a[1:] - a[:-1])
+        lo = np.minimum(v[:-1], v[1:]) - slack
+        hi = np.maximum(v[:-1], v[1:]) + slack
         cons[:-1] = np.max(np.maximum(np.maximum(lo - fd, fd - hi), 0.0), axis=1)
-    vscale = max(1.0, float(np.max(np.abs(motion.v))))
+    vscale = max(1.0, float(np.max(np.abs(v))))
     return _make("velocity_consistency", cons, tol.velocity_consistency, "max", "rad/s",
                  vscale)
 

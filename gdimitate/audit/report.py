@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
-from typing import NamedTuple
+from dataclasses import dataclass, field, fields, is_dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -215,13 +215,13 @@ class SelfCollisionAudit:
     excluded: tuple[tuple[str, str, float], ...] = ()
 
 
-def _json(x: object) -> object:
+def _json(x: object) -> Any:
     """JSON-safe copy: NaN/inf → None, NumPy → Python, tuples → lists."""
     if isinstance(x, Mapping):
         return {str(k): _json(v) for k, v in x.items()}
     if hasattr(x, "_asdict"):
         return _json(x._asdict())
-    if hasattr(x, "__dataclass_fields__"):
+    if is_dataclass(x) and not isinstance(x, type):
         return {f.name: _json(getattr(x, f.name)) for f in fields(x)}
     if isinstance(x, np.ndarray):
         return [_json(v) for v in x.tolist()]

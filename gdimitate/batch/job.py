@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidInputError, UnknownNameError
+from ..types import AdaptMethod, ForceModel
 
 __all__ = ["BatchOptions", "BatchRow", "GRF_SUFFIX", "STATUSES", "grf_file", "load_robot",
            "output_paths", "process_file", "read_finished"]
@@ -51,8 +52,8 @@ class BatchOptions:
     """
 
     imitator: str
-    method: str = "optimal"
-    force: str = "segment"
+    method: AdaptMethod = "optimal"
+    force: ForceModel = "segment"
     simulate: bool = False
     demonstrator: str | None = None
     verbose: bool = False

@@ -26,6 +26,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from ..errors import BatchError, UnknownNameError
 from .job import (
@@ -217,13 +218,15 @@ def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
 def _absolute_models(options: BatchOptions) -> BatchOptions:
     """Model files (``.urdf``/``.osim``) named by absolute path, so that workers started
     elsewhere (another folder, a cluster node) find them."""
-    def absolute(spec: str | None) -> str | None:
+    def absolute(spec: str) -> str:
         if spec and Path(spec).suffix.lower() in (".urdf", ".osim") and Path(spec).is_file():
             return str(Path(spec).expanduser().resolve())
         return spec
 
+    demonstrator = options.demonstrator
     return dataclasses.replace(options, imitator=absolute(options.imitator),
-                               demonstrator=absolute(options.demonstrator))
+                               demonstrator=None if demonstrator is None
+                               else absolute(demonstrator))
 
 
 def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
@@ -285,7 +288,7 @@ def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
         bar.update(row)
 
     used = workers
-    meta = {"executor": executor, "address": address, "workers": workers,
+    meta: dict[str, Any] = {"executor": executor, "address": address, "workers": workers,
             "options": options.key(), "inputs": len(files)}
     complete = False
     try:

@@ -9,6 +9,9 @@ steps of a chunk); chunks run in parallel threads.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 
 try:  # numba is a dependency, but keep the NumPy path usable without it
@@ -253,6 +256,8 @@ def _rk4_uncoupled(t, g, has_g, P, x0, rec_all, Y, XE, XF, VE, VF, final):
             final[3, 0, c] = vf[l]
 
 
+rk4_numba: Callable[..., Any] | None
+rk4_uncoupled_numba: Callable[..., Any] | None
 if HAVE_NUMBA:
     _deriv = numba.njit(cache=True, inline="always", fastmath=True)(_deriv)
     _gather = numba.njit(cache=True, inline="always", fastmath=True)(_gather)

@@ -94,7 +94,9 @@ def adapt_frequency(
     n = unit.shape[-1] if unit.shape else 1
     omega = float(initial_frequency)
     x = x0
-    ts, st, ys = [], [], []
+    ts: list[np.ndarray] = []
+    st: list[np.ndarray] = []
+    ys: list[np.ndarray] = []
     hist_t, hist_f = [], []
     t0 = 0.0
     t_all = np.empty(0)
@@ -118,14 +120,13 @@ def adapt_frequency(
         hist_t.append(t0)
         hist_f.append(omega)
     teach_until = t0
+    if x is None:  # no teaching cycle ran and no start state was given
+        raise OscillatorError("adapt_frequency needs teach_cycles >= 1 or x0")
     final_teach = x.copy()
     if free_cycles > 0:
-        bank = MatsuokaBank(unit.time_scaled(unit_frequency / omega), coupling, shape=(n,))
-        t = t0 + dt * np.arange(int(round(free_cycles / (omega * dt))) + 1)
-        tr = bank.simulate(t, None, x)
-        ts.append(t[1:])
-        st.append(tr.states()[:, 1:])
-        ys.append(tr.y[1:])
+        for out, part in zip((ts, st, ys), _free_run(unit, coupling, unit_frequency, omega, x,
+                                                     t0, free_cycles, dt), strict=True):
+            out.append(part)
     return AdaptiveRun(
         t=np.concatenate(ts),
         states=np.concatenate(st, axis=1),
@@ -136,6 +137,19 @@ def adapt_frequency(
         teach_until=teach_until,
         final_teach_state=final_teach,
     )
+
+
+def _free_run(unit: MatsuokaParams, coupling: np.ndarray | None,
+              unit_frequency: np.ndarray, omega: float, x: np.ndarray, t0: float,
+              free_cycles: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``free_cycles`` cycles at intrinsic frequency ``omega`` [Hz] without input from state
+    ``x`` ``(4, n)`` at ``t0`` [s]: ``(t (S,), states (4, S, n), y (S, n))``, the start left
+    out."""
+    n = unit.shape[-1] if unit.shape else 1
+    bank = MatsuokaBank(unit.time_scaled(unit_frequency / omega), coupling, shape=(n,))
+    t = t0 + dt * np.arange(int(round(free_cycles / (omega * dt))) + 1)
+    tr = bank.simulate(t, None, x)
+    return t[1:], tr.states()[:, 1:], tr.y[1:]
 
 
 def _last_periods(t: np.ndarray, y: np.ndarray) -> list[float] | None:

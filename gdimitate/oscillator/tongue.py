@@ -8,6 +8,7 @@ The whole grid runs as **one** bank of shape ``(G, F, 1)`` (one oscillator per c
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -70,7 +71,7 @@ def arnold_tongue(
     dt: float | None = None,
     ratio_tol: float = 0.005,
     plv_min: float = 0.95,
-    backend: str = "auto",
+    backend: Literal["auto", "numba", "numpy"] = "auto",
 ) -> ArnoldTongue:
     """Compute the 1:1 locking region over ``frequencies (F,)`` [Hz] × ``gains (G,)``.
 

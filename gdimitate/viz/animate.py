@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import meshcat
 import numpy as np
@@ -37,7 +38,7 @@ class MotionMismatchError(ViewerError, InvalidInputError):
     """A motion that does not fit the robot it is shown on (joint names, ``q`` width, times)."""
 
 
-def check_motion(model: pin.Model, motion: object) -> tuple[np.ndarray, np.ndarray]:
+def check_motion(model: pin.Model, motion: Any) -> tuple[np.ndarray, np.ndarray]:
     """Validate ``motion`` against ``model``; return ``(t (T,), q (T, nq))`` as float arrays.
 
     Accepts a ``Motion`` or an ``AdaptedMotion`` (its ``.motion`` is used).
@@ -169,6 +170,11 @@ def sample_frames(model: pin.Model, visual_model: pin.GeometryModel, t: np.ndarr
         force={leg: a[idx] for leg, a in forces.items()},
         sole_paths=paths,
     )
+
+
+#: leg name -> a foot's push directions: a ``gdimitate.metrics.ForceDirection``, ``(T, 3)``
+#: vectors or ``(T,)`` sagittal angles [rad] (what :func:`push_vectors` reads)
+PushDirections = Mapping[str, Any]
 
 
 def push_vectors(directions: object) -> np.ndarray:

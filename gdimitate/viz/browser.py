@@ -6,7 +6,7 @@ Chromium's plain ``--headless`` mode renders WebGL with its software rasteriser
 lets the page's scripts run (and the first animation frames play) before the capture. Every
 call has a timeout and the whole process group is killed when it expires.
 
-Regenerate the README picture with ``python -m gdimitate.viz.browser`` (see :func:`main`).
+Regenerate the README picture with ``python -m gdimitate.apps.viewer_picture screenshot PNG``.
 """
 
 from __future__ import annotations

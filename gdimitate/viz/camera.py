@@ -4,9 +4,10 @@ call)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["framing", "ground_extent", "place_camera"]
 
@@ -34,7 +35,7 @@ def ground_extent(tracks: Iterable, margin: float) -> tuple[np.ndarray, np.ndarr
     return lo - margin, hi + margin
 
 
-def place_camera(vis, position: Sequence[float], target: Sequence[float]) -> None:
+def place_camera(vis, position: ArrayLike, target: ArrayLike) -> None:
     """Put meshcat's camera at ``position`` (3,) [m] looking at ``target`` (3,) [m]: its orbit
     controls turn around the world origin, so the scene (``/meshcat``) is shifted by
     ``-target`` and the camera put at ``position - target`` (in the y-up frame of

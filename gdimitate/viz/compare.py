@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from ..errors import ViewerError
+from .animate import PushDirections
 from .scene import Style
 from .viewer import Viewer, leg_length
 
@@ -19,9 +20,9 @@ _GHOST_COLOR = (0.55, 0.75, 1.0)
 def compare(demonstrator: object, demo_motion: object, imitator: object,
             imitator_motion: object, *, layout: str = "side", gap: float = 1.2,
             ghost_scale: float | None = None,
-            demo_force: Mapping[str, np.ndarray] | None = None,
-            imitator_force: Mapping[str, np.ndarray] | None = None,
-            fps: float = 30.0, html: str | os.PathLike | None = None,
+            demo_force: PushDirections | None = None,
+            imitator_force: PushDirections | None = None,
+            fps: float = 30.0, html: str | os.PathLike[str] | None = None,
             viewer: Viewer | None = None, port: int | None = None, open_browser: bool = False,
             camera: Sequence[float] | None = None, style: Style | None = None) -> Viewer:
     """Show a demonstrator and an imitator over their motions, animated, in one scene.
@@ -53,7 +54,7 @@ def compare(demonstrator: object, demo_motion: object, imitator: object,
     if layout not in ("side", "ghost"):
         raise ViewerError(f"unknown layout {layout!r}; valid layouts: 'side', 'ghost'")
     own = viewer is None
-    v = Viewer.start(port, open_browser, style=style) if own else viewer
+    v = Viewer.start(port, open_browser, style=style) if viewer is None else viewer
     try:
         if not own:
             v.clear()

@@ -12,6 +12,7 @@ two, the one closer to the original surface is drawn.
 from __future__ import annotations
 
 import functools
+from typing import cast
 
 import numpy as np
 
@@ -75,7 +76,7 @@ def decimate(v: np.ndarray, f: np.ndarray, max_faces: int) -> tuple[np.ndarray, 
     if len(fq) <= max_faces:
         out.append((np.asarray(vq, float), np.asarray(fq, np.int64)))
     points = trimesh.Trimesh(v, f, process=False).sample(400, seed=0)
-    return min(out, key=lambda c: _distance(*c, points))
+    return min(out, key=lambda c: _distance(c[0], c[1], points))
 
 
 @functools.lru_cache(maxsize=256)
@@ -84,6 +85,7 @@ def decimated_stl(path: str, max_faces: int) -> bytes:
     vertices welded) with at most ``max_faces`` triangles (:func:`decimate`)."""
     import trimesh
 
-    mesh = trimesh.load(path, force="mesh")
+    mesh = cast(trimesh.Trimesh, trimesh.load(path, force="mesh"))  # force="mesh": one mesh
     v, f = decimate(np.asarray(mesh.vertices), np.asarray(mesh.faces), max_faces)
-    return trimesh.Trimesh(v, f, process=False).export(file_type="stl")
+    # binary STL: bytes
+    return cast(bytes, trimesh.Trimesh(v, f, process=False).export(file_type="stl"))

@@ -26,6 +26,7 @@ import meshcat
 import meshcat.geometry as mg
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..errors import ViewerError
 from ..meshes import collada_y_up
@@ -92,12 +93,12 @@ class Style:
         return dict(self.path_colors).get(leg, (0.4, 0.4, 0.4))
 
 
-def _hex(rgb: Sequence[float]) -> int:
-    r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgb[:3])
+def _hex(rgb: ArrayLike) -> int:
+    r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in np.ravel(rgb)[:3])
     return (r << 16) | (g << 8) | b
 
 
-def material(rgb: Sequence[float], opacity: float = 1.0) -> mg.MeshPhongMaterial:
+def material(rgb: ArrayLike, opacity: float = 1.0) -> mg.MeshPhongMaterial:
     """A Phong material of colour ``rgb`` (3 floats in [0, 1]) and ``opacity`` in [0, 1]."""
     opacity = float(opacity)
     if not 0.0 <= opacity <= 1.0:
@@ -243,7 +244,7 @@ def skeleton_geometry(model: pin.Model, radius: float = 0.02,
     return geom
 
 
-def draw_ground(node: meshcat.Visualizer, xy_min: Sequence[float], xy_max: Sequence[float],
+def draw_ground(node: meshcat.Visualizer, xy_min: ArrayLike, xy_max: ArrayLike,
                 color: Sequence[float] = (0.78, 0.80, 0.82), thickness: float = 0.02) -> None:
     """A grey slab whose top face is the plane z = 0, covering ``[xy_min, xy_max]`` [m]."""
     lo, hi = np.asarray(xy_min, dtype=float), np.asarray(xy_max, dtype=float)

@@ -4,15 +4,15 @@ directions, centre of mass), before anything is drawn."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import ViewerError
-from .animate import Frames, MotionMismatchError, check_motion, push_vectors
+from .animate import Frames, MotionMismatchError, PushDirections, check_motion, push_vectors
 from .scene import has_visuals, skeleton_geometry
 
 __all__ = ["Track", "TrackInputs", "leg_length", "track_inputs"]
@@ -53,7 +53,7 @@ class Track:
     frames: Frames | None = field(default=None, repr=False)
 
 
-def leg_length(robot: object) -> float:
+def leg_length(robot: Any) -> float:
     """Hip-to-sole distance [m] of the robot's first leg (``.legs[...]`` with ``.hip`` joint
     and ``.sole`` frame) in its neutral configuration; ``nan`` if it has no such leg."""
     model: pin.Model = robot.model
@@ -94,7 +94,7 @@ class TrackInputs(NamedTuple):
 
 
 def track_inputs(robot: object, motion: object, *, offset: Sequence[float], scale: float,
-                 force_directions: Mapping[str, np.ndarray] | None,
+                 force_directions: PushDirections | None,
                  com: np.ndarray | bool | None, skeleton: bool) -> TrackInputs:
     """Check :meth:`~gdimitate.viz.viewer.Viewer.show`'s arguments (its docstring) and put
     them in the viewer's terms; ViewerError (MotionMismatchError for shapes that do not fit

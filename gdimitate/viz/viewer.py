@@ -18,17 +18,20 @@ Scene layout (meshcat paths)::
 
 from __future__ import annotations
 
+import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import meshcat
 import numpy as np
 from meshcat.animation import Animation
+from numpy.typing import ArrayLike
 
 from ..errors import ViewerError
 from .animate import (
     Frames,
+    PushDirections,
     arrow_pose,
     place_frame,
     record_frames,
@@ -158,7 +161,7 @@ class Viewer:
     def show(self, robot: object, motion: object, *, name: str | None = None,
              offset: Sequence[float] = (0.0, 0.0, 0.0), scale: float = 1.0,
              color: Sequence[float] | None = None, opacity: float = 1.0,
-             force_directions: Mapping[str, np.ndarray] | None = None,
+             force_directions: PushDirections | None = None,
              com: np.ndarray | bool | None = True, foot_paths: bool = True,
              skeleton: bool = False) -> str:
         """Add a robot following a motion; draw it at the motion's first frame.
@@ -297,14 +300,16 @@ class Viewer:
     def _frame_camera(self) -> None:
         place_camera(self.vis, *framing(self.tracks.values()))
 
-    def look_at_track(self, name: str, position: Sequence[float]) -> None:
+    def look_at_track(self, name: str, position: ArrayLike) -> None:
         """Place the camera at ``position`` (3,) [m], looking at the mean centre of mass (x, z;
         y = 0) of the animated track ``name`` (call after :meth:`animate`)."""
         track = self.tracks[name]
+        if track.frames is None:  # show() samples frame 0: not reached
+            raise ViewerError(f"track {name!r} has no frames: call show() and animate() first")
         com = track.frames.com + track.offset
         self.set_camera(position, np.array([com[:, 0].mean(), 0.0, com[:, 2].mean()]))
 
-    def set_camera(self, position: Sequence[float], target: Sequence[float] = (0.0, 0.0, 0.8)
+    def set_camera(self, position: ArrayLike, target: ArrayLike = (0.0, 0.0, 0.8)
                    ) -> None:
         """Place the camera at ``position`` (3,) [m, world], looking at ``target`` (3,) [m].
 
@@ -329,7 +334,7 @@ class Viewer:
         self._ensure_animated()
         return self.vis.static_html()
 
-    def save_html(self, path: str | Path) -> Path:
+    def save_html(self, path: str | os.PathLike[str]) -> Path:
         """Write :meth:`html` to ``path``; the file plays offline. Returns the absolute path.
 
         Raises:
