@@ -8,15 +8,26 @@ Feedback (entrainment to the ground): a foot's contact onset in the simulation (
 force rising above :data:`ONSET_FRACTION` of m·g after a swing — below :data:`OFF_FRACTION`
 for at least :data:`MIN_SWING` of the period — and staying above :data:`OFF_FRACTION` for
 :data:`MIN_LOAD` of the period: a scuff or a bounce of a few milliseconds is no heel strike)
-says where in the cycle the body is; the
-*ground phase* jumps there and otherwise advances at the cycle's own rate. Only onsets within
-:data:`STRIKE_WINDOW` cycles of the plan's heel strike of that foot count (a swing foot that
-scuffs the floor mid-swing is no heel strike). Where "there" is comes from the walk itself:
-the ground phase at each foot's first heel strike (the first, unperturbed steps), so
-neither the controller's touchdown lag nor the network's lead on its drive is a bias. The network's
-input is ``g = gain · u(ground phase)``, ``u`` the input it was taught with at that fraction
-(:meth:`~gdimitate.walk.network.WalkNetwork.input_at`): with ``gain`` 0 the network runs
-open loop (free), with ``gain`` > 0 it is pulled towards the body's rhythm.
+says where in the cycle the body is. Only onsets within :data:`STRIKE_WINDOW` cycles of the
+plan's heel strike of that foot count (a swing foot that scuffs the floor mid-swing is no heel
+strike). The network is driven by ``g = gain · u(ground phase)``, ``u`` the input it was taught
+with at that fraction (:meth:`~gdimitate.walk.network.WalkNetwork.input_at`): with ``gain`` 0
+the network runs open loop (free), with ``gain`` > 0 it is pulled towards the body's rhythm.
+
+The *ground phase* advances at the cycle's own rate and is corrected at each heel strike
+towards where the body is: the body's phase at a strike of foot s is where the network's
+phase stands at that foot's strikes (learnt: the first strike's, then moved by
+:data:`STRIKE_LEARN` of each new strike's difference — the controller's touchdown lag is in
+it, so it is no bias, and a first strike made while the walk still settles is forgotten);
+the correction moves the ground phase by :data:`STRIKE_CORRECTION` of the gap between it and
+that phase. The network reads its phase on the orbit it has when locked to a drive at the
+cycle's rate (:meth:`~gdimitate.walk.network.WalkNetwork.use_gain`), so in a walk that keeps
+its rhythm network, ground and body agree, the gap is zero and the feedback does not move the
+network's mean frequency. (An earlier version re-set the ground phase to its own value at
+each foot's first strike and read the network on its free orbit: it left out the network's
+lead on its drive and the transient of the first steps, every strike pushed the drive
+forward and the loop ran 1.2–1.3 % fast.) After a push the body's strikes come early or late,
+the drive follows them and the network with it.
 """
 
 from __future__ import annotations
@@ -35,13 +46,16 @@ from ..sim.periodic import PeriodicReference
 from ..sim.simulate import measure_contacts, mujoco_warnings
 from .network import WalkNetwork
 
-__all__ = ["WalkPush", "Trace", "run_loop", "ONSET_FRACTION", "OFF_FRACTION"]
+__all__ = ["WalkPush", "Trace", "run_loop", "ONSET_FRACTION", "OFF_FRACTION",
+           "STRIKE_CORRECTION", "STRIKE_LEARN"]
 
 ONSET_FRACTION = 0.05
 OFF_FRACTION = 0.01
 MIN_SWING = 0.15
 MIN_LOAD = 0.05
 STRIKE_WINDOW = 0.2
+STRIKE_CORRECTION = 1.0
+STRIKE_LEARN = 0.5
 
 
 @dataclass(frozen=True)
@@ -128,6 +142,7 @@ def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int
     data = sim.new_data()
     mo = pref.plan.motion
     sim.set_state(data, mo.q[0], mo.v[0])
+    net.use_gain(gain)
     net.start_at(0.0)
     bounds = step_bounds(pref, steps)
     strike: dict[str, float | None] = {s: None for s in SIDES}
@@ -180,33 +195,31 @@ def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int
 
 def _strikes(s, fz, t, c, P, ground, off_since, pending, strike, planned, tr) -> float:
     """Heel-strike detection of foot ``s`` (``fz``: vertical force / m·g) and the ground
-    phase it sets (module docstring); returns the ground phase."""
+    phase it corrects (module docstring); returns the ground phase. ``strike[s]``: the
+    network's cycle fraction at the foot's strikes, learnt (the body's phase at a strike)."""
     if pending[s] is not None:
-        t_on, off_before = pending[s]
+        t_on, off_before, c_on = pending[s]
         if fz < OFF_FRACTION:  # a scuff: the swing goes on
             pending[s], off_since[s] = None, off_before
         elif t - t_on >= MIN_LOAD * P:  # confirmed: a heel strike at t_on
             pending[s] = None
             g_on = ground - (t - t_on) / P  # the ground phase at the strike
             if strike[s] is None:
-                strike[s] = g_on % 1.0  # where this foot lands, unperturbed
-            ground = _nearest(g_on, strike[s]) + (t - t_on) / P
+                strike[s] = c_on % 1.0  # where this foot lands, unperturbed
+            gap = (strike[s] - g_on + 0.5) % 1.0 - 0.5
+            ground += STRIKE_CORRECTION * gap
+            strike[s] += STRIKE_LEARN * ((c_on - strike[s] + 0.5) % 1.0 - 0.5)
             tr.onsets.append((t_on, s))
         return ground
     swung = off_since[s] is not None and t - off_since[s] >= MIN_SWING * P
     near = abs((c - planned[s] + 0.5) % 1.0 - 0.5) < STRIKE_WINDOW
     if fz > ONSET_FRACTION:
         if swung and near:
-            pending[s] = (t, off_since[s])
+            pending[s] = (t, off_since[s], c)
         off_since[s] = None
     elif fz < OFF_FRACTION and off_since[s] is None:
         off_since[s] = t
     return ground
-
-
-def _nearest(x: float, frac: float) -> float:
-    """The value ≡ ``frac`` (mod 1) nearest ``x``."""
-    return frac + np.round(x - frac)
 
 
 def _record(tr, t, q, v, tau, c, ground, wr, s_ref, h, ph, tilt, net) -> None:
