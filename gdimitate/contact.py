@@ -369,5 +369,9 @@ def sole_contacts(robot, given: Mapping[str, SoleContact | Mapping] | None = Non
             if g is None:
                 problems[s] = str(e)
                 continue
-        out[s] = measured if g is None else _given_contact(robot, s, g, measured)
+        if g is None:
+            if measured is not None:
+                out[s] = measured
+            continue
+        out[s] = _given_contact(robot, s, g, measured)
     return out, problems

@@ -114,7 +114,8 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
         if markers is not None:
             return _from_markers(Path(markers).expanduser(), p, grf, overground,
                                  f"{p} (model) + ")
-        return _full_body(Path(coordinates).expanduser(), Robot.from_osim(p), grf, overground,
+        return _full_body(Path(str(coordinates)).expanduser(), Robot.from_osim(p), grf,
+                          overground,
                           f"{p} (model) + ")
     if suffix in (".trc", ".c3d"):
         if robot is None:

@@ -214,7 +214,7 @@ def anchored_base_offsets(rel: Mapping[str, np.ndarray], contact: Mapping[str, n
 
 # ---------------------------------------------------------------------- a robot's motion
 def robot_motion(robot: Robot, t: np.ndarray, q: np.ndarray,
-                 contact: dict[str, np.ndarray]) -> Motion:
+                 contact: Mapping[str, np.ndarray]) -> Motion:
     """A :class:`Motion` of ``robot`` (joint names, per-joint widths and base width filled in).
 
     ``t`` ``(T,)`` [s], ``q`` ``(T, nq)`` in Pinocchio order, ``contact`` ``{side: (T,) bool}``.

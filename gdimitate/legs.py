@@ -33,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import GdimitateError, LegDetectionError, UnknownNameError
-from .types import SIDES, Side
+from .types import SIDES
 
 if TYPE_CHECKING:
     from .planar.sagittal import SagittalLeg
@@ -74,7 +74,7 @@ class Leg:
     for legs whose joints turn about the lateral axis.
     """
 
-    side: Side
+    side: str
     hip: str
     knee: str
     ankle: str | None
@@ -386,7 +386,7 @@ def sole_from_geometry(robot, side: str, names: dict[str, str | None],
     return name
 
 
-def measure_leg(robot, side: Side, names: dict[str, str | None]) -> Leg:
+def measure_leg(robot, side: str, names: dict[str, str | None]) -> Leg:
     """A :class:`Leg` of ``robot`` (``model``, ``data``, ``base``, ``base_rotation``) from its
     joint and sole names, measured at the turned neutral pose. Any joint axes."""
     pin.framesForwardKinematics(robot.model, robot.data, _turned_neutral(robot))

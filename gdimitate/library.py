@@ -76,7 +76,7 @@ def erd_robots_dir() -> Path:
         if "example-robot-data" in parts and "robots" in parts:
             i = parts.index("robots")
             if i > 0 and parts[i - 1] == "example-robot-data":
-                return Path(dist.locate_file(Path(*parts[: i + 1]))).resolve()
+                return Path(str(dist.locate_file(Path(*parts[: i + 1])))).resolve()
     raise URDFError("example-robot-data is installed but ships no robots/ folder")
 
 

@@ -200,6 +200,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
                 point = np.where(np.isfinite(cop), cop, point)
             push[s] = point - c
     elif model == "measured":
+        assert forces is not None  # checked above
         for s in SIDES:
             f, _, contact = _measured_on(forces, motion.t, s)
             push[s] = -f

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -148,8 +149,9 @@ class Motion:
 
     def replace(self, **changes) -> Motion:
         """A copy with some fields replaced."""
-        d = dict(t=self.t, joint_names=self.joint_names, q=self.q, contact=self.contact,
-                 base_nq=self.base_nq, joint_nq=self.joint_nq, v=self.v, a=self.a)
+        d: dict[str, Any] = dict(t=self.t, joint_names=self.joint_names, q=self.q,
+                                 contact=self.contact, base_nq=self.base_nq,
+                                 joint_nq=self.joint_nq, v=self.v, a=self.a)
         d.update(changes)
         return Motion(**d)
 
@@ -164,7 +166,8 @@ class Motion:
         file is read back without naming the robot
         (:func:`gdimitate.demonstration.load_demonstration`). ``extra``: more arrays to store
         (e.g. ``wrench_left``); their names must not clash."""
-        arrays = dict(t=self.t, q=self.q, joint_names=np.array(self.joint_names),
+        arrays: dict[str, Any] = dict(t=self.t, q=self.q,
+                                      joint_names=np.array(self.joint_names),
                       joint_nq=np.array(self.joint_nq), base_nq=self.base_nq,
                       **{f"contact_{k}": v for k, v in self.contact.items()})
         for name in ("v", "a"):

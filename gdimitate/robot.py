@@ -83,6 +83,7 @@ class Robot:
     base: BaseKind
     spec: PlanarBipedSpec
     osim: Any
+    bvh_info: Any
     load_args: dict[str, Any]
 
     def __init__(self, name: str, model: pin.Model, visual_model: pin.GeometryModel | None,

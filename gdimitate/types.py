@@ -17,7 +17,7 @@ __all__ = ["AdaptMethod", "BaseKind", "ContactRule", "ForceModel", "PlanarMethod
 #: a leg
 Side = Literal["left", "right"]
 #: the legs, in the order every ``{side: …}`` mapping is filled
-SIDES: tuple[Side, Side] = ("left", "right")
+SIDES: tuple[str, str] = ("left", "right")  # str keys: {side: ...} dicts index by name
 #: the force-direction model of the goal (docs/design.md §5)
 ForceModel = Literal["measured", "dynamics", "com", "segment"]
 #: ``Robot.base``: a 6-DoF free-flyer, the planar models' (x, z, pitch) base, or none

@@ -82,12 +82,12 @@ def check_urdf_physics(root: ET.Element, source: object,
     children: dict[str, list[tuple[str, str, str]]] = {}
     has_parent = set()
     for j in root.findall("joint"):
-        p, c = j.find("parent"), j.find("child")
-        if p is None or c is None:
+        parent, child = j.find("parent"), j.find("child")
+        if parent is None or child is None:
             continue
-        children.setdefault(str(p.get("link")), []).append(
-            (str(j.get("name")), str(j.get("type")), str(c.get("link"))))
-        has_parent.add(str(c.get("link")))
+        children.setdefault(str(parent.get("link")), []).append(
+            (str(j.get("name")), str(j.get("type")), str(child.get("link"))))
+        has_parent.add(str(child.get("link")))
     roots = [lk for lk in mass if lk not in has_parent]
     order: list[str] = []  # links, parents before children (iterative: chains may be deep)
     stack = list(roots)
@@ -148,9 +148,10 @@ def check_urdf_joints(root: ET.Element, source: object) -> None:
                 try:
                     _numbers(el.find(tag), key, 3)
                 except ValueError:
-                    raise URDFError(f"{source}: {what}: <{tag} {key}="
-                                    f"{el.find(tag).get(key)!r}> must be three finite numbers"
-                                    ) from None
+                    bad = el.find(tag)
+                    text = bad.get(key) if bad is not None else None
+                    raise URDFError(f"{source}: {what}: <{tag} {key}={text!r}> must be three "
+                                    "finite numbers") from None
     zero: dict[str, list[str]] = {"effort": [], "velocity": []}
     for j in root.findall("joint"):
         lim, name = j.find("limit"), j.get("name")

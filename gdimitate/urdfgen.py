@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 __all__ = ["PlanarBipedSpec", "PLANAR_MODELS", "planar_biped_urdf", "write_planar_models",
            "MASS_FRACTIONS"]
@@ -64,7 +65,8 @@ class PlanarBipedSpec:
 
 def _spec(name: str, thigh: float, shank: float, mass: float, note: str, **kw) -> PlanarBipedSpec:
     L = thigh + shank
-    defaults = dict(foot=0.16 * L, hip_width=0.2 * L, torso=0.9 * L, toe=0.25 * L, heel=0.07 * L)
+    defaults: dict[str, Any] = dict(foot=0.16 * L, hip_width=0.2 * L, torso=0.9 * L,
+                                    toe=0.25 * L, heel=0.07 * L)
     defaults.update(kw)
     return PlanarBipedSpec(name=name, thigh=thigh, shank=shank, mass=mass, note=note, **defaults)
 

@@ -142,6 +142,7 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
     :class:`WrenchEstimate` (wrenches, the unexplained residual, the explained net wrench).
     """
     contacts = _validate(robot, motion, contacts, method, f_min)
+    assert motion.v is not None and motion.a is not None  # checked by _validate
     model = robot.model
     data = model.createData()
     T = motion.T

@@ -218,7 +218,7 @@ def _scale(bvh: BVHFile, C: np.ndarray, scale: float | None) -> tuple[float, str
 
 def _skeleton_robot(bvh: BVHFile, name: str, C: np.ndarray, scale: float, mass: float,
                     hip_height: float, legs, urdf_path
-                    ) -> tuple[Robot, str, tuple[ChannelJoint, ...], list]:
+                    ) -> tuple[Robot, str, tuple[ChannelJoint, ...], tuple[str, ...]]:
     """The skeleton as a :class:`Robot` (legs and sole rectangles given), with its URDF text,
     channel map and the segments de Leva's table does not name."""
     chains, leg_spec = _robot_legs(bvh, legs, C)

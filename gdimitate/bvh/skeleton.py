@@ -134,7 +134,7 @@ def find_legs(bvh: BVHFile, legs: Mapping[str, Mapping[str, str]] | None = None
             if s not in legs:
                 raise LegDetectionError(f"legs= must give 'left' and 'right'; got {list(legs)}")
             d = dict(legs[s])
-            idx = {}
+            idx: dict[str, int | None] = {}
             for role in ("hip", "knee", "ankle", "toe"):
                 n = d.get(role)
                 if n is None and role == "toe":
@@ -155,16 +155,19 @@ def find_legs(bvh: BVHFile, legs: Mapping[str, Mapping[str, str]] | None = None
                         "legs={'left': {'hip': …, 'knee': …, 'ankle': …, 'toe': …}, 'right': …} "
                         "with BVH joint names")
                 idx[role] = c[0]
-            toes = [k for k in bvh.children(idx["ankle"]) if match_segment(names[k]) == "foot"]
+            found = idx["ankle"]
+            assert found is not None  # set in the loop
+            toes = [k for k in bvh.children(found) if match_segment(names[k]) == "foot"]
             idx["toe"] = toes[0] if toes else None
-        chain = [idx["hip"], idx["knee"], idx["ankle"]] + ([idx["toe"]] if idx["toe"] is not None
-                                                           else [])
+        hip, knee, ankle, toe = idx["hip"], idx["knee"], idx["ankle"], idx["toe"]
+        assert hip is not None and knee is not None and ankle is not None  # found above
+        chain = [hip, knee, ankle] + ([toe] if toe is not None else [])
         for a, b in zip(chain, chain[1:]):
             if not _is_ancestor(bvh, a, b):
                 raise LegDetectionError(
                     f"{bvh.path}: {s} leg: {names[b]!r} is not below {names[a]!r} in the "
                     "hierarchy; pass legs= with the hip, knee, ankle (and toe) joints in order")
-        out[s] = LegChain(s, idx["hip"], idx["knee"], idx["ankle"], idx["toe"])
+        out[s] = LegChain(s, hip, knee, ankle, toe)
     return out
 
 

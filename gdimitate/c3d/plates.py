@@ -98,7 +98,7 @@ def assign_plates(plates, robot, motion, *, threshold: float = CONTACT_THRESHOLD
     feet = _feet(robot, motion)
     m = {s: np.zeros((motion.T, 3)) for s in feet}
     f = {s: np.zeros((motion.T, 3)) for s in feet}
-    h = {s: [] for s in feet}
+    h: dict[str, list] = {s: [] for s in feet}
     for plate in plates:
         F, M, P = _resample(plate, t)
         for lo, hi in _runs(F[:, 2] > threshold):

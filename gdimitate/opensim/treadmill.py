@@ -67,7 +67,7 @@ def treadmill_to_overground(robot, motion: Motion, forces: ContactForces,
     estimated = speed is None
     if estimated:
         speed = belt_speed(robot, motion, forces.contact)
-    shift = float(speed) * (motion.t - motion.t[0])
+    shift = float(speed or 0.0) * (motion.t - motion.t[0])
     q = motion.q.copy()
     q[:, _base_x_index(robot)] += shift
     feet = {}

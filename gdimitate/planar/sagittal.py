@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -31,7 +32,7 @@ from ..kinematics import (
     robot_motion,
 )
 from ..kinematics import check_q as _check_q
-from ..types import SIDES, Side
+from ..types import SIDES
 
 if TYPE_CHECKING:
     from ..robot import Robot
@@ -49,7 +50,7 @@ class SagittalLeg(NamedTuple):
     angle relative to the torso, the knee and ankle angles relative to their parent segment
     (an ankle-less leg: sign 1, offset 0)."""
 
-    side: Side
+    side: str
     thigh: float
     shank: float
     foot: float
@@ -69,7 +70,7 @@ def _axis_world(robot: Robot, joint: str, q: np.ndarray) -> np.ndarray:
     return J[3:, robot.model.joints[jid].idx_v]
 
 
-def _measure(robot: Robot, side: Side) -> SagittalLeg:
+def _measure(robot: Robot, side: str) -> SagittalLeg:
     leg = robot.legs[side]
     q0 = pin.neutral(robot.model)
     if robot.base == "free":
@@ -100,7 +101,7 @@ def _measure(robot: Robot, side: Side) -> SagittalLeg:
                        (th_off, sh_off - th_off, 0.0))
 
 
-def sagittal_leg(robot: Robot, side: Side) -> SagittalLeg:
+def sagittal_leg(robot: Robot, side: str) -> SagittalLeg:
     """``robot``'s ``side`` leg as the paper's planar leg (measured once per robot).
     :class:`~gdimitate.errors.LegDetectionError` where a hip, knee or ankle joint does not turn
     about the lateral axis (|cos| < 0.9 at the neutral pose)."""
@@ -180,7 +181,7 @@ def _set_base_xz(robot: Robot, q: np.ndarray, x: np.ndarray, z: np.ndarray) -> N
         raise InvalidInputError(f"{robot.name} has a fixed base; it cannot be placed on the ground")
 
 
-def ground_base(robot: Robot, q: np.ndarray, contact: dict[str, np.ndarray],
+def ground_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray],
                 x0: float = 0.0) -> np.ndarray:
     """Place the floating base so that the motion walks on the ground z = 0 without slipping.
 
