@@ -136,7 +136,7 @@ def confine_meshes(root: ET.Element, urdf_path: Path, package_dirs: Sequence[Pat
     for el in root.iter():
         if el.tag not in MESH_TAGS:
             continue
-        up = el
+        up: ET.Element | None = el
         while up is not None and up.tag != "link":
             up = owner.get(up)
         where = f"link {up.get('name')!r}" if up is not None else "a top-level material"

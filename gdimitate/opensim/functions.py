@@ -74,6 +74,8 @@ class Function:
         if k == "Polynomial":
             return np.polyval(np.asarray(self.coefficients), x)
         if k == "MultiplierFunction":
+            if self.inner is None:
+                raise OsimError("a MultiplierFunction without its inner function")
             return self.scale * self.inner(x)
         if k == "PiecewiseLinearFunction":
             return _piecewise_linear(np.asarray(self.x), np.asarray(self.y), x)

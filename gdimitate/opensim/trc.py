@@ -164,7 +164,7 @@ def read_trc(path: str | Path, *, up: str | None = None) -> Markers:
         warnings.warn(f"{path}: markers missing in some frames (NaN there): {gaps}",
                       MarkerGapWarning, stacklevel=2)
     detected = up is None
-    up = _up_axis(raw, path) if detected else up.upper()
+    up = _up_axis(raw, path) if up is None else str(up).upper()
     xyz = raw @ ground_to_world(up).T
     note = (f"units {head['Units']} → m; {'detected' if detected else 'given'} {up} up → world "
             + ("x = X, y = −Z, z = Y" if up == "Y" else "x = X, y = Y, z = Z"))

@@ -51,7 +51,7 @@ def cache_dir() -> Path:
 def source_digest(*modules) -> str:
     """A digest of the source files of ``modules`` (packages: every ``.py`` below them), so
     that a library compiled by another version of the code is never loaded."""
-    h = hashlib.sha1(ca.__version__.encode())
+    h = hashlib.sha1(str(ca.CasadiMeta.version()).encode())
     for mod in modules:
         p = Path(mod.__file__)
         files = sorted(p.parent.rglob("*.py")) if p.name == "__init__.py" else [p]
@@ -78,7 +78,8 @@ def _build(funcs: list[ca.Function], lib: Path, cc: str) -> None:
     global COMPILE_COUNT
     lib.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp:
-        objs, procs = [], []
+        objs: list[str] = []
+        procs: list[subprocess.Popen] = []
         for f in sorted(funcs, key=lambda f: -f.n_instructions()):
             cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
             cg.add(f)

@@ -61,9 +61,9 @@ def resolve(robot: Robot, act_idx: np.ndarray, limits: Limits) -> Resolved:
     for k in limits.freeze:
         if k not in names:
             raise UnknownNameError("actuated joint", k, names)
-    qi = np.array(qi, int)
-    lo = np.array([m.lowerPositionLimit[i] for i in qi], float)
-    hi = np.array([m.upperPositionLimit[i] for i in qi], float)
+    idx_q = np.array(qi, int)
+    lo = np.array([m.lowerPositionLimit[i] for i in idx_q], float)
+    hi = np.array([m.upperPositionLimit[i] for i in idx_q], float)
     bad = ~(lo < hi)  # no URDF range (e.g. continuous): free
     lo[bad], hi[bad] = -np.inf, np.inf
     for k, (a, b) in (limits.position or {}).items():
@@ -74,7 +74,7 @@ def resolve(robot: Robot, act_idx: np.ndarray, limits: Limits) -> Resolved:
     eff = np.array([_value(limits.effort, n, m.effortLimit[iv] if m.effortLimit[iv] > 0
                            else np.inf) for n, iv in zip(names, act_idx)])
     frozen = np.array([n in limits.freeze for n in names], bool)
-    at = robot.neutral[qi].copy()
+    at = robot.neutral[idx_q].copy()
     for k, v in (limits.freeze_at or {}).items():
         at[names.index(k)] = float(v)
-    return Resolved(tuple(names), qi, lo, hi, vel, eff, frozen, at)
+    return Resolved(tuple(names), idx_q, lo, hi, vel, eff, frozen, at)

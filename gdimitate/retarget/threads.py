@@ -42,9 +42,12 @@ def _libs() -> list:
         _LIBS = []
         for pkg, pattern, get, set_ in _TARGETS:
             try:
-                root = os.path.dirname(importlib.import_module(pkg).__file__)
+                file = importlib.import_module(pkg).__file__
             except ImportError:
                 continue
+            if file is None:  # a namespace package: no library beside it
+                continue
+            root = os.path.dirname(file)
             for path in sorted(glob.glob(os.path.join(root, pattern)))[:1]:
                 try:
                     lib = ctypes.CDLL(path)

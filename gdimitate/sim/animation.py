@@ -9,11 +9,15 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..robot import SIDES, Robot
 from .simulate import SimResult
+
+if TYPE_CHECKING:
+    from ..viz import Viewer
 
 __all__ = ["show_simulation"]
 
@@ -30,9 +34,9 @@ def _directions(forces: dict[str, np.ndarray], min_force: float) -> dict[str, np
 
 
 def show_simulation(robot: Robot, result: SimResult, *, gap: float = 1.0, fps: float = 30.0,
-                    html: str | os.PathLike | None = None, viewer: object | None = None,
+                    html: str | os.PathLike[str] | None = None, viewer: Viewer | None = None,
                     port: int | None = None, open_browser: bool = False,
-                    camera: Sequence[float] | None = None) -> object:
+                    camera: Sequence[float] | None = None) -> Viewer:
     """Animate ``result``'s plan and simulation side by side; return the
     :class:`~gdimitate.viz.Viewer` (close it when done, unless you passed ``viewer``).
 
@@ -43,7 +47,7 @@ def show_simulation(robot: Robot, result: SimResult, *, gap: float = 1.0, fps: f
     from ..viz import Viewer
 
     own = viewer is None
-    v = Viewer.start(port, open_browser) if own else viewer
+    v = Viewer.start(port, open_browser) if viewer is None else viewer
     try:
         if not own:
             v.clear()

@@ -38,6 +38,7 @@ exactly both ways.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -349,9 +350,11 @@ class SimModel:
 
     def __init__(self, robot: Robot, spec: mujoco.MjSpec, mj: mujoco.MjModel,
                  contacts: dict[str, SoleContact], actuated: list[int], options: ModelOptions,
-                 frozen: list[int] = ()):
+                 frozen: Sequence[int] = ()):
         self.robot, self.spec, self.mj, self.contacts = robot, spec, mj, contacts
         self.options = options
+        #: body name -> largest principal moment added [kg·m²] (set by build_model)
+        self.inertia_changes: dict[str, float] = {}
         m = robot.model
         self.frozen = tuple(frozen)
         self.idx_v_frozen = np.array([i for j in self.frozen for i in

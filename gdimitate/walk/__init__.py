@@ -35,6 +35,10 @@ def periodic_cycle(demo=None, demonstrator: Robot | None = None,
 
         demonstrator, whole, forces = gait.human_walk_3d()
         demo, forces = gait.one_stride(whole, forces)
+    elif demonstrator is None:
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError("periodic_cycle: a demo needs its demonstrator (a Robot)")
     imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
     opts = dict(force="measured", forces=forces) if forces is not None else {}
     with warnings.catch_warnings():

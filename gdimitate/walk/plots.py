@@ -28,7 +28,7 @@ def plot_walk(res, out: Path) -> list[str]:
 def _portraits(res, out: Path) -> str:
     tr = res.trace
     names = res.network.result.joint_names
-    pick = np.argsort(-np.ptp(tr.y, axis=0))[:4] if tr.y.size else []
+    pick = np.argsort(-np.ptp(tr.y, axis=0))[:4] if tr.y.size else np.zeros(0, int)
     fig, axes = plt.subplots(1, max(len(pick), 1), figsize=(3.2 * max(len(pick), 1), 3.2))
     axes = np.atleast_1d(axes)
     dt = np.gradient(tr.t) if tr.t.size > 1 else np.ones(1)
