@@ -150,7 +150,7 @@ def _by_prefix(table: Table, prefix: str, what: str) -> tuple[int, int, int] | N
     if len(idx) != 3:
         raise ForceDataError(f"{table.path}: {what} identifier {prefix!r} matches {len(idx)} "
                              f"columns {[table.names[i] for i in idx]}; exactly 3 are needed")
-    return tuple(idx)
+    return idx[0], idx[1], idx[2]
 
 
 def _named_sets(table: Table) -> dict[tuple[str, str], _Set]:
@@ -169,12 +169,12 @@ def _named_sets(table: Table) -> dict[tuple[str, str], _Set]:
                                  f"{sorted(axes)}; x, y and z are needed")
 
         def find(stem: str) -> tuple[int, int, int] | None:
-            idx = [low.get(f"{stem}{a}".lower()) for a in "xyz"]
-            return tuple(idx) if None not in idx else None
+            ix, iy, iz = (low.get(f"{stem}{a}".lower()) for a in "xyz")
+            return (ix, iy, iz) if ix is not None and iy is not None and iz is not None else None
 
         point = find(f"{pre}ground_force_{mid}p")
         torque = find(f"{pre}ground_torque_{mid}")
-        sets[(pre, mid)] = _Set(label, tuple(axes[a] for a in "xyz"), point, torque)
+        sets[(pre, mid)] = _Set(label, (axes["x"], axes["y"], axes["z"]), point, torque)
     return sets
 
 
@@ -205,13 +205,13 @@ def _default_sides(table: Table) -> tuple[dict[str, list[_Set]], str]:
                 "external_loads= (an OpenSim ExternalLoads .xml naming each force's "
                 "applied_to_body)")
     out: dict[str, list[_Set]] = {"left": [], "right": []}
-    for k, s in sets.items():
-        out[side[k]].append(s)
-    for s in SIDES:
-        if len(out[s]) > 1:
+    for k, fs in sets.items():
+        out[str(side[k])].append(fs)
+    for foot in SIDES:
+        if len(out[foot]) > 1:
             raise ForceDataError(
-                f"{table.path}: several force sets name the {s} foot "
-                f"({[x.label for x in out[s]]}); pass external_loads= to combine them")
+                f"{table.path}: several force sets name the {foot} foot "
+                f"({[x.label for x in out[foot]]}); pass external_loads= to combine them")
     return out, "feet by column names"
 
 
@@ -237,8 +237,11 @@ def _xml_sides(table: Table, robot, xml: Path) -> tuple[dict[str, list[_Set]], s
     notes = []
     for spec in read_external_loads(xml):
         side = _body_side(robot, spec.body, xml)
-        s = _Set(spec.force_identifier,
-                 _by_prefix(table, spec.force_identifier, "force"),
+        force = _by_prefix(table, spec.force_identifier, "force")
+        if force is None:
+            raise ForceDataError(f"{xml}: external force {spec.name!r} has no "
+                                 "force_identifier")
+        s = _Set(spec.force_identifier, force,
                  _by_prefix(table, spec.point_identifier, "point"),
                  _by_prefix(table, spec.torque_identifier, "torque"))
         out[side].append(s)
@@ -269,7 +272,7 @@ def _foot_wrench(table: Table, sets: list[_Set], R: np.ndarray, up: int
             raise ForceDataError(f"{table.path}: force {s.label!r} has no centre-of-pressure "
                                  "columns (…p{x,y,z}); they are needed to apply it")
     F = [d[:, list(s.force)] for s in sets]
-    P = [d[:, list(s.point)] for s in sets]
+    P = [d[:, list(s.point)] for s in sets if s.point is not None]  # all (checked above)
     Tq = [d[:, list(s.torque)] if s.torque is not None else np.zeros_like(F[0]) for s in sets]
     missing = [s.label for s in sets if s.torque is None]
     if missing:
@@ -279,7 +282,7 @@ def _foot_wrench(table: Table, sets: list[_Set], R: np.ndarray, up: int
     if len(sets) == 1:
         f, p, tq = F[0], P[0], Tq[0]
     else:
-        f = sum(F)
+        f = sum(F[1:], F[0])
         m = sum(np.cross(p, fi) + ti for p, fi, ti in zip(P, F, Tq))
         h = np.mean([p[:, up] for p in P], axis=0)
         loaded = np.abs(f[:, up]) > 1e-9

@@ -74,7 +74,7 @@ __all__ = ["WORLD_FROM_OPENSIM", "Step", "Approximation", "JointPlan", "plan_joi
 WORLD_FROM_OPENSIM = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
-def rotations(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+def rotations(axis: np.ndarray, angle: np.ndarray | float) -> np.ndarray:
     """Rotation matrices (*angle.shape, 3, 3) about unit ``axis`` (3,) by ``angle`` [rad]."""
     a = np.asarray(angle, dtype=float)[..., None, None]
     k = np.asarray(axis, dtype=float)
@@ -178,7 +178,7 @@ def joint_transform(joint: OsimJoint, values: Mapping[str, np.ndarray], n: int):
 
 def _classify(joint: OsimJoint, claimed: set[str]):
     """Per axis: ("exact", sign, intercept) | ("constant", value) | ("coupled",)."""
-    out = []
+    out: list[tuple] = []
     for a in joint.axes:
         if a.coordinate is None:
             out.append(("constant", float(a.function(0.0))))
@@ -285,7 +285,7 @@ def plan_joint(joint: OsimJoint, claimed: set[str]) -> JointPlan:
     kinds = _classify(joint, claimed)
     coupled = [a for a, k in zip(joint.axes, kinds) if k[0] == "coupled"]
     defaults = {c.name: c.default for c in joint.coordinates}
-    held = {a.name: float(a.function(defaults[a.coordinate])) for a in coupled}
+    held = {a.name: float(a.function(defaults[str(a.coordinate)])) for a in coupled}
     zero = np.zeros(3)
     if not coupled:
         steps, tail = _build(joint, kinds, held, zero, zero)

@@ -204,6 +204,14 @@ def _text(el: ET.Element | None, tag: str, default: str | None = None) -> str | 
     return sub.text.strip()
 
 
+def _name(el: ET.Element, where: str) -> str:
+    """The ``name`` attribute of an element; OsimError where it has none."""
+    name = el.get("name")
+    if name is None:
+        raise OsimError(f"{where}: a <{el.tag}> without a name attribute; give it one")
+    return name
+
+
 def _vec(el: ET.Element, tag: str, n: int, where: str, default=None) -> np.ndarray:
     t = _text(el, tag)
     if t is None:
@@ -237,7 +245,7 @@ def _load_xml(path: Path) -> ET.Element:
 
 # ---------------------------------------------------------------------- parsing
 def _body(el: ET.Element, where: str) -> OsimBody:
-    name = el.get("name")
+    name = _name(el, where)
     m = _text(el, "mass")
     try:
         mass = float(m) if m is not None else math.nan
@@ -249,7 +257,7 @@ def _body(el: ET.Element, where: str) -> OsimBody:
     if el.find("inertia") is not None:
         i = _vec(el, "inertia", 6, f"{where} body {name!r}")
     else:
-        i = np.array([float(_text(el, f"inertia_{k}", "0")) for k in
+        i = np.array([float(str(_text(el, f"inertia_{k}", "0"))) for k in
                       ("xx", "yy", "zz", "xy", "xz", "yz")])
     if not np.all(np.isfinite(i)):
         raise OsimError(f"{where}: body {name!r} has a NaN/inf inertia {i}")
@@ -262,10 +270,10 @@ def _coordinates(joint_el: ET.Element, joint: str, where: str) -> list[OsimCoord
         "CoordinateSet/objects/Coordinate")
     out = []
     for c in els:
-        name = c.get("name")
+        name = _name(c, where)
         rng = _vec(c, "range", 2, f"{where} coordinate {name!r}", default=(-math.pi, math.pi))
         mt = (_text(c, "motion_type") or "").lower()
-        default = float(_text(c, "default_value", "0"))
+        default = float(str(_text(c, "default_value", "0")))
         if not math.isfinite(default):
             raise OsimError(f"{where}: coordinate {name!r} has default_value {default}")
         out.append(OsimCoordinate(name, joint, mt or "rotational", default,
@@ -346,7 +354,7 @@ def _resolve_frame(joint_el: ET.Element, socket: str, where: str):
 
 def _joint(el: ET.Element, where: str, child: str | None, v3: bool):
     jtype = el.tag
-    name = el.get("name")
+    name = _name(el, where)
     w = f"{where} joint {name!r}"
     if jtype not in JOINT_TYPES:
         raise OsimError(f"{w}: unsupported joint type <{jtype}>; supported: "
@@ -356,7 +364,7 @@ def _joint(el: ET.Element, where: str, child: str | None, v3: bool):
                         "the joint from parent to child")
     if v3:
         parent = _text(el, "parent_body")
-        if parent is None:
+        if parent is None or child is None:
             raise OsimError(f"{w}: missing <parent_body>")
         po = (euler_xyz(_vec(el, "orientation_in_parent", 3, w, default=(0, 0, 0))),
               _vec(el, "location_in_parent", 3, w, default=(0, 0, 0)))
@@ -375,7 +383,7 @@ def _joint(el: ET.Element, where: str, child: str | None, v3: bool):
                             f"{len(coords)}")
         axes = [TransformAxis(f"{k}{i + 1}", k, np.asarray(a, dtype=float), c.name, _IDENTITY)
                 for i, ((k, a), c) in enumerate(zip(std, coords))]
-    kinds = {}
+    kinds: dict[str | None, set[str]] = {}
     for a in axes:  # OpenSim 4 files omit motion_type: a coordinate driving only
         kinds.setdefault(a.coordinate, set()).add(a.kind)  # translations is translational
     coords = [c if c.explicit_type or kinds.get(c.name) != {"translation"} else
@@ -422,9 +430,10 @@ def read_osim(path: str | Path) -> OsimModel:
             continue
         bodies.append(_body(b, where))
         if v3:
-            jel = next(iter(b.find("Joint") if b.find("Joint") is not None else []), None)
+            holder = b.find("Joint")
+            jel = next(iter(holder), None) if holder is not None else None
             if jel is not None:
-                joints.append(_joint(jel, where, b.get("name"), True))
+                joints.append(_joint(jel, where, _name(b, where), True))
     if not bodies:
         raise OsimError(f"{where}: no bodies (<BodySet><objects><Body>); the model needs at "
                         "least one body")
@@ -443,13 +452,13 @@ def read_osim(path: str | Path) -> OsimModel:
         if j.child not in names:
             raise OsimError(f"{where}: joint {j.name!r} has child {j.child!r}, which is no "
                             f"body of the model (bodies: {names}); add the body or fix the joint")
-    for b in names:
-        n = sum(j.child == b for j in joints)
+    for body in names:
+        n = sum(j.child == body for j in joints)
         if n == 0:
-            raise OsimError(f"{where}: body {b!r} has no joint connecting it to the model; "
+            raise OsimError(f"{where}: body {body!r} has no joint connecting it to the model; "
                             "add one (a WeldJoint if it is fixed)")
         if n > 1:
-            raise OsimError(f"{where}: body {b!r} is the child of {n} joints (closed loops are "
+            raise OsimError(f"{where}: body {body!r} is the child of {n} joints (closed loops are "
                             "not supported); keep one and use a constraint for the others")
     cnames = [c.name for j in joints for c in j.coordinates]
     if len(set(cnames)) != len(cnames):
@@ -460,7 +469,7 @@ def read_osim(path: str | Path) -> OsimModel:
             _text(m, "socket_parent_frame_connectee_name")
         if mb is None or _body_of_path(mb) not in known:
             raise OsimError(f"{where}: marker {m.get('name')!r} is on {mb!r}, which is no body")
-        markers.append(OsimMarker(m.get("name"), _body_of_path(mb),
+        markers.append(OsimMarker(_name(m, where), _body_of_path(mb),
                                   _vec(m, "location", 3, f"{where} marker {m.get('name')!r}")))
     return OsimModel(model_el.get("name", path.stem), path, version, ground, tuple(bodies),
                      tuple(_sort_joints(joints, ground)), tuple(markers))

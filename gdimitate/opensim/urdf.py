@@ -206,8 +206,9 @@ def _foot_box(model, poses, foot: str, floor: dict[str, float] | None = None):
         lo[:2], hi[:2] = np.minimum(lo[:2], Mk.min(axis=0)[:2]), np.maximum(hi[:2],
                                                                             Mk.max(axis=0)[:2])
     seen = {n: float(marks[n][2] - h) for n, h in (floor or {}).items() if n in marks}
-    if seen:  # each marker's lowest height is at most its flat-foot one: an upper bound
-        low_mark = min(seen, key=seen.get)
+    # each marker's lowest height is at most its flat-foot one: an upper bound
+    if seen and floor is not None:
+        low_mark = min(seen, key=lambda n: seen[n])
         lo[2] = seen[low_mark]
         note = (f"marker {low_mark}: {floor[low_mark] * 1e3:.1f} mm over the floor at its "
                 "lowest (the tightest of the foot markers' bounds)")
@@ -268,7 +269,8 @@ def _visuals(model, plans, poses, body: str, feet: dict[str, tuple]) -> list[you
     vecs = [v for v in vecs if np.linalg.norm(v) > 0.02]
     com = C @ b.com
     L = float(np.linalg.norm(com))
-    along = any(v @ com > max(np.linalg.norm(v), L) * L * math.cos(math.radians(20)) for v in vecs)
+    along = any(v @ com > max(float(np.linalg.norm(v)), L) * L * math.cos(math.radians(20))
+                for v in vecs)
     if L > 0.02 and not along:  # no child joint along the mass: e.g. a torso carrying arms
         vecs.append(2 * com)
     if not vecs:
