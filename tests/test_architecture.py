@@ -292,6 +292,14 @@ UPWARD_ALLOWED = {
 }
 
 
+def test_no_module_imports_a_deprecated_alias():
+    """The old paths are for users: inside the package every import names the new place."""
+    graph = gdimitate_graph()
+    users = {m: sorted(deps & DEPRECATED_ALIASES) for m, deps in graph.items()
+             if m not in DEPRECATED_ALIASES and deps & DEPRECATED_ALIASES}
+    assert not users, f"modules importing deprecated aliases: {users}"
+
+
 def _floor(module: str) -> int:
     unit = module.split(".")[1] if "." in module else ""
     return next((i for i, f in enumerate(FLOORS) if unit in f), len(FLOORS))
