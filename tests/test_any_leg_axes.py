@@ -135,8 +135,8 @@ def test_a_robot_whose_knee_is_not_a_pitch_joint_adapts_and_audits(tmp_path):
     lengths) adapted to the tilted knees at 20 knots/s, the push within 0.35 rad of the
     twin's shank direction: measured feasible (39 iterations), the tilted knees flexing up
     to 0.59 rad. Checked with Pinocchio: the output's integration, the base rows of its
-    inverse dynamics against its wrenches, torques within the effort limits, the stance feet
-    holding their poses on the floor."""
+    inverse dynamics with its wrenches as external forces (RNEA), torques within the effort
+    limits, the stance feet holding their poses on the floor."""
     twin, _ = _load(tmp_path, "pitch")
     robot, ref = _load(tmp_path, "tilted")
     demo = gd.walking_motion(twin, gd.GaitSpec(cycles=1, single_support=0.35,
@@ -154,13 +154,13 @@ def test_a_robot_whose_knee_is_not_a_pitch_joint_adapts_and_audits(tmp_path):
                                    atol=1e-8)
         np.testing.assert_allclose(M.v[k] + h[k] * M.a[k], M.v[k + 1], atol=1e-8)
     mg = robot.mass * 9.81
-    for k in range(M.T):
-        tau = pin.rnea(ref, data, M.q[k], M.v[k], M.a[k]).copy()
-        pin.computeJointJacobians(ref, data, M.q[k])
-        pin.framesForwardKinematics(ref, data, M.q[k])
-        for s in SIDES:
-            J = pin.getFrameJacobian(ref, data, ref.getFrameId(r.contacts[s].frame), pin.LOCAL)
-            tau -= J.T @ r.wrenches[s][k]
+    frames = [ref.frames[ref.getFrameId(r.contacts[s].frame)] for s in SIDES]
+    for k in range(M.T):  # Pinocchio's RNEA with the wrenches as external forces
+        fext = [pin.Force.Zero() for _ in range(ref.njoints)]
+        for s, fr in zip(SIDES, frames):
+            fext[fr.parentJoint] = fext[fr.parentJoint] + fr.placement.act(
+                pin.Force(r.wrenches[s][k]))
+        tau = pin.rnea(ref, data, M.q[k], M.v[k], M.a[k], fext)
         assert np.abs(tau[:6]).max() <= 1e-6 * mg
         assert np.all(np.abs(tau[6:]) <= ref.effortLimit[6:] * (1 + 1e-6))
     for s in SIDES:
