@@ -201,7 +201,7 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
         robot, motion, forces = demo.robot, demo.motion, demo.forces
         print(f"read {demo.source}: {demo.note}", flush=True)
         imitator = _robot(a.imitator, a)
-    force = cast(ForceModel, getattr(a, "force", "segment"))  # one of argparse's choices
+    force = cast("ForceModel", getattr(a, "force", "segment"))  # one of argparse's choices
     print(f"adapting {motion.T} frames of {robot.name} → {imitator.name} "
           f"(method={a.method}, force={force}) …", flush=True)
     options = {"forces": forces} if a.method == "optimal" and forces is not None else {}
