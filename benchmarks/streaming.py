@@ -1,17 +1,20 @@
 """Streaming adaptor: frames per second and audited feasibility (issue 17).
 
 Run: ``python benchmarks/streaming.py [--robot talos] [--frames 200] [--force measured]
-[--baseline-rev 7b16d65] [--baseline-frames 20]``.
+[--baseline-rev edd0e2f] [--baseline-frames 200]``.
 
 The shipped real 3-D walk (with its measured forces) is streamed frame by frame into
 ``gdimitate.retarget.StreamingAdaptor`` for ``--robot``. Frames per second are counted after a
-warm-up (the first frame, which solves the window's NLP, and the next four); every frame is
-then judged by :func:`gdimitate.audit.audit` on the assembled motion (knot by knot, the same
-verdict ``adapt(..., mode="per_frame").frame_feasible`` reports). The same-run baseline is the
-streaming of ``--baseline-rev`` (a git revision of this repository, extracted with
-``git archive`` into a temporary folder and run in its own process: by default the revision
-before issue 17, an IPOPT solve of the two-knot window per frame with its audit in the loop)
-over ``--baseline-frames`` frames.
+warm-up (the first five frames); every frame is then judged by :func:`gdimitate.audit.audit`
+on the assembled motion (knot by knot, the same verdict ``adapt(..., mode="per_frame")
+.frame_feasible`` reports), and the checks that fail most often are listed with the number
+of frames each fails. Where the adaptor's ``step`` takes ``v_demo`` (the demonstrator's
+velocity at the first frame), it is given, as ``adapt(..., mode="per_frame")`` does. The
+same-run baseline is the streaming of ``--baseline-rev`` (a git revision of this repository,
+extracted with ``git archive`` into a temporary folder and run in its own process: by default
+the tree before the inverse-dynamics QP — one linearised Gauss–Newton QP of the two-knot
+window per frame; ``7b16d65`` is the one before issue 17, an IPOPT solve per frame) over
+``--baseline-frames`` frames. The machine's load average is printed with the table.
 """
 
 from __future__ import annotations
@@ -41,6 +44,9 @@ _CHILD = textwrap.dedent("""
     robot = gd.Robot.from_library(name)
     kw = {"audit": False} if "audit" in inspect.signature(
         gd.retarget.StreamingAdaptor).parameters else {}
+    moving = "v_demo" in inspect.signature(gd.retarget.StreamingAdaptor.step).parameters
+    import pinocchio as pin
+    v0 = pin.difference(h.model, m.q[0], m.q[1]) / (m.t[1] - m.t[0])
     sa = gd.retarget.StreamingAdaptor(h, robot, force, dt=m.dt, **kw)
     T = min(frames + warm, m.T)
     sides = ("left", "right")
@@ -55,7 +61,8 @@ _CHILD = textwrap.dedent("""
     for k in range(T):
         if k == warm:
             t0 = time.perf_counter()
-        r = sa.step(m.q[k], {s: bool(m.contact[s][k]) for s in sides}, forces=fk(k))
+        extra = {"v_demo": v0} if moving and k == 0 else {}
+        r = sa.step(m.q[k], {s: bool(m.contact[s][k]) for s in sides}, forces=fk(k), **extra)
         q[k], v[k] = r.q, r.v
         statuses.append(r.status)
         if k:
@@ -70,9 +77,11 @@ _CHILD = textwrap.dedent("""
     motion = robot_motion(robot, m.t[:T], q, c).replace(v=v, a=a)
     rep = audit(sa._audit_robot, motion, W, sa.contacts)
     ok = np.asarray(rep.knot_feasible, bool)
+    fails = {c.name: int((~k).sum()) for c, k in zip(rep.checks, rep.knot_checks) if (~k).any()}
+    top = sorted(fails.items(), key=lambda x: -x[1])[:4]
     print("RESULT " + json.dumps({
         "frames_per_s": (T - warm) / elapsed, "frames": T, "feasible": int(ok.sum()),
-        "binding": list(rep.binding[:3]),
+        "binding": [f"{n} ({c})" for n, c in top],
         "statuses": {s: statuses.count(s) for s in set(statuses)}}))
 """)
 
@@ -90,10 +99,10 @@ def run(root: Path, robot: str, frames: int, force: str) -> dict:
 
 def row(label: str, r: dict) -> str:
     if "error" in r:
-        return f"| {label} | error: {r['error']!r} | | |"
+        return f"| {label} | error: {r['error']!r} | | | |"
     pct = 100 * r["feasible"] / r["frames"]
     return (f"| {label} | {r['frames_per_s']:.1f} | {r['feasible']}/{r['frames']} "
-            f"({pct:.0f} %) | {r['statuses']} |")
+            f"({pct:.0f} %) | {', '.join(r['binding'])} | {r['statuses']} |")
 
 
 def main() -> None:
@@ -101,20 +110,24 @@ def main() -> None:
     ap.add_argument("--robot", default="talos")
     ap.add_argument("--frames", type=int, default=200)
     ap.add_argument("--force", default="measured")
-    ap.add_argument("--baseline-rev", default="7b16d65",
+    ap.add_argument("--baseline-rev", default="edd0e2f",
                     help="git revision streamed as the same-run baseline ('' for none)")
-    ap.add_argument("--baseline-frames", type=int, default=20)
+    ap.add_argument("--baseline-frames", type=int, default=200)
     a = ap.parse_args()
     rows = [f"streaming the shipped 3-D walk → {a.robot} (force={a.force}); goal ≥ 200 "
             "frames/s after warm-up, ≥ 95 % of frames audited feasible", "",
-            "| streaming | frames/s | audited feasible frames | frame solves |",
-            "|---|---|---|---|"]
-    rows.append(row("this tree: one QP per frame", run(ROOT, a.robot, a.frames, a.force)))
+            "| streaming | frames/s | audited feasible frames | checks failed most (frames) "
+            "| frame solves |",
+            "|---|---|---|---|---|"]
+    rows.append(row("this tree: inverse-dynamics QP per frame",
+                    run(ROOT, a.robot, a.frames, a.force)))
     if a.baseline_rev:
         with tempfile.TemporaryDirectory() as tmp:
             base = checkout(a.baseline_rev, tmp)
-            rows.append(row(f"baseline {a.baseline_rev}: IPOPT per frame",
+            rows.append(row(f"baseline {a.baseline_rev}",
                             run(base, a.robot, a.baseline_frames, a.force)))
+    rows.append("")
+    rows.append(f"load average (1, 5, 15 min): {os.getloadavg()}, {os.cpu_count()} CPUs")
     print("\n".join(rows))
 
 

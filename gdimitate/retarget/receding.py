@@ -1,275 +1,449 @@
-"""The streaming mode's per-frame solve: one quadratic program over the same parts, linearised.
+"""The streaming mode's per-frame solve: one inverse-dynamics QP at the committed state.
 
-Frame k is the two-knot window (k − 1, k) of the trajectory problem (:mod:`.streaming`). Around
-a guess ``Z₀`` (the previous frame's committed knot and its constant-velocity prediction) every
-part is linearised with the compiled per-knot functions of the
-:class:`~.problem.Formulation` (rows ``g`` and their Jacobian ``J``; the cost residuals ``r``
-and their Jacobian ``J_r``), and one QP in the step ``δ`` of the free variables is solved
-(DAQP, dense):
+Frame k's step starts from the committed state ``(q_j, v_j)`` of knot ``j = k − 1`` and
+chooses knot j's acceleration ``a_j`` ``(nv,)`` and the wrench ``w_c`` ``(6,)`` of each foot in
+stance at j (sole frame, at its centre); the next state follows by exact integration on the
+configuration's Lie group, ``v_k = v_j + h a_j``, ``q_k = q_j ⊕ h v_k`` (``pin.integrate``,
+the trajectory mode's rule, :class:`~.parts.integration.Integration`). At fixed ``(q_j, v_j)``
+the whole-body dynamics ``M a + h = Sᵀτ + Σ J_cᵀ w_c`` is linear in ``(a, w)``, and so is every
+row the audit (:mod:`gdimitate.audit`) checks at knot j or, one step ahead, at knot k:
 
-    min ½ δᵀ (J_rᵀ J_r + εI) δ + (J_rᵀ r)ᵀ δ
-    s.t. lbx − z₀ ≤ δ ≤ ubx − z₀,   lbg − g ≤ J δ ≤ ubg − g
+- hard: the base rows of the dynamics (equalities; made exact afterwards by the base
+  acceleration), every actuated torque within its effort limit, each stance wrench in its
+  contact wrench cone (Caron et al. 2015; friction μ/√2 so that the square pyramid lies inside
+  the audit's circular cone; ``f_z ≥ f_min``; the centre of pressure ``cop_margin`` inside),
+  knot k's joint velocities and positions within their limits (``v_k``, ``q_j + h v_k``),
+  the sole velocity ``J_c(q̂_k) v_k`` of each foot in stance at k (a small feedback back to the
+  pose its stance began with), every sole corner of a foot in swing at k above the floor;
+- soft (a weighted least-squares cost in the tasks' own units, m/s², rad/s²): centre of mass,
+  base orientation, swing-foot pose, posture (PD laws on the frame's reference,
+  :mod:`.frameref`), the contact force along the demonstrator's direction, small
+  regularisations.
 
-— a Gauss–Newton step of the window's problem. Every row is hard except the goal's
-(:class:`~.parts.force.ForceDirection`: DAQP's soft constraints, violated only where nothing
-else is possible): a frame that cannot meet its goal still meets its physics. Where the
-physical rows themselves cannot hold, every row a part declares relaxable becomes soft, and
-where even the contact rows cannot (a touch-down out of reach) every row but the dynamics' base
-rows and the integration: the QP answers without an elastic re-solve, and the audit says which
-frames it could not make feasible.
-
-Then the window's equalities are made exact on the step's own numbers, as the trajectory
-mode's polish does (:mod:`.polish`): the quaternion normalised, ``v_k`` and ``a_{k−1}`` rebuilt
-from ``q`` by the integration rule, and knot k − 1's wrenches chosen by a small QP of their own
-(:func:`wrench_qp`): the base rows of ``rnea − Σ J_cᵀ w`` exactly zero, every actuated torque
-within its limit, each stance wrench inside its cone (with a small inner margin) and along the
-goal direction where the goal is the contact force — as close as possible to the step's
-wrenches. A frame whose wrench QP has no solution keeps the least-squares correction and the
-audit says so.
+Rows one step ahead are linearised at ``q̂_k = q_j ⊕ h (v_j + h a_prev)`` (the previous
+frame's acceleration): the error is second order in ``h (a − a_prev)``. DAQP (dual active
+set, exact) solves it. When the hard rows cannot all hold, first the limits and the swing
+rows become soft, then everything but the base rows: the QP always answers, and the audit
+says which frames it could not make feasible.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import daqp
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
 
 from ..robot import SIDES
-from .parts.base_dynamics import BaseDynamics
-from .parts.cone import cone_rows
-from .parts.force import ForceDirection
-from .parts.integration import Integration
 
-__all__ = ["qp_step", "wrench_qp", "CONE_MARGIN"]
+__all__ = ["FrameQP", "Tasks", "SOLVED"]
 
-#: Inner margin of the step's inequality rows [their scaled units], above DAQP's primal
-#: tolerance (1e-6), so that the polish finds its wrenches inside the cones.
-INNER = 1e-5
-#: Inner margin of the wrench QP's cone rows, relative to m·g (keeps the audit's 1e-6
-#: tolerances clear of round-off).
-CONE_MARGIN = 1e-7
-_SOFT, _EQ = 8, 5
 SOLVED = (1, 2)
-"""DAQP's exit flags of a solved QP (2: optimal with some soft rows relaxed)."""
+"""DAQP's exit flags of a solved QP (2: optimal with some soft rows relaxed); :meth:`FrameQP.solve`
+returns 1 (every hard row met), 2 (solved with hard rows relaxed) or DAQP's negative flag."""
+_EQ, _SOFT = 5, 8
+_LIMITS = ("torque", "velocity", "position")
+_LOCAL = pin.ReferenceFrame.LOCAL
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+#: margins inside the hard bounds (fractions of the limit; metres for the floor)
+TORQUE_MARGIN, VELOCITY_MARGIN, FLOOR_MARGIN = 1e-3, 1e-3, 5e-4
+#: re-linearise the next knot's sole rows when the step moves a held foot faster than this [m/s]
+AHEAD_TOL, PASSES = 2e-5, 3
 
 
-class _Fast:
-    """A ``casadi.Function`` of dense inputs called through CasADi's buffer interface (the
-    NumPy arrays are read and written in place: converting sparse ``DM`` outputs with
-    ``.full()`` cost 60 ms per Talos frame, the evaluations themselves 3 ms). ``(*args) ->
-    [dense output arrays]``."""
+@dataclass
+class Tasks:
+    """What one frame asks (world axes): centre of mass ``com``, ``com_vel``, ``com_acc``
+    ``(3,)``; base rotation ``base_rot`` ``(3, 3)``; swing-foot references ``feet`` {side:
+    (position (3,), rotation (3, 3), velocity (6,), acceleration (6,), resting: bool)}; ``joints``,
+    ``joints_vel`` ``(n_act,)``; ``push`` {side: unit (3,) direction of the ground force on
+    the robot, or None}; ``anchor`` {side: pin.SE3 of a stance foot's sole}."""
 
-    def __init__(self, f, cols: np.ndarray | None = None):
-        self.buf, self._ret = f.buffer()
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self.args):
-            self.buf.set_arg(i, memoryview(a))
-        for i, r in enumerate(self.res):
-            self.buf.set_res(i, memoryview(r))
-        self.shape, self.idx, self.sel = [], [], []
-        for k in range(f.n_out()):  # keep only the columns ``cols`` (of a matrix output)
-            i, j = (np.array(t, int) for t in f.sparsity_out(k).get_triplet())
-            shape = f.size_out(k)
-            sel = np.ones(i.size, bool)
-            if cols is not None and shape[1] > 1:
-                new = np.full(shape[1], -1)
-                new[cols] = np.arange(len(cols))
-                j, sel = new[j], new[j] >= 0
-                i, j, shape = i[sel], j[sel], (shape[0], len(cols))
-            self.shape.append(shape)
-            self.idx.append((i, j))
-            self.sel.append(sel)
+    com: np.ndarray
+    com_vel: np.ndarray
+    com_acc: np.ndarray
+    base_rot: np.ndarray
+    feet: dict
+    joints: np.ndarray
+    joints_vel: np.ndarray
+    push: dict
+    anchor: dict
 
-    def __call__(self, *args) -> list[np.ndarray]:
-        for a, v in zip(self.args, args):
-            a[:] = v
-        self.buf._eval()
-        out = []
-        for r, shape, (i, j), sel in zip(self.res, self.shape, self.idx, self.sel):
-            M = np.zeros(shape)
-            M[i, j] = r[sel]
-            out.append(M)
+
+@dataclass(frozen=True)
+class Gains:
+    """Natural frequencies [rad/s] of the PD laws (critically damped) and task weights."""
+
+    com: float = 8.0
+    com_xy: float = 2.0
+    w_com_xy: float = 30.0
+    w_com_xy_single: float = 0.3
+    w_cop: float = 5.0
+    base: float = 10.0
+    swing: float = 18.0
+    posture: float = 10.0
+    w_com: float = 30.0
+    w_base: float = 10.0
+    w_swing: float = 30.0
+    w_posture: float = 1.0
+    w_legs: float = 0.02
+    w_push: float = 10.0
+    w_wrench: float = 1e-3
+    w_acc: float = 1e-5
+    hold: float = 0.01  # fraction of a stance foot's pose error removed per step
+    rest: float = 0.5  # the same for a swing foot resting on the floor
+
+
+def _pd(w: float) -> tuple[float, float]:
+    return w * w, 2.0 * w
+
+
+class FrameQP:
+    """The QP of the module docstring for one robot.
+
+    ``robot``: the imitator (its model's limits are the ones enforced: pass the limited copy
+    the audit judges); ``contacts`` {side: SoleContact}; ``base_idx``, ``act_idx``: velocity
+    indices of the base and of the actuated joints; ``f_min`` [N], ``cop_margin`` [m]."""
+
+    def __init__(self, robot, contacts: dict, base_idx: np.ndarray, act_idx: np.ndarray,
+                 f_min: float, cop_margin: float, gains: Gains = Gains()):
+        from ..kinematics import base_joint_id
+
+        m = robot.model
+        self.robot, self.m, self.g = robot, m, gains
+        self.d, self.d1 = m.createData(), m.createData()
+        self.planar = robot.base == "planar"
+        self.comp = np.array([0, 2, 4] if self.planar else range(6))
+        self.lin = np.array([0, 2] if self.planar else range(3))
+        self.ang = np.array([1] if self.planar else range(3))
+        self.base_idx, self.act_idx = np.asarray(base_idx, int), np.asarray(act_idx, int)
+        self.root = base_joint_id(robot)
+        self.fid = {s: m.getFrameId(contacts[s].frame) for s in SIDES}
+        self.corners = {s: contacts[s].corners() for s in SIDES}
+        self.cone = {s: _cone(contacts[s], cop_margin)[:, self.comp] for s in SIDES}
+        self.f_min = float(f_min)
+        self.mg = robot.mass * 9.81
+        eff = np.asarray(m.effortLimit)[self.act_idx]
+        self.lim_t = np.flatnonzero(np.isfinite(eff) & (eff < 1e30))
+        self.effort = eff[self.lim_t]
+        vel = np.asarray(m.velocityLimit)[self.act_idx]
+        self.lim_v = np.flatnonzero(np.isfinite(vel) & (vel < 1e30) & (vel > 0))
+        self.vel = vel[self.lim_v]
+        self.pos = _position_rows(m, self.act_idx)
+        self.q_act = _q_of_v(m, self.act_idx)
+        legs = {jm for x in SIDES for jm in m.supports[m.frames[self.fid[x]].parentJoint]}
+        leg_v = {m.joints[j].idx_v for j in legs if j > 0}
+        #: the legs follow the feet, centre of mass and base: their posture only regularises
+        self.posture_w = np.array([gains.w_legs if i in leg_v else 1.0 for i in self.act_idx])
+        self.nw = len(self.comp)
+        self.wscale = np.where(np.arange(6)[self.comp] < 3, 1.0, 0.3) * self.mg
+        # the centre of pressure drawn to the sole's centre: the moments τ_x, τ_y [N·m] in
+        # units of m·g·(10 cm)
+        self.cop_w = np.where(np.isin(np.arange(6)[self.comp], (3, 4)),
+                              gains.w_cop / (0.1 * self.mg) ** 2, 0.0)
+
+    # ------------------------------------------------------------------ model terms
+    def _terms(self, q: np.ndarray, v: np.ndarray) -> dict:
+        m, d, nv = self.m, self.d, self.m.nv
+        pin.forwardKinematics(m, d, q, v, np.zeros(nv))
+        pin.computeJointJacobians(m, d, q)
+        pin.updateFramePlacements(m, d)
+        t = {"feet": {}}
+        for s in SIDES:
+            f = self.fid[s]
+            t["feet"][s] = (d.oMf[f].copy(), pin.getFrameVelocity(m, d, f, _LWA).vector.copy(),
+                            pin.getFrameClassicalAcceleration(m, d, f, _LWA).vector.copy(),
+                            pin.getFrameJacobian(m, d, f, _LOCAL).copy(),
+                            pin.getFrameJacobian(m, d, f, _LWA).copy())
+        Rb = d.oMi[self.root].rotation.copy()
+        t["base"] = (Rb, Rb @ d.v[self.root].angular, Rb @ d.a[self.root].angular,
+                     pin.getJointJacobian(m, d, self.root, _LWA)[3:].copy())
+        pin.centerOfMass(m, d, q, v, np.zeros(nv))
+        t["com"] = (d.com[0].copy(), d.vcom[0].copy(), d.acom[0].copy(),
+                    pin.jacobianCenterOfMass(m, d, q, False).copy())
+        M = pin.crba(m, d, q)
+        t["M"] = np.triu(M) + np.triu(M, 1).T
+        t["h"] = pin.nonLinearEffects(m, d, q, v).copy()
+        return t
+
+    def _ahead(self, q_hat: np.ndarray, v_hat: np.ndarray) -> dict:
+        """At the predicted next state: each sole's placement, its LOCAL velocity
+        ``J(q̂) v̂`` ``(6,)`` and that velocity's derivatives with respect to ``q`` (tangent)
+        and ``v`` (= the LOCAL Jacobian), and its LOCAL_WORLD_ALIGNED Jacobian."""
+        m, d = self.m, self.d1
+        pin.computeForwardKinematicsDerivatives(m, d, q_hat, v_hat, np.zeros(m.nv))
+        pin.updateFramePlacements(m, d)
+        out = {}
+        for s, f in self.fid.items():
+            dq, dv = pin.getFrameVelocityDerivatives(m, d, f, _LOCAL)
+            out[s] = (d.oMf[f].copy(), pin.getFrameVelocity(m, d, f, _LOCAL).vector.copy(),
+                      dq.copy(), dv.copy(), pin.getFrameJacobian(m, d, f, _LWA).copy())
         return out
 
+    # ------------------------------------------------------------------ the QP
+    def solve(self, q, v, h: float, now: dict, nxt: dict, tk: Tasks, a_prev: np.ndarray
+              ) -> tuple[np.ndarray, dict, int]:
+        """``(a (nv,), wrenches {side: (6,)}, DAQP flag)`` at state ``(q, v)`` with step ``h``
+        [s], stance flags ``now`` (knot j) and ``nxt`` (knot k) and the frame's tasks."""
+        t = self._terms(q, v)
+        stance = [s for s in SIDES if now[s]]
+        nv, nw = self.m.nv, self.nw
+        n = nv + nw * len(stance)
+        self._qa = q[self.q_act]
+        H, f = self._cost(t, v, tk, stance, nxt, n)
+        S = np.ones(n)  # the wrenches in units of m·g: a well-scaled QP
+        S[nv:] = self.mg
+        H, f = H * S[:, None] * S[None], f * S
+        fixed = _Rows(n)  # the rows at knot j: built once
+        self._dynamics(fixed, t, stance)
+        self._limits(fixed, q, v, h)
+        A0, up0, lo0, sense0, kind0 = fixed.stack()
+        A0 = A0 * S[None]
+        a_lin = a_prev.copy()  # the previous frame's acceleration: a first guess of q_k
+        for i in range(PASSES):  # the rows one step ahead, linearised again at the step's q_k
+            v_hat = v + h * a_lin
+            ahead = self._ahead(pin.integrate(self.m, q, h * v_hat), v_hat)
+            rows = _Rows(n)
+            err = self._feet_ahead(rows, t, v, h, nxt, tk, ahead, a_lin)
+            if i and err < AHEAD_TOL:
+                break
+            A, up, lo, sense, kind = rows.stack()
+            x, flag = _solve(H, f, np.vstack([A0, A * S[None]]), np.concatenate([up0, up]),
+                             np.concatenate([lo0, lo]), np.concatenate([sense0, sense]),
+                             np.concatenate([kind0, kind]))
+            x = x * S
+            a_lin = x[:nv].copy()
+        a = x[:nv].copy()
+        W = {s: np.zeros(6) for s in SIDES}
+        for i, s in enumerate(stance):
+            W[s][self.comp] = x[nv + nw * i: nv + nw * (i + 1)]
+        self._exact_base(a, t, W, stance)
+        return a, W, flag
 
-_FAST: dict = {}
+    def _cost(self, t, v, tk: Tasks, stance, nxt, n) -> tuple[np.ndarray, np.ndarray]:
+        g, nv, nw = self.g, self.m.nv, self.nw
+        J, r, w = [], [], []
+
+        def task(Jt, target, weight):
+            J.append(Jt)
+            r.append(target)
+            w.append(np.full(len(target), weight))
+
+        c, vc, dc, Jc = t["com"]
+        kp, kd = _pd(g.com)
+        kp = np.array([g.com_xy**2, g.com_xy**2, kp])  # horizontally: mostly the velocity
+        acc = tk.com_acc + kp * (tk.com - c) + kd * (tk.com_vel - vc) - dc
+        J.append(Jc[self.lin])
+        r.append(acc[self.lin])
+        # horizontally in single support the centre of mass is left to its pendulum dynamics
+        # (the steps, placed at the capture point, govern it); in double support it follows
+        # the demonstrator's velocity
+        wxy = g.w_com_xy if len(stance) > 1 else g.w_com_xy_single
+        w.append(np.where(self.lin == 2, g.w_com, wxy))
+        Rb, wb, db, Jb = t["base"]
+        kp, kd = _pd(g.base)
+        acc = kp * pin.log3(tk.base_rot @ Rb.T) - kd * wb - db
+        task(Jb[self.ang], acc[self.ang], g.w_base)
+        kp, kd = _pd(g.swing)
+        for s in SIDES:
+            if nxt[s] or s not in tk.feet or tk.feet[s][4]:
+                continue
+            oMf, vel, drift, _, Jw = t["feet"][s]
+            p, R, vr, ar, _ = tk.feet[s]
+            e = np.concatenate([p - oMf.translation, pin.log3(R @ oMf.rotation.T)])
+            acc = ar + kp * e + kd * (vr - vel) - drift
+            task(Jw[self.comp], acc[self.comp], g.w_swing)
+        kp, kd = _pd(g.posture)
+        qa = self._qa
+        acc = kp * (tk.joints - qa) + kd * (tk.joints_vel - v[self.act_idx])
+        Js = np.zeros((self.act_idx.size, nv))
+        Js[np.arange(self.act_idx.size), self.act_idx] = 1.0
+        J.append(Js)
+        r.append(acc)
+        w.append(g.w_posture * self.posture_w)
+        Jt = np.zeros((sum(len(x) for x in r), n))
+        Jt[:, :nv] = np.vstack(J)
+        wt, rt = np.concatenate(w), np.concatenate(r)
+        H = Jt.T @ (wt[:, None] * Jt)
+        f = -Jt.T @ (wt * rt)
+        H[:nv, :nv] += g.w_acc * np.eye(nv)
+        for i, s in enumerate(stance):
+            sl = slice(nv + nw * i, nv + nw * (i + 1))
+            H[sl, sl] += np.diag(g.w_wrench / self.wscale**2 + self.cop_w)
+            d = tk.push.get(s)
+            if d is not None:  # the force along d: its components across d vanish
+                R = t["feet"][s][0].rotation
+                E = _across(d) @ R  # (2, 3): e_i · (R f)
+                B = np.zeros((E.shape[0], nw))
+                B[:, :self.lin.size] = E[:, self.lin]
+                H[sl, sl] += g.w_push / self.mg**2 * B.T @ B
+        return H, f
+
+    def _dynamics(self, rows, t, stance) -> None:
+        nv, nw = self.m.nv, self.nw
+        M, hh = t["M"], t["h"]
+        D = np.zeros((nv, rows.n))
+        D[:, :nv] = M
+        for i, s in enumerate(stance):
+            D[:, nv + nw * i: nv + nw * (i + 1)] = -t["feet"][s][3][self.comp].T
+            C = np.zeros((self.cone[s].shape[0] + 1, rows.n))
+            C[:-1, nv + nw * i: nv + nw * (i + 1)] = self.cone[s]
+            C[-1, nv + nw * i + (1 if self.planar else 2)] = -1.0
+            ub = np.zeros(C.shape[0])
+            ub[-1] = -self.f_min
+            ub[:-1] = -1e-7 * self.mg
+            rows.add(C, ub, np.full(C.shape[0], -1e30), 0, "hard")
+        rows.add(D[self.base_idx], -hh[self.base_idx], -hh[self.base_idx], _EQ, "base")
+        if self.lim_t.size:
+            Dt = D[self.act_idx[self.lim_t]]
+            ht, e = hh[self.act_idx[self.lim_t]], self.effort * (1 - TORQUE_MARGIN)
+            rows.add(Dt / self.effort[:, None], (e - ht) / self.effort,
+                     (-e - ht) / self.effort, 0, "torque")
+
+    def _limits(self, rows, q, v, h) -> None:
+        if self.lim_v.size:
+            i = self.act_idx[self.lim_v]
+            A = np.zeros((i.size, rows.n))
+            A[np.arange(i.size), i] = h / self.vel
+            vl = self.vel * (1 - VELOCITY_MARGIN)
+            rows.add(A, (vl - v[i]) / self.vel, (-vl - v[i]) / self.vel, 0, "velocity")
+        vi, qi, lo, hi = self.pos
+        if vi.size:
+            A = np.zeros((vi.size, rows.n))
+            A[np.arange(vi.size), vi] = h * h
+            now = q[qi] + h * v[vi]
+            rows.add(A, hi - now, lo - now, 0, "position")
+
+    def _feet_ahead(self, rows, t, v, h, nxt, tk: Tasks, ahead, a_lin) -> float:
+        """Rows of the next knot's soles; returns how far the feet held still or at rest
+        would move, at ``a_lin``, from what their rows ask [m/s]."""
+        nv, err = self.m.nv, 0.0
+        for s in SIDES:
+            oMf, vel, dq, Jl, Jw = ahead[s]
+            rest = not nxt[s] and s in tk.feet and tk.feet[s][4]
+            if nxt[s] or rest:  # J(q_k) v_k = back towards the stance's (rest) pose: a Newton
+                if rest:  # row in a, q_k = q ⊕ h v_k, v_k = v + h a (both through a)
+                    p, R = tk.feet[s][0], tk.feet[s][1]
+                    u = self.g.rest * pin.log6(oMf.actInv(pin.SE3(R, p))).vector / h
+                elif s in tk.anchor:
+                    u = self.g.hold * pin.log6(oMf.actInv(tk.anchor[s])).vector / h
+                else:  # touch-down: still
+                    u = np.zeros(6)
+                # the midpoint rule ½ (J(q_j) + J(q_k)) v_k = u: the sole moves by h·u over
+                # the step (not only ends it still), so that it does not drift knot by knot
+                Jj = t["feet"][s][3]
+                D = 0.5 * (h * Jj + h * Jl + h * h * dq)[self.comp]
+                mid = 0.5 * (Jj @ (v + h * a_lin) + vel)
+                A = np.zeros((self.nw, rows.n))
+                A[:, :nv] = D
+                b = (u - mid)[self.comp] + D @ a_lin
+                rows.add(A, b, b, _EQ, "stance")
+                err = max(err, float(np.max(np.abs(mid - u))))
+                continue
+            R, p = oMf.rotation, oMf.translation
+            rc = self.corners[s] @ R.T  # corner offsets, world axes (4, 3)
+            z = p[2] + rc[:, 2]
+            Jz = Jw[2][None] + Jw[3][None] * rc[:, [1]] - Jw[4][None] * rc[:, [0]]
+            A = np.zeros((4, rows.n))
+            A[:, :nv] = h * h * Jz
+            lb = -FLOOR_MARGIN - z + h * h * Jz @ a_lin
+            rows.add(A, np.full(4, 1e30), lb, 0, "swing")
+        return err
+
+    def _exact_base(self, a, t, W, stance) -> None:
+        """The base rows exact: ``a``'s base components absorb the QP's round-off."""
+        M, hh = t["M"], t["h"]
+        r = M @ a + hh
+        for s in stance:
+            r -= t["feet"][s][3].T @ W[s]
+        b = self.base_idx
+        a[b] -= np.linalg.solve(M[b][:, b], r[b])
 
 
-def _core(form) -> np.ndarray:
-    """Indices of a knot's variables other than the elastic slacks (fixed at 0 here)."""
-    var = form.knot.var
-    return np.array([i for n, sl in var.slices.items() if not n.startswith("s_")
-                     for i in range(sl.start, sl.stop)], int)
+class _Rows:
+    def __init__(self, n: int):
+        self.n, self.A, self.up, self.lo, self.sense, self.kind = n, [], [], [], [], []
+
+    def add(self, A, up, lo, sense, kind) -> None:
+        self.A.append(A)
+        self.up.append(np.asarray(up, float))
+        self.lo.append(np.asarray(lo, float))
+        self.sense.append(np.full(A.shape[0], sense, np.intc))
+        self.kind.append(np.full(A.shape[0], kind))
+
+    def stack(self):
+        return (np.vstack(self.A), np.concatenate(self.up), np.concatenate(self.lo),
+                np.concatenate(self.sense), np.concatenate(self.kind))
 
 
-def _fast(form, name: str) -> _Fast:
-    key = (id(form), name)
-    if key not in _FAST or _FAST[key][0] is not form:
-        core = _core(form)
-        cols = np.r_[core, form.nx + core] if name in ("pjac",) else core
-        _FAST[key] = (form, _Fast(form.fun[name], cols))
-    return _FAST[key][1]
-
-
-def _dense(f, *args) -> np.ndarray:
-    return f(*args)[0]
-
-
-def qp_step(form, Z0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
-            lbg: np.ndarray, ubg: np.ndarray, reg: float = 1e-6
-            ) -> tuple[np.ndarray, int]:
-    """One linearised step of the two-knot window (module docstring).
-
-    ``Z0``, ``lbx``, ``ubx`` ``(n_x, 2)``; ``P`` ``(n_p, 2)``; ``lbg``, ``ubg``: bounds of
-    every row of the window (:func:`~.problem.row_bounds`). Returns ``(Z (n_x, 2), DAQP's exit
-    flag)`` (:data:`SOLVED`: 1 every row met, 2 some soft rows relaxed)."""
-    f = {n: _fast(form, n) for n in ("kg", "kjac", "pg", "pjac", "kres", "kresjac")}
-    core = _core(form)  # the QP's columns: every variable but the slacks (fixed at 0)
-    nx = core.size
-    Z0 = np.clip(Z0, lbx, ubx)  # fixed variables at their values, the rest inside bounds
-    x0, x1, p0, p1 = Z0[:, 0], Z0[:, 1], P[:, 0], P[:, 1]
-    G = np.concatenate([_dense(f["kg"], x0, p0).ravel(), _dense(f["kg"], x1, p1).ravel(),
-                        _dense(f["pg"], x0, x1, p1).ravel()])
-    ngk = form.ngk
-    J = np.zeros((G.size, 2 * nx))
-    J[:ngk, :nx] = _dense(f["kjac"], x0, p0)
-    J[ngk:2 * ngk, nx:] = _dense(f["kjac"], x1, p1)
-    J[2 * ngk:] = _dense(f["pjac"], x0, x1, p1)
-    Jr = [_dense(f["kresjac"], x, p) for x, p in ((x0, p0), (x1, p1))]
-    r = [_dense(f["kres"], x, p).ravel() for x, p in ((x0, p0), (x1, p1))]
-    z0 = Z0[core].T.ravel()
-    lo, hi = lbx[core].T.ravel(), ubx[core].T.ravel()
-    free = np.flatnonzero(lo != hi)
-    H = np.zeros((2 * nx, 2 * nx))
-    g = np.zeros(2 * nx)
-    for i in range(2):
-        s = slice(i * nx, (i + 1) * nx)
-        H[s, s] = Jr[i].T @ Jr[i]
-        g[s] = Jr[i].T @ r[i]
-    # rows some bound applies to and some free variable moves (a row of fixed variables only,
-    # e.g. knot k − 1's pose, was settled by the previous frame)
-    moved = np.any(J[:, free] != 0.0, axis=1)
-    keep = np.flatnonzero((np.isfinite(lbg) | np.isfinite(ubg)) & moved)
-    goal = np.zeros(ngk, bool)
-    for c, sl in zip(form.cons, form.slices):
-        goal[sl] = isinstance(c, ForceDirection)
-    relax = np.zeros(G.size, bool)
-    relax[:2 * ngk] = np.tile(goal, 2)
-    A = J[np.ix_(keep, free)]
-    bu = np.concatenate([hi[free] - z0[free], ubg[keep] - G[keep]])
-    bl = np.concatenate([lo[free] - z0[free], lbg[keep] - G[keep]])
-    sense = np.zeros(bu.size, np.intc)
-    rows_eq = np.isfinite(lbg[keep]) & (lbg[keep] == ubg[keep])
-    sense[free.size:][rows_eq] = _EQ
-    ineq = free.size + np.flatnonzero(~rows_eq)  # a margin inside DAQP's tolerance
-    bu[ineq] -= INNER
-    bl[ineq] += INNER
-    sense[free.size:][relax[keep]] = _SOFT
-    eq = np.flatnonzero(sense == _EQ)
-    if eq.size:  # linearly dependent equalities (e.g. a stance foot's pose and hold rows)
-        R, piv = scipy.linalg.qr(A[eq - free.size].T, mode="r", pivoting=True)
-        diag = np.abs(np.diag(R)) if R.size else np.zeros(0)
-        rank = int(np.sum(diag > 1e-9 * max(diag.max(initial=0.0), 1.0)))
-        sense[eq[piv[rank:]]] = _SOFT
-    Hf = H[np.ix_(free, free)] + reg * np.eye(free.size)
-    big = 1e30
-    bu, bl = np.minimum(bu, big), np.maximum(bl, -big)
-    d, _, flag, _ = daqp.solve(Hf, g[free], A, bu, bl, sense)
-    if flag not in SOLVED:  # the physical rows cannot all hold: every relaxable row soft
-        allr = np.zeros(G.size, bool)
-        allr[form.relax_rows] = allr[ngk + form.relax_rows] = True
-        sense[free.size:][allr[keep]] = _SOFT
-        d, _, flag, _ = daqp.solve(Hf, g[free], A, bu, bl, sense)
-    if flag not in SOLVED:  # nor the contact rows (a touch-down out of reach): all but the
-        hard = np.zeros(G.size, bool)  # dynamics' base rows and the integration soft
-        for c, sl in zip(form.cons, form.slices):
-            if isinstance(c, BaseDynamics):
-                hard[sl] = hard[ngk + sl.start:ngk + sl.stop] = True
-        for pp, sl in zip(form.pairs, form.pair_slices):
-            if isinstance(pp, Integration):
-                hard[2 * ngk + sl.start:2 * ngk + sl.stop] = True
-        sense[free.size:][~hard[keep]] = _SOFT
-        d, _, flag, _ = daqp.solve(Hf, g[free], A, bu, bl, sense)
-    z = z0.copy()
+def _solve(H, f, A, up, lo, sense, kind) -> tuple[np.ndarray, int]:
+    """DAQP with every hard row (flag 1); failing that, the limits and swing rows soft, then
+    every row but the base rows (flag 2: solved with hard rows relaxed); else a negative
+    flag and the unconstrained minimiser."""
+    up, lo = np.minimum(up, 1e30), np.maximum(lo, -1e30)
+    x, _, flag, _ = daqp.solve(H, f, A, up, lo, sense)
     if flag in SOLVED:
-        z[free] += np.asarray(d)
-    Z = Z0.copy()
-    Z[core] = z.reshape(2, nx).T
-    return Z, int(flag)
+        return np.asarray(x), 1
+    for soft in (_LIMITS + ("swing",), _LIMITS + ("swing", "hard", "stance")):
+        s = sense.copy()
+        s[np.isin(kind, soft)] = _SOFT
+        x, _, flag, _ = daqp.solve(H, f, A, up, lo, s)
+        if flag in SOLVED:
+            return np.asarray(x), 2
+    return np.linalg.lstsq(H + 1e-9 * np.eye(H.shape[0]), -f, rcond=None)[0], int(flag)
 
 
-def _cone_matrix(X, Y, mu, Xc, Yc, planar: bool) -> np.ndarray:
-    """``(n, 6)`` with rows ``A w ≤ b`` of :func:`.cone.cone_rows` (f_min row excluded; it is
-    the constant part handled by the caller)."""
-    zero = cone_rows(np.zeros(6), X, Y, mu, Xc, Yc, 0.0, planar)
-    return np.array([[float(a - b) for a, b in zip(cone_rows(e, X, Y, mu, Xc, Yc, 0.0, planar),
-                                                    zero)] for e in np.eye(6)]).T
+def _cone(c, margin: float) -> np.ndarray:
+    """``(16, 6)`` wrench cone rows ``A w ≤ 0`` of sole ``c`` with friction μ/√2 (the square
+    pyramid inside the circular cone) and the centre-of-pressure rows ``margin`` inside."""
+    from ..contact import wrench_cone
+
+    A = wrench_cone(c.half_length, c.half_width, c.mu / np.sqrt(2))
+    A[4:6, 2] = -(c.half_width - margin)
+    A[6:8, 2] = -(c.half_length - margin)
+    return A
 
 
-def wrench_qp(robot, q: np.ndarray, v: np.ndarray, a: np.ndarray, W: dict, stance: dict,
-              contacts: dict, base_idx: np.ndarray, act_idx: np.ndarray,
-              inv_effort: np.ndarray, f_min: float, cop_margin: float,
-              goal: dict | None = None) -> tuple[dict, bool]:
-    """Knot wrenches ``{side: (6,)}`` [N, N·m] (sole frames) closest to ``W`` with the base
-    rows of ``rnea(q, v, a) − Σ J_cᵀ w`` exactly zero, torques within limits, cones met and,
-    with ``goal`` ``{side: (e1, e2) or None}`` (world axes), the force along the goal;
-    ``(wrenches, solved)``. Planar robots: the x, z, pitch components only."""
-    m, d = robot.model, robot.data
-    sides = [s for s in SIDES if stance[s]]
-    comp = [0, 2, 4] if robot.base == "planar" else list(range(6))
-    nc = len(comp)
-    tau = pin.rnea(m, d, q, v, a).copy()
-    if not sides:
-        ok = bool(np.all(np.abs(tau[base_idx]) <= 1e-6))
-        return {s: np.zeros(6) for s in SIDES}, ok
-    pin.computeJointJacobians(m, d, q)
-    pin.updateFramePlacements(m, d)
-    Jt, w0, rows_A, rows_u, rows_l, sense = [], [], [], [], [], []
-    n = nc * len(sides)
-    mg = robot.mass * 9.81
-    for i, s in enumerate(sides):
-        c = contacts[s]
-        fid = m.getFrameId(c.frame)
-        Jt.append(pin.getFrameJacobian(m, d, fid, pin.LOCAL)[comp].T)
-        w0.append(W[s][comp])
-        C = _cone_matrix(c.half_length, c.half_width, c.mu, c.half_length - cop_margin,
-                         c.half_width - cop_margin, robot.base == "planar")[:, comp]
-        blk = np.zeros((C.shape[0], n))
-        blk[:, i * nc:(i + 1) * nc] = C
-        rows_A.append(blk)
-        up = np.full(C.shape[0], -CONE_MARGIN * mg)
-        up[-1] = -f_min - CONE_MARGIN * mg  # f_min − f_z ≤ 0 row
-        rows_u.append(up)
-        rows_l.append(np.full(C.shape[0], -1e30))
-        sense.append(np.zeros(C.shape[0], np.intc))
-        if goal is not None and goal.get(s) is not None:
-            R = d.oMf[fid].rotation
-            for e in goal[s]:
-                row = np.zeros(n)
-                fw = e @ R  # e · (R f)
-                row[i * nc:(i + 1) * nc] = [fw[j] if j < 3 else 0.0 for j in comp]
-                rows_A.append(row[None])
-                rows_u.append(np.zeros(1))
-                rows_l.append(np.zeros(1))
-                sense.append(np.full(1, _SOFT, np.intc))
-    Jt = np.hstack(Jt)  # (nv, n): τ = rnea − Jt w
-    A = np.vstack([Jt[base_idx], Jt[act_idx] * inv_effort[:, None]] + rows_A)
-    lim = np.where(inv_effort > 0, 1.0, 1e30)
-    ta = tau[act_idx] * inv_effort
-    bu = np.concatenate([tau[base_idx], ta + lim] + rows_u)
-    bl = np.concatenate([tau[base_idx], ta - lim] + rows_l)
-    sense = np.concatenate([np.full(len(base_idx), _EQ, np.intc),
-                            np.zeros(len(act_idx), np.intc)] + sense)
-    scale = 1.0 / mg
-    H = np.eye(n) * scale**2
-    w0 = np.concatenate(w0)
-    x, _, flag, _ = daqp.solve(H, -H @ w0, A, bu, bl, sense)
-    out = {s: np.zeros(6) for s in SIDES}
-    if flag not in SOLVED:  # least-squares correction of the base rows only
-        x = w0 + np.linalg.lstsq(Jt[base_idx], tau[base_idx] - Jt[base_idx] @ w0,
-                                 rcond=None)[0]
-    for i, s in enumerate(sides):
-        out[s][comp] = np.asarray(x)[i * nc:(i + 1) * nc]
-    return out, flag in SOLVED
+def _across(d: np.ndarray) -> np.ndarray:
+    """``(2, 3)``: two unit vectors orthogonal to the unit vector ``d``."""
+    ref = np.array([0.0, 1.0, 0.0]) if abs(d[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    e1 = ref - (ref @ d) * d
+    e1 /= np.linalg.norm(e1)
+    return np.array([e1, np.cross(d, e1)])
+
+
+def _flat(oMf: pin.SE3) -> pin.SE3:
+    """The sole pose on the floor nearest ``oMf``: z = 0, its yaw kept, roll and pitch zero."""
+    R = oMf.rotation
+    yaw = np.arctan2(R[1, 0], R[0, 0])
+    c, s = np.cos(yaw), np.sin(yaw)
+    p = oMf.translation.copy()
+    p[2] = 0.0
+    return pin.SE3(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), p)
+
+
+def _q_of_v(m, vi: np.ndarray) -> np.ndarray:
+    """``q`` index of each 1-dof velocity index in ``vi`` (joints with nq = nv = 1)."""
+    out = np.zeros(len(vi), int)
+    for j in range(1, m.njoints):
+        jm = m.joints[j]
+        for i, k in enumerate(vi):
+            if jm.idx_v <= k < jm.idx_v + jm.nv:
+                out[i] = jm.idx_q + (k - jm.idx_v) if jm.nq == jm.nv else jm.idx_q
+    return out
+
+
+def _position_rows(m, act_idx: np.ndarray):
+    """``(v index, q index, lower, upper)`` of the 1-dof actuated joints with finite limits."""
+    vi, qi, lo, hi = [], [], [], []
+    for j in range(1, m.njoints):
+        jm = m.joints[j]
+        if jm.nq == 1 and jm.nv == 1 and jm.idx_v in set(act_idx.tolist()):
+            a, b = m.lowerPositionLimit[jm.idx_q], m.upperPositionLimit[jm.idx_q]
+            if abs(a) < 1e30 and abs(b) < 1e30 and a < b:
+                vi.append(jm.idx_v)
+                qi.append(jm.idx_q)
+                lo.append(a)
+                hi.append(b)
+    return np.array(vi, int), np.array(qi, int), np.array(lo), np.array(hi)

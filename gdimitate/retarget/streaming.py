@@ -1,18 +1,23 @@
-"""Streaming mode: the same formulation on a two-knot window, one demonstration frame at a
-time (``mode="per_frame"``, or :class:`StreamingAdaptor` for live input).
+"""Streaming mode: a demonstration adapted one frame at a time (``mode="per_frame"``, or
+:class:`StreamingAdaptor` for live input), in real time.
 
-Frame k is solved on the window (k − 1, k) of the trajectory problem (:mod:`.problem`,
-``T = 2``: the same tasks and constraints, cached once): knot k − 1 holds the committed
-configuration and velocity of the previous frame (fixed), knot k is free; the solve chooses
-``a_{k−1}`` and the wrenches of frame k − 1 (which the dynamics, the cones and the force
-direction constrain there) together with ``q_k``, ``v_k`` (linked by the integration rows).
-So each frame is final one frame late: ``a`` and the wrenches of the last frame come from its
-own window. The first frame is solved on a window of two copies of itself.
+Each frame is one quadratic program at the committed state (:mod:`.receding`): frame k's step
+chooses knot k − 1's acceleration and contact wrenches at its configuration and velocity —
+where the whole-body dynamics, the contact wrench cones and the torque limits are linear, so
+they hold exactly, not linearised — and integrates them exactly (``v_k = v_{k−1} + h a``,
+``q_k = q_{k−1} ⊕ h v_k``). So each frame is final one frame late: ``a`` and the wrenches of
+frame k − 1 come with frame k's step, those of the last frame from :meth:`StreamingAdaptor.final`.
+No frame waits for later ones (no latency beyond that one frame): the swing feet land early
+and wait, still and flat, for the demonstration's touch-down (:mod:`.frameref`). The first
+frame is the robot at rest in the demonstrator's first pose (:func:`.frameref.initial_pose`).
 
-Each frame's feasibility flag is the audit's (:func:`gdimitate.audit.audit`) on the window
-where that frame became final — recomputed from the output, not read from the optimiser.
-Force models: ``segment``, ``com`` and ``measured`` (the demonstrator's measured force of the
-frame, ``step(..., forces=...)``); ``dynamics`` needs the demonstrator's future accelerations.
+Each frame's feasibility flag is the audit's (:func:`gdimitate.audit.audit`), recomputed
+from the output, never read from the QP: per frame in :meth:`StreamingAdaptor.step` (on the
+frames since the current stances began; ``audit=False`` keeps it off the hot path), and for
+the whole motion, knot by knot, in :func:`adapt_per_frame`. Force models: ``segment``,
+``com`` and ``measured`` (the demonstrator's measured force of the frame, ``step(...,
+forces=...)``); the goal — the robot's contact force along the demonstrator's — is a soft
+task; ``dynamics`` needs the demonstrator's future accelerations.
 """
 
 from __future__ import annotations
@@ -21,43 +26,41 @@ import time
 from typing import NamedTuple
 
 import numpy as np
+import pinocchio as pin
 
-from ..contact import ContactForces, FootForces, SoleContact
+from ..contact import ContactForces, SoleContact
 from ..errors import InvalidInputError, UnknownNameError
 from ..kinematics import robot_motion
 from ..motion import Motion
 from ..result import AdaptedMotion, compare
 from ..robot import SIDES, Robot
 from . import limits as limits_mod
-from . import problem as pb
 from .bodymap import BodyMap, body_map
+from .frameref import FrameReference, initial_pose, initial_velocity
+from .info import SolverInfo, Unmet, limited_robot, resolve_contacts
 from .knot import base_dofs
 from .params import Contact, Limits, Weights
-from .parts import FlatContact
-from .receding import SOLVED, qp_step, wrench_qp
-from .solve import (
-    SolverInfo,
-    Unmet,
-    limited_robot,
-    problem_for,
-    resolve_contacts,
-    run_solver,
-    setup,
-    wrenches_of,
-)
-from .targets import demonstration_targets
+from .receding import FrameQP
 from .threads import single_thread
 
 __all__ = ["StreamingAdaptor", "FrameResult", "adapt_per_frame", "STREAMING_FORCE_MODELS"]
 
 STREAMING_FORCE_MODELS = ("segment", "com", "measured")
+#: how many frames a per-frame audit in :meth:`StreamingAdaptor.step` looks back at most
+AUDIT_WINDOW = 120
+#: a step that would make any velocity component larger than this [rad/s, m/s] is not taken
+#: (the robot coasts: the audit fails those frames)
+MAX_SPEED = 100.0
+_STATUS = {1: "QP", 2: "QP, relaxed", -99: "coasting"}
 
 
 class FrameResult(NamedTuple):
     """One :meth:`StreamingAdaptor.step`: the new frame's ``q`` ``(nq,)`` and ``v`` ``(nv,)``;
     the previous frame, now final (``None`` at the first step): its ``a`` ``(nv,)``,
-    ``wrenches`` ``{side: (6,)}`` and ``feasible`` (the audit's verdict); the solve's
-    ``status``, ``iterations`` and ``time_s``."""
+    ``wrenches`` ``{side: (6,)}`` [N, N·m, sole frames] and ``feasible`` (the audit's verdict;
+    ``None`` with ``audit=False``); the step's ``status`` (``"QP"``: every hard row held;
+    ``"QP, relaxed"``: some could not; ``"rest pose"`` at the first frame), ``iterations``
+    and ``time_s`` [s]."""
 
     q: np.ndarray
     v: np.ndarray
@@ -73,10 +76,11 @@ class StreamingAdaptor:
     """Adapt a demonstration frame by frame (module docstring).
 
     ``demonstrator``, ``imitator``: robots; ``force``: one of
-    :data:`STREAMING_FORCE_MODELS`; ``weights``, ``limits``, ``contact``: as for
-    :func:`~.solve.adapt_optimal` (the ``"all"`` contact rule only); ``contacts``: sole
-    overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``: extra IPOPT options
-    (the first frame's solve); ``audit``: audit each frame's window in :meth:`step`
+    :data:`STREAMING_FORCE_MODELS`; ``weights``: accepted for the trajectory mode's signature
+    (the per-frame QP has its own task weights, :class:`~.receding.Gains`); ``limits``,
+    ``contact``: as for :func:`~.solve.adapt_optimal` (the ``"all"`` contact rule only);
+    ``contacts``: sole overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``:
+    accepted and unused (no NLP runs); ``audit``: audit each frame in :meth:`step`
     (``FrameResult.previous_feasible``; False keeps the audit off the hot path: audit the
     assembled motion afterwards, as :func:`adapt_per_frame` does).
     """
@@ -102,45 +106,36 @@ class StreamingAdaptor:
                                                                  contacts)
         bm = body_map if isinstance(body_map, BodyMap) else None
         self.body_map = bm or _body_map(demonstrator, imitator, body_map)
-        _, act = base_dofs(imitator)
+        base, act = base_dofs(imitator)
         self._lim = limits_resolved = limits_mod.resolve(imitator, act, self.limits)
         self._act_names = limits_resolved.names
+        self._act = np.array([imitator.idx_v(n) for n in self._act_names], int)
         self._audit_robot = limited_robot(imitator, limits_resolved)
-        self._form = problem_for(imitator, force, self.contact, self.body_map, self._act_names)
-        ng = self._form.ngk * 2 + self._form.ns
-        self._c, _ = pb.compiled(self._form, 2, np.arange(ng), {"max_iter": 60,
-                                                                 **(ipopt or {})})
+        self._qp = FrameQP(self._audit_robot, self.contacts, base, self._act,
+                           self.contact.f_min, self.contact.cop_margin)
+        self._fid = {s: imitator.model.getFrameId(self.contacts[s].frame) for s in SIDES}
         self.reset()
 
     def reset(self) -> None:
         """Forget the previous frames."""
-        self._prev: tuple | None = None  # (t, q_demo, contact, force)
-        self._x: np.ndarray | None = None  # committed knot (n_x,)
+        self._ref = FrameReference(self.demonstrator, self.imitator, self.body_map,
+                                   self._act_names, self.force)
+        self._hist: dict[str, list] = {k: [] for k in ("t", "q", "v", "a", "c", "w")}
+        self._anchor: dict[str, pin.SE3] = {}
+        self._lift: dict[str, float] = {}
+        self._a_prev = np.zeros(self.imitator.model.nv)
         self._n = 0
 
     # ------------------------------------------------------------------ one frame
-    def _window(self, t1: float, q_demo: np.ndarray, contact: dict, forces) -> tuple:
-        if self._prev is None:
-            rows = [(t1 - self.dt, q_demo, contact, forces), (t1, q_demo, contact, forces)]
-        else:
-            rows = [self._prev, (t1, q_demo, contact, forces)]
-        t = np.array([r[0] for r in rows])
-        q = np.array([r[1] for r in rows])
-        c = {s: np.array([bool(r[2][s]) for r in rows]) for s in SIDES}
-        d = self.demonstrator
-        demo = robot_motion(d, t, q, c)
-        fs = None
-        if self.force == "measured":
-            fs = ContactForces(t, {s: FootForces(np.array([r[3][s] for r in rows]),
-                                                 np.full((2, 3), np.nan), np.zeros((2, 3)),
-                                                 c[s]) for s in SIDES}, "streaming")
-        return demo, fs
-
     def step(self, q_demo: np.ndarray, contact: dict[str, bool], dt: float | None = None,
-             forces: dict[str, np.ndarray] | None = None, verbose: bool = False) -> FrameResult:
+             forces: dict[str, np.ndarray] | None = None, verbose: bool = False,
+             v_demo: np.ndarray | None = None) -> FrameResult:
         """Adapt one demonstrator configuration ``q_demo`` ``(nq_demo,)`` with its stance flags
         ``{"left": bool, "right": bool}``; ``dt`` [s] since the previous frame; ``forces``
-        ``{side: (3,)}`` [N] the measured ground force on each foot (``force="measured"``)."""
+        ``{side: (3,)}`` [N] the measured ground force on each foot (``force="measured"``);
+        ``v_demo`` ``(nv_demo,)`` [rad/s, m/s]: the demonstrator's velocity, read at the first
+        frame only — the robot then starts moving with it (scaled) instead of at rest (a walk
+        joined mid-stride cannot be caught from a standstill within a step)."""
         d = self.demonstrator
         q_demo = np.asarray(q_demo, dtype=float)
         if q_demo.shape != (d.model.nq,):
@@ -151,141 +146,147 @@ class StreamingAdaptor:
         if self.force == "measured" and forces is None:
             raise InvalidInputError("force='measured' needs forces={side: (3,)} at each step")
         dt = self.dt if dt is None else float(dt)
-        t1 = (self._prev[0] + dt) if self._prev is not None else 0.0
-        demo, fs = self._window(t1, q_demo, contact, forces)
-        c = self._c
-        tg = demonstration_targets(d, demo, self.imitator, self.body_map, self._act_names,
-                                   self.force, fs, "all")
-        var = c.knot.var
-        x_start = None
-        if self._x is not None:
-            x_start = np.column_stack([self._x, self._x])
-            x_start[var["q"], 1] = self._integrate(self._x, dt)  # constant velocity
-        num = setup(self._form, tg, self.imitator, d, self.weights, self.limits, self.contact,
-                    self.contacts, x_start)
-        num.keep = np.arange(num.lbg.size)
-        if self._x is not None:  # the previous frame's configuration and velocity are final
-            for blk in ("q", "v"):
-                num.lbx[var[blk], 0] = num.ubx[var[blk], 0] = self._x[var[blk]]
-            fc = self._form.rows_of(FlatContact)  # and so is its foot velocity
-            rows = fc.start + FlatContact().start_velocity_rows(num.spec)
-            num.lbg[rows], num.ubg[rows] = -np.inf, np.inf
+        if not (np.isfinite(dt) and dt > 0):
+            raise InvalidInputError(f"dt must be a positive period in seconds; got {dt!r}")
+        H = self._hist
+        t = H["t"][-1] + dt if H["t"] else 0.0
+        flags = {s: bool(contact[s]) for s in SIDES}
         t0 = time.perf_counter()
-        if self._x is None:  # the first frame: the window's NLP from the warm start
-            Z, status, iters = self._nlp(c, num, verbose)
-        else:  # every later frame: one linearised QP (:mod:`.receding`)
-            with single_thread():
-                Z, flag = qp_step(self._form, num.x0, num.P, num.lbx, num.ubx, num.lbg,
-                                  num.ubg)
-                status, iters = "QP", 1
-                if flag in SOLVED:
-                    Z = self._polish(Z, tg, num.P, dt)
-            if flag not in SOLVED:  # no step from here: the window's NLP
-                Z, status, iters = self._nlp(c, num, verbose)
+        self._ref.frames.append(self._ref.features(t, q_demo, flags, forces))
+        if not H["t"]:
+            return self._first(t, flags, t0, v_demo)
+        with single_thread():
+            a, W, flag = self._solve(len(H["t"]) - 1, flags)
+        v_next = H["v"][-1] + self._h * a
+        if not (np.all(np.isfinite(a)) and all(np.all(np.isfinite(W[s])) for s in SIDES)
+                and np.max(np.abs(v_next)) < MAX_SPEED):  # no usable step: coast
+            a, W, flag = np.zeros_like(a), {s: np.zeros(6) for s in SIDES}, -99
+        q, v = self._commit(t, flags, a, W)
         elapsed = time.perf_counter() - t0
-        prev_a = prev_w = prev_ok = None
-        if self._x is not None:
-            prev_a = Z[var["a"], 0].copy()
-            W = _wrenches(c, Z)
-            prev_w = {s: W[s][0] for s in SIDES}
-            prev_ok = self._audit_window(tg, Z, W) if self.audit else None
-        self._prev = (t1, q_demo, {s: bool(contact[s]) for s in SIDES}, forces)
-        self._x = Z[:, 1].copy() if self._x is not None else Z[:, 0].copy()
-        self._last = (tg, Z, num.P)
+        ok = self._audit_last() if self.audit else None
         self._n += 1
-        return FrameResult(self._x[var["q"]].copy(), self._x[var["v"]].copy(), prev_a, prev_w,
-                           prev_ok, status, iters, elapsed)
+        return FrameResult(q.copy(), v.copy(), a.copy(), {s: W[s].copy() for s in SIDES}, ok,
+                           _STATUS.get(flag, f"QP failed ({flag})"), 1, elapsed)
 
-    def _nlp(self, c, num, verbose: bool) -> tuple[np.ndarray, str, int]:
-        """The window's NLP with IPOPT (the first frame, or a frame whose QP failed)."""
-        var = c.knot.var
-        z, st = run_solver(c, num, num.x0, False, verbose, "frame", "converged")
-        Z = z.reshape(2, -1).T
-        iters = int(st.get("iter_count", 0))
-        if not st.get("success"):
-            z2, st2 = run_solver(c, num, Z, True, verbose, "frame, least-infeasible",
-                                 "converged")
-            Z = z2.reshape(2, -1).T.copy()
-            for name in ("s_plus", "s_minus"):
-                Z[var[name]] = 0.0
-            st = st2
-            iters += int(st2.get("iter_count", 0))
-        return Z, str(st.get("return_status")), iters
+    def _first(self, t: float, flags: dict, t0: float, v_demo) -> FrameResult:
+        f0 = self._ref.frames[0]
+        moving = v_demo is not None
+        if moving:
+            v_demo = np.asarray(v_demo, float)
+            if v_demo.shape != (self.demonstrator.model.nv,):
+                raise InvalidInputError(f"v_demo must have shape "
+                                        f"({self.demonstrator.model.nv},); got {v_demo.shape}")
+        cv = None
+        if moving:
+            dm, dd = self.demonstrator.model, self.demonstrator.model.createData()
+            pin.centerOfMass(dm, dd, f0["q"], v_demo)
+            cv = self._ref.s * dd.vcom[0]
+        q = initial_pose(self.imitator, self._ref, f0, self._act, cv)
+        v0 = (initial_velocity(self.imitator, q, self._ref, f0, v_demo, self._act) if moving
+              else np.zeros(self.imitator.model.nv))
+        m, data = self.imitator.model, self.imitator.model.createData()
+        pin.framesForwardKinematics(m, data, q)
+        feet = {s: data.oMf[self._fid[s]].copy() for s in SIDES}
+        from ..kinematics import base_joint_id
 
-    def _polish(self, Z: np.ndarray, tg, P: np.ndarray, dt: float) -> np.ndarray:
-        """The window's equalities exact on the step's numbers (:mod:`.receding`): ``q_k``'s
-        quaternion, ``v_k`` and ``a_{k−1}`` by the integration rule, knot k − 1's wrenches by
-        :func:`~.receding.wrench_qp`."""
-        import pinocchio as pin
+        self._ref.start(f0, pin.centerOfMass(m, data, q), feet,
+                        data.oMi[base_joint_id(self.imitator)].rotation.copy(), moving)
+        self._anchor = {s: feet[s] for s in SIDES if flags[s]}
+        H = self._hist
+        for k, x in (("t", t), ("q", q), ("v", v0), ("c", flags)):
+            H[k].append(x)
+        self._n += 1
+        return FrameResult(q.copy(), v0.copy(), None, None, None,
+                           "moving start" if moving else "rest pose", 0,
+                           time.perf_counter() - t0)
 
-        Z = Z.copy()
-        var, m = self._form.knot.var, self.imitator.model
-        q0, q1 = Z[var["q"], 0], Z[var["q"], 1].copy()
-        if self.imitator.base == "free":
-            q1[3:7] /= np.linalg.norm(q1[3:7])
-        h = tg.t[1] - tg.t[0]
-        v1 = pin.difference(m, q0, q1) / h
-        Z[var["q"], 1], Z[var["v"], 1] = q1, v1
-        Z[var["a"], 0] = (v1 - Z[var["v"], 0]) / h
-        self._wrench_fix(Z, 0, tg, P)
-        return Z
+    def _solve(self, j: int, nxt: dict) -> tuple[np.ndarray, dict, int]:
+        """Knot ``j``'s QP (the next knot's stance flags ``nxt``)."""
+        H = self._hist
+        q, v = H["q"][j], H["v"][j]
+        F = self._ref.frames
+        h = F[j + 1]["t"] - H["t"][j] if j + 1 < len(F) else self.dt
+        m, data = self.imitator.model, self._qp.d
+        pin.framesForwardKinematics(m, data, q)
+        feet = {s: data.oMf[self._fid[s]].copy() for s in SIDES}
+        c = pin.centerOfMass(m, data, q, v)
+        tk = self._ref.tasks(j, nxt, feet, self._anchor, (c.copy(), data.vcom[0].copy()))
+        a, W, flag = self._qp.solve(q, v, h, H["c"][j], nxt, tk, self._a_prev)
+        self._h = h
+        return a, W, flag
 
-    def _wrench_fix(self, Z: np.ndarray, col: int, tg, P: np.ndarray) -> None:
-        k, var = self._form.knot, self._form.knot.var
-        W = _wrenches(self._c, Z)
-        Wk = {s: W[s][col] for s in SIDES}
-        stance = {s: bool(tg.stance[s][col]) for s in SIDES}
-        goal = None
-        if self.force == "measured":
-            goal = {s: ((P[k.par[f"e1_{s}"], col],) if k.planar else
-                        (P[k.par[f"e1_{s}"], col], P[k.par[f"e2_{s}"], col]))
-                    if np.all(np.isfinite(tg.push[s][col])) else None for s in SIDES}
-        out, _ = wrench_qp(self.imitator, Z[var["q"], col], Z[var["v"], col],
-                           Z[var["a"], col], Wk, stance, self.contacts, k.base_idx, k.act_idx,
-                           P[k.par["inv_effort"], col], self.contact.f_min,
-                           self.contact.cop_margin, goal)
-        cols = [0, 2, 4] if k.planar else list(range(6))
+    def _commit(self, t: float, flags: dict, a: np.ndarray, W: dict):
+        """Knot j's ``a``, wrenches final; knot k's ``q``, ``v`` by exact integration."""
+        H, m = self._hist, self.imitator.model
+        v = H["v"][-1] + self._h * a
+        q = pin.integrate(m, H["q"][-1], self._h * v)
+        H["a"].append(a)
+        H["w"].append(W)
+        self._a_prev = a
+        prev = H["c"][-1]
+        data = self._qp.d1
+        pin.framesForwardKinematics(m, data, q)
         for s in SIDES:
-            Z[var[f"w_{s}"], col] = out[s][cols] / k.mg
+            if flags[s] and not prev[s]:  # touch-down: the stance's pose is this one
+                self._anchor[s] = data.oMf[self._fid[s]].copy()
+                if s in self._lift:
+                    self._ref.touched_down(s, t - self._lift.pop(s))
+            elif not flags[s]:
+                self._anchor.pop(s, None)
+                if prev[s]:
+                    self._lift[s] = t
+        for k, x in (("t", t), ("q", q), ("v", v), ("c", flags)):
+            H[k].append(x)
+        return q, v
 
     def final(self) -> tuple[np.ndarray, dict, bool | None]:
         """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
-        window (call after the last :meth:`step`); ``feasible`` None without the per-frame
+        QP (call after the last :meth:`step`); ``feasible`` None without the per-frame
         audit."""
-        tg, Z, P = self._last
-        var = self._c.knot.var
-        col = 0 if self._n == 1 else 1
-        Z = Z.copy()
-        if col == 1:
-            self._wrench_fix(Z, 1, tg, P)
-        W = _wrenches(self._c, Z)
-        ok = self._audit_window(tg, Z, W, col) if self.audit else None
-        return Z[var["a"], col].copy(), {s: W[s][col] for s in SIDES}, ok
+        H = self._hist
+        j = len(H["t"]) - 1
+        if j < 0:
+            raise InvalidInputError("final() needs at least one step()")
+        with single_thread():
+            a, W, _ = self._solve(j, H["c"][j])
+        ok = None
+        if self.audit:
+            ok = self._audit_knots(j, a, W)
+        return a, W, ok
 
-    def _integrate(self, x: np.ndarray, dt: float) -> np.ndarray:
-        import pinocchio as pin
+    # ------------------------------------------------------------------ the audit
+    def _audit_last(self) -> bool:
+        j = len(self._hist["t"]) - 2
+        return self._audit_knots(j, None, None)
 
-        var = self._c.knot.var
-        return pin.integrate(self.imitator.model, x[var["q"]], dt * x[var["v"]])
-
-    def _audit_window(self, tg, Z, W, col: int = 0) -> bool:
+    def _audit_knots(self, j: int, a_last, W_last) -> bool:
+        """The audit's verdict on knot ``j``, on the frames since the stances at ``j`` began
+        (at most :data:`AUDIT_WINDOW` back) and up to the next one, whose acceleration is
+        taken as knot j's (no look-ahead in ``velocity_consistency``'s allowance)."""
         from ..audit import audit
 
-        var = self._c.knot.var
-        m = robot_motion(self.imitator, tg.t, Z[var["q"]].T, tg.stance).replace(
-            v=Z[var["v"]].T, a=Z[var["a"]].T)
-        target = tg.push if self.force == "measured" else None
-        rep = audit(self._audit_robot, m, W, self.contacts, target=target,
+        H = self._hist
+        c = H["c"]
+        i = j
+        while i > 0 and j - i < AUDIT_WINDOW and any(c[i - 1][s] and c[j][s] for s in SIDES):
+            i -= 1
+        stop = min(j + 2, len(H["t"]))
+        a = list(H["a"][i:stop]) if a_last is None else list(H["a"][i:j]) + [a_last]
+        W = list(H["w"][i:stop]) if W_last is None else list(H["w"][i:j]) + [W_last]
+        while len(a) < stop - i:
+            a.append(a[-1])
+            W.append(W[-1])
+        flags = {s: np.array([x[s] for x in c[i:stop]]) for s in SIDES}
+        mo = robot_motion(self.imitator, np.array(H["t"][i:stop]), np.array(H["q"][i:stop]),
+                          flags).replace(v=np.array(H["v"][i:stop]), a=np.array(a))
+        Wd = {s: np.array([w[s] for w in W]) for s in SIDES}
+        rep = audit(self._audit_robot, mo, Wd, self.contacts,
                     cone_half_angle=self.contact.cone_half_angle)
-        return bool(rep.knot_feasible[col])
+        return bool(rep.knot_feasible[j - i])
 
 
 def _body_map(demonstrator: Robot, imitator: Robot, given) -> BodyMap:
     return body_map(demonstrator, imitator, given)
-
-
-def _wrenches(c: pb.Compiled, Z: np.ndarray) -> dict[str, np.ndarray]:
-    return wrenches_of(c, Z)
 
 
 def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: str = "segment",
@@ -296,7 +297,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     """:class:`StreamingAdaptor` over every frame of ``demo`` (what ``adapt(...,
     method="optimal", mode="per_frame")`` runs). Returns an
     :class:`~gdimitate.adapt.AdaptedMotion` whose ``motion`` has the frames' ``q``, ``v``,
-    ``a``, whose ``solver`` is a :class:`~.solve.SolverInfo` (frames per second in
+    ``a``, whose ``solver`` is a :class:`~.info.SolverInfo` (frames per second in
     ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags —
     the audit of the assembled motion, knot by knot, run once after the frames (also in
     ``solver``'s ``unmet`` when some frames fail); ``audit`` is that whole motion's."""
@@ -304,6 +305,8 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
 
     if demo.base_nq and demo.q.shape[1] != demonstrator.model.nq:
         raise InvalidInputError("the demonstration does not match the demonstrator")
+    if force == "measured" and forces is None:
+        raise InvalidInputError("force='measured' needs forces= (the measured ground forces)")
     ad = StreamingAdaptor(demonstrator, imitator, force, weights=weights, limits=limits,
                           contact=contact, contacts=contacts, body_map=body_map, dt=demo.dt,
                           ipopt=ipopt, audit=False)
@@ -311,7 +314,10 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     nq, nv = imitator.model.nq, imitator.model.nv
     q, v, a = np.zeros((T, nq)), np.zeros((T, nv)), np.zeros((T, nv))
     W = {s: np.zeros((T, 6)) for s in SIDES}
-    iters, statuses = 0, []
+    statuses = []
+    v0 = None
+    if T > 1:  # the demonstrator's velocity at the first frame: start moving with it
+        v0 = pin.difference(demonstrator.model, demo.q[0], demo.q[1]) / (demo.t[1] - demo.t[0])
     t0 = time.perf_counter()
     for k in range(T):
         f_k = None
@@ -319,13 +325,13 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
             f_k = {s: np.array([np.interp(demo.t[k], forces.t, forces[s].force[:, i])
                                 for i in range(3)]) for s in SIDES}
         dt = demo.t[k] - demo.t[k - 1] if k else demo.dt
-        r = ad.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, f_k)
+        r = ad.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, f_k,
+                    v_demo=v0 if k == 0 else None)
         q[k], v[k] = r.q, r.v
         if k:
             a[k - 1] = r.previous_a
             for s in SIDES:
                 W[s][k - 1] = r.previous_wrenches[s]
-        iters += r.iterations
         statuses.append(r.status)
     a[-1], wl, _ = ad.final()
     for s in SIDES:
@@ -340,7 +346,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
                      {s: ok.copy() for s in SIDES}, force if force != "measured" else "segment")
     bad = tuple(Unmet(f"frame {k}", 1.0, int(k)) for k in np.flatnonzero(~ok))
     info = SolverInfo(status=max(set(statuses), key=statuses.count), success=bool(ok.all()),
-                      iterations=iters, time_s=elapsed, build_s=0.0, cached=True,
+                      iterations=T - 1, time_s=elapsed, build_s=0.0, cached=True,
                       elastic=not ok.all(), knots=T, variables=0, constraints=0, unmet=bad)
     return AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,
                          contacts=dict(ad.contacts), audit=aud, solver=info,

@@ -1,0 +1,394 @@
+"""What one demonstration frame asks of the imitator in the streaming mode: the references of
+the per-frame QP's tasks (:class:`~.receding.Tasks`), from the demonstrator's own kinematics.
+
+Positions map from the demonstrator's world to the imitator's by ``p ↦ s·p + o`` in the
+horizontal plane, ``s`` the ratio of the legs' lengths and ``o`` an offset that follows, with
+a 0.5-s time constant, where the imitator's stance feet really are against the demonstrator's
+(so that the centre of mass is asked to stay over the imitator's own support). Heights: the
+centre of mass keeps the imitator's starting height plus ``s`` times the demonstrator's change.
+Velocities and accelerations are central differences over the frames ``j − 1, j, j + 1`` (the
+streaming step of frame ``j + 1`` solves knot ``j``: no extra latency).
+
+Swing feet land early and wait: a foot that leaves the floor follows a smooth arc (quintic
+in the horizontal plane, clearance ``0.08 ·`` leg length at mid-swing) to the landing point
+predicted from the demonstrator's foot, within 75 % of the last swing's duration (0.4 s
+before the first), and then rests flat on the floor, unloaded, until the demonstration's
+contact flag says it is in stance — so that it touches down still and flat whenever the
+flag comes. Its landing point keeps at least 80 % of the neutral stance's lateral
+separation from the other foot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..robot import SIDES
+from .receding import Tasks
+
+__all__ = ["FrameReference"]
+
+LAND, FIRST_SWING, TAU_OFFSET, CLEARANCE, SEPARATION, RAMP = 0.95, 0.45, 0.15, 0.08, 1.0, 0.6
+TAU_COM, KEEP_GOING, MAX_STEP = 1.0, 0.0, 0.5
+
+
+class FrameReference:
+    """References per frame (module docstring). ``demonstrator``, ``imitator``: robots;
+    ``bmap``: the body map; ``act_names``: the imitator's actuated joints (QP order);
+    ``force``: the goal's force model (``measured``, ``segment`` or ``com``)."""
+
+    def __init__(self, demonstrator, imitator, bmap, act_names, force: str):
+        self.d, self.r, self.force = demonstrator, imitator, force
+        self.s = float(np.mean([imitator.legs[x].length for x in SIDES])
+                       / np.mean([demonstrator.legs[x].length for x in SIDES]))
+        dm = demonstrator.model
+        dc = demonstrator.contacts or {}
+        self.sole = {x: dm.getFrameId(dc[x].frame if x in dc else demonstrator.legs[x].sole)
+                     for x in SIDES}
+        self.knee = {x: dm.getJointId(demonstrator.legs[x].knee) for x in SIDES}
+        self.ankle = {x: dm.getFrameId(demonstrator.legs[x].ankle or demonstrator.legs[x].sole)
+                      for x in SIDES}
+        pelvis = [dseg for dseg, iseg in bmap.segments.items()
+                  if iseg in ("base_link", imitator.model.frames[2].name)]
+        self.pelvis = dm.getFrameId(pelvis[0]) if pelvis else None
+        n = len(act_names)
+        self.neutral = np.array([imitator.neutral[imitator.idx_q(j)] for j in act_names])
+        self.jmap = [(demonstrator.idx_q(dj), act_names.index(ij), sc, off)
+                     for dj, (ij, sc, off) in bmap.joints.items() if ij in act_names]
+        self.n_act = n
+        self.leg = float(np.mean([imitator.legs[x].length for x in SIDES]))
+        self.clearance = CLEARANCE * self.leg
+        im, idt = imitator.model, imitator.model.createData()
+        pin.framesForwardKinematics(im, idt, imitator.neutral)
+        ys = [idt.oMf[im.getFrameId(imitator.legs[x].sole)].translation[1] for x in SIDES]
+        self.sep = abs(ys[0] - ys[1])
+        self.frames: list[dict] = []
+        self.swing: dict = {x: None for x in SIDES}
+        self.t_swing = FIRST_SWING
+        self.lift = {x: None for x in SIDES}
+
+    # ------------------------------------------------------------------ one frame
+    def features(self, t: float, q_demo: np.ndarray, contact: dict, forces) -> dict:
+        """The demonstrator's quantities of one frame (world, its own scale)."""
+        m, data = self.d.model, self.d.data
+        pin.framesForwardKinematics(m, data, q_demo)
+        com = pin.centerOfMass(m, data, q_demo).copy()
+        soles = {x: data.oMf[self.sole[x]].copy() for x in SIDES}
+        joints = self.neutral.copy()
+        for qi, ai, sc, off in self.jmap:
+            joints[ai] = sc * q_demo[qi] + off
+        rot = data.oMf[self.pelvis].rotation.copy() if self.pelvis is not None else None
+        push = {}
+        for x in SIDES:
+            d = None
+            if contact[x]:
+                if self.force == "measured" and forces is not None:
+                    d = np.asarray(forces[x], float)
+                elif self.force == "segment":
+                    d = data.oMi[self.knee[x]].translation - data.oMf[self.ankle[x]].translation
+                elif self.force == "com":
+                    d = com - soles[x].translation
+            nd = np.linalg.norm(d) if d is not None else 0.0
+            push[x] = d / nd if nd > 1e-9 else None
+        return {"t": t, "q": q_demo, "com": com, "soles": soles, "joints": joints, "rot": rot,
+                "push": push, "contact": {x: bool(contact[x]) for x in SIDES}}
+
+    def start(self, f0: dict, com0: np.ndarray, feet0: dict, base_rot0: np.ndarray,
+              moving: bool) -> None:
+        """Anchor the map on the first frame: the imitator's ``com0`` ``(3,)``, sole poses
+        ``feet0`` {side: SE3} and base rotation ``base_rot0``; ``moving``: the imitator starts
+        with the demonstrator's velocity (else at rest: the centre of mass is led from where
+        it stands to the demonstration's within :data:`RAMP` seconds)."""
+        self.ramp = 1e-9 if moving else RAMP
+        self.track = None
+        self.z0, self.zd0 = float(com0[2]), float(f0["com"][2])
+        self.off = self._centre(feet0, f0) - self.s * self._centre(f0["soles"], f0)
+        self.rot0, self.com0 = base_rot0, np.asarray(com0, float).copy()
+        for x in SIDES:  # a foot in swing at the start rests on the floor, waiting
+            if not f0["contact"][x]:
+                R = feet0[x].rotation
+                self.lift[x] = {"t0": -1e9, "p0": feet0[x].translation.copy(), "R0": R.copy(),
+                                "goal": (feet0[x].translation[:2].copy(),
+                                         float(np.arctan2(R[1, 0], R[0, 0])))}
+
+    def _centre(self, poses: dict, f: dict) -> np.ndarray:
+        down = [x for x in SIDES if f["contact"][x]] or list(SIDES)
+        return np.mean([poses[x].translation[:2] for x in down], axis=0)
+
+    def _map(self, p: np.ndarray) -> np.ndarray:
+        return self.s * p[:2] + self.off
+
+    # ------------------------------------------------------------------ the tasks
+    def tasks(self, j: int, nxt: dict, feet: dict, anchors: dict, com: tuple) -> Tasks:
+        """The tasks of knot ``j`` (frames ``j − 1 … j + 1`` must be in :attr:`frames`); ``nxt``
+        the stance flags of knot ``j + 1``; ``feet`` {side: SE3} the imitator's soles at ``j``;
+        ``anchors`` {side: SE3} the poses the stance feet began their stance with; ``com``
+        ``(position (3,), velocity (3,))`` the imitator's centre of mass at ``j``."""
+        F = self.frames
+        f0, f1, f2 = F[max(j - 1, 0)], F[j], F[min(j + 1, len(F) - 1)]
+        h = max(f2["t"] - f0["t"], 1e-9)
+        hs = [x for x in SIDES if f1["contact"][x] and x in anchors]
+        if hs:
+            ctr = np.mean([anchors[x].translation[:2] for x in hs], axis=0)
+            dem = np.mean([f1["soles"][x].translation[:2] for x in hs], axis=0)
+            gain = min(1.0, (f2["t"] - f1["t"]) / TAU_OFFSET)
+            self.off = self.off + gain * (ctr - self.s * dem - self.off)
+        com = [np.append(self._map(f["com"]), self.z0 + self.s * (f["com"][2] - self.zd0))
+               for f in (f0, f1, f2)]
+        hh = 0.5 * h
+        acc = (com[2] - 2 * com[1] + com[0]) / hh**2 if f0 is not f1 and f2 is not f1 else \
+            np.zeros(3)
+        R = self.ramp
+        b, db, ddb = _quintic((f1["t"] - F[0]["t"]) / R)  # from rest to the demonstration
+        gap = com[1] - self.com0
+        target = self.com0 + b * gap
+        # horizontally, the centre of mass follows the demonstrator's velocity (scaled) from
+        # where the imitator's reference was, drawn towards the support-relative position
+        # only slowly (TAU_COM): its own steps, placed for balance, set where it walks
+        if self.track is None:
+            self.track = target[:2].copy()
+        else:
+            dt1 = f1["t"] - F[j - 1]["t"] if j else 0.0
+            vel = self._cap(b * (com[1][:2] - com[0][:2]) / max(f1["t"] - f0["t"], 1e-9))
+            self.track = self.track + dt1 * vel + min(1.0, dt1 / TAU_COM) * (
+                target[:2] - self.track)
+        target[:2] = self.track
+        cv = b * (com[2] - com[0]) / h + db / R * gap
+        cv[:2] = self._cap(cv[:2])
+        tk = Tasks(com=target,
+                   com_vel=cv,
+                   com_acc=b * acc + ddb / R**2 * gap,
+                   base_rot=f1["rot"] if f1["rot"] is not None else self.rot0, feet={},
+                   joints=f1["joints"], joints_vel=(f2["joints"] - f0["joints"]) / h,
+                   push=f1["push"], anchor=anchors)
+        # foot placement feedback (capture point): a centre of mass ahead of its reference
+        # by e (and ė) puts the swing foot ahead by e + ė/ω, ω = √(g/z)
+        self._cp = (com[0][:2], com[1][:2], np.sqrt(9.81 / max(com[0][2], 1e-3)))
+        for x in SIDES:
+            if nxt[x]:
+                self.lift[x] = None
+            else:
+                tk.feet[x] = self._swing(x, f1, f0, f2, feet, h)
+        return tk
+
+    def _swing(self, x: str, f1: dict, f0: dict, f2: dict, feet: dict, h: float) -> tuple:
+        """The swing foot's reference ``(position, rotation, velocity (6,), acc (6,), resting)``."""
+        t = f1["t"]
+        if self.lift[x] is None:
+            self.lift[x] = {"t0": t, "p0": feet[x].translation.copy(),
+                            "R0": feet[x].rotation.copy(), "goal": None}
+        L = self.lift[x]
+        T = LAND * self.t_swing
+        phi = min((t - L["t0"]) / T, 1.0)
+        if L["goal"] is None or phi < 0.9:
+            sole = f1["soles"][x]
+            # the capture point ξ = c + ċ/ω at the expected touch-down, diverging from the
+            # stance sole p as ξ(t + τ) = p + (ξ − p) e^{ωτ} (linear inverted pendulum),
+            # less a share of the lead ċ/ω so that the walk goes on
+            c, cd, w0 = self._cp
+            o = "right" if x == "left" else "left"
+            p = feet[o].translation[:2]
+            tau = max(L["t0"] + self.t_swing - t, 0.0)
+            xi = p + (c + cd / w0 - p) * np.exp(w0 * tau)
+            goal = xi - KEEP_GOING * cd / w0
+            R = sole.rotation
+            yaw = np.arctan2(R[1, 0], R[0, 0])
+            L["goal"] = (self._apart(x, goal, feet), yaw)
+        goal, yaw = L["goal"]
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        Rg = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+        sig, dsig, ddsig = _quintic(phi)
+        b, db, ddb = _bump(phi)
+        p0 = L["p0"]
+        dp = np.append(goal - p0[:2], -p0[2])
+        up = np.array([0.0, 0.0, self.clearance])
+        pos = p0 + sig * dp + b * up
+        vel = (dsig * dp + db * up) / T
+        acc = (ddsig * dp + ddb * up) / T**2
+        w = pin.log3(L["R0"].T @ Rg)
+        R = L["R0"] @ pin.exp3(sig * w)
+        om = L["R0"] @ w * dsig / T
+        al = L["R0"] @ w * ddsig / T**2
+        if phi >= 1.0:  # resting on the floor until the touch-down
+            return np.append(goal, 0.0), Rg, np.zeros(6), np.zeros(6), True
+        return pos, R, np.concatenate([vel, om]), np.concatenate([acc, al]), False
+
+    def _cap(self, v: np.ndarray) -> np.ndarray:
+        """A horizontal velocity ``v`` ``(2,)`` cut to the speed of steps of
+        :data:`MAX_STEP` leg lengths in 1.25 swing durations (flat feet reach less far than a
+        heel-strike and toe-off: the demonstrator's scaled stride is out of reach)."""
+        vmax = MAX_STEP * self.leg / (1.25 * self.t_swing)
+        n = float(np.linalg.norm(v))
+        return v * (vmax / n) if n > vmax else v
+
+    def _apart(self, x: str, goal: np.ndarray, feet: dict) -> np.ndarray:
+        """``goal`` in the other sole's frame kept at least :data:`SEPARATION` times the
+        neutral stance's lateral distance to its side, and at most :data:`MAX_STEP` leg
+        lengths ahead or behind it."""
+        o = "right" if x == "left" else "left"
+        other = feet[o]
+        R = other.rotation[:2, :2]
+        fwd = R[:, 0] / max(np.linalg.norm(R[:, 0]), 1e-9)
+        lat = np.array([-fwd[1], fwd[0]])
+        sign = 1.0 if x == "left" else -1.0
+        step = goal - other.translation[:2]
+        along = float(np.clip(step @ fwd, -MAX_STEP * self.leg, MAX_STEP * self.leg))
+        side = max(float(step @ lat) * sign, SEPARATION * self.sep)
+        return other.translation[:2] + along * fwd + sign * side * lat
+
+    def touched_down(self, x: str, duration: float) -> None:
+        """A swing of ``duration`` [s] ended (the next estimate of a swing's duration)."""
+        self.t_swing = float(duration)
+
+
+def _quintic(phi: float) -> tuple[float, float, float]:
+    """Smooth step ``10φ³ − 15φ⁴ + 6φ⁵`` and its first two derivatives."""
+    p = min(max(phi, 0.0), 1.0)
+    return (p**3 * (10 - 15 * p + 6 * p * p), 30 * p * p * (1 - p) ** 2,
+            60 * p * (1 - p) * (1 - 2 * p))
+
+
+def _bump(phi: float) -> tuple[float, float, float]:
+    """``64 φ³ (1 − φ)³`` (1 at mid-swing, still at both ends) and its derivatives."""
+    p = min(max(phi, 0.0), 1.0)
+    u = 1 - p
+    return 64 * p**3 * u**3, 192 * p * p * u * u * (u - p), 384 * p * u * ((u - p) ** 2 - p * u)
+
+
+def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
+                 com_vel: np.ndarray | None, iterations: int = 100) -> np.ndarray:
+    """The first frame's configuration ``(nq,)`` (the robot at rest): stance soles flat on
+    the floor and swing soles flat at half the clearance, both under the demonstrator's scaled
+    soles, the centre of mass over the stance soles, the base at 92 % of its neutral height
+    with the demonstrator's pelvis orientation, the other joints near their targets — damped
+    Gauss–Newton steps on the configuration's Lie group. ``com_vel`` ``(3,)`` [m/s]: the
+    demonstrator's scaled centre-of-mass velocity, for a start with its velocity
+    (:func:`initial_velocity`): the centre of mass where the demonstrator's is (scaled) and a
+    swing sole resting under the capture point ``c + ċ·√(z/g)`` along the walk."""
+    from ..kinematics import base_joint_id
+
+    m, d = robot.model, robot.model.createData()
+    planar = robot.base == "planar"
+    comp = np.array([0, 2, 4] if planar else range(6))
+    root = base_joint_id(robot)
+    q = robot.neutral.copy()
+    fids = {x: m.getFrameId(robot.require_contacts()[x].frame) for x in SIDES}
+    pin.framesForwardKinematics(m, d, q)
+    z_root = d.oMi[root].translation[2] - min(d.oMf[f].translation[2] for f in fids.values())
+    goals = {}
+    for x in SIDES:
+        sole = f0["soles"][x]
+        R = sole.rotation
+        yaw = 0.0 if planar else np.arctan2(R[1, 0], R[0, 0])
+        c, s_ = np.cos(yaw), np.sin(yaw)
+        p = np.r_[ref.s * sole.translation[:2], 0.0]
+        goals[x] = pin.SE3(np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]), p)
+    down = [x for x in SIDES if f0["contact"][x]] or list(SIDES)
+    moving = com_vel is not None
+    if len(down) == 1:  # keep the swing sole clear of the stance sole
+        o = [x for x in SIDES if x != down[0]][0]
+        if moving:  # and, moving, put it where it will catch the centre of mass
+            cp = ref.s * f0["com"][:2] + com_vel[:2] * np.sqrt(f0["com"][2] / 9.81)
+            fwd = com_vel[:2] / max(np.linalg.norm(com_vel[:2]), 1e-9)
+            g = goals[o].translation[:2]
+            goals[o].translation = np.r_[g + fwd * ((cp - g) @ fwd), 0.0]
+        g = ref._apart(o, goals[o].translation[:2], goals)
+        goals[o].translation = np.r_[g, goals[o].translation[2]]
+    centre = np.mean([goals[x].translation for x in down], axis=0)
+    if moving:  # the demonstrator's centre of mass over its soles, scaled
+        centre = np.r_[ref.s * f0["com"][:2], 0.0]
+    rot = f0["rot"] if f0["rot"] is not None else np.eye(3)
+    targets = f0["joints"]
+    qa = _q_index(m, act_idx)
+    for _ in range(iterations):
+        pin.computeJointJacobians(m, d, q)
+        pin.updateFramePlacements(m, d)
+        J, e, w = [], [], []
+        for x in SIDES:
+            Jf = pin.getFrameJacobian(m, d, fids[x], pin.ReferenceFrame.LOCAL)
+            J.append(Jf[comp])
+            e.append(pin.log6(d.oMf[fids[x]].actInv(goals[x])).vector[comp])
+            w.append(np.full(comp.size, 1e5))
+        c = pin.centerOfMass(m, d, q)
+        Jc = pin.jacobianCenterOfMass(m, d, q)
+        lin = [0] if planar else [0, 1]
+        J.append(Jc[lin])
+        e.append((centre - c)[lin])
+        w.append(np.full(len(lin), 30.0))
+        Jr = pin.getJointJacobian(m, d, root, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        ang = [4] if planar else [3, 4, 5]
+        J.append(Jr[[2] + ang])
+        Rb = d.oMi[root].rotation
+        e.append(np.r_[0.92 * z_root - d.oMi[root].translation[2],
+                       pin.log3(rot @ Rb.T)[[a - 3 for a in ang]]])
+        w.append(np.full(1 + len(ang), 10.0))
+        Js = np.zeros((act_idx.size, m.nv))
+        Js[np.arange(act_idx.size), act_idx] = 1.0
+        J.append(Js)
+        e.append(targets - q[qa])
+        w.append(np.full(act_idx.size, 0.1))
+        J, e, w = np.vstack(J), np.concatenate(e), np.concatenate(w)
+        dq = np.linalg.solve(J.T @ (w[:, None] * J) + 1e-6 * np.eye(m.nv), J.T @ (w * e))
+        q = pin.integrate(m, q, dq)
+        q = np.clip(q, m.lowerPositionLimit, m.upperPositionLimit)
+    return q
+
+
+def _q_index(m, vi: np.ndarray) -> np.ndarray:
+    out = np.zeros(len(vi), int)
+    for j in range(1, m.njoints):
+        jm = m.joints[j]
+        for i, k in enumerate(vi):
+            if jm.idx_v <= k < jm.idx_v + jm.nv:
+                out[i] = jm.idx_q + (k - jm.idx_v)
+    return out
+
+
+def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo: np.ndarray,
+                     act_idx: np.ndarray) -> np.ndarray:
+    """The first frame's velocity ``(nv,)``: both soles still, the centre of mass moving with
+    the demonstrator's (scaled), the base turning with its pelvis, the other joints with their
+    mapped joints (least squares in the null space of the soles' velocity rows)."""
+    from ..kinematics import base_joint_id
+
+    m, d = robot.model, robot.model.createData()
+    dm, dd = ref.d.model, ref.d.model.createData()
+    planar = robot.base == "planar"
+    comp = np.array([0, 2, 4] if planar else range(6))
+    pin.computeJointJacobians(m, d, q)
+    pin.updateFramePlacements(m, d)
+    C = np.vstack([pin.getFrameJacobian(m, d, m.getFrameId(robot.require_contacts()[x].frame),
+                                        pin.ReferenceFrame.LOCAL)[comp] for x in SIDES])
+    qd = f0["q"]
+    pin.computeAllTerms(dm, dd, qd, v_demo)
+    lin = [0, 2] if planar else [0, 1, 2]
+    J = [pin.jacobianCenterOfMass(m, d, q)[lin]]
+    r = [ref.s * dd.vcom[0][lin]]
+    wts = [30.0] * len(lin)
+    if f0["rot"] is not None and ref.pelvis is not None:
+        J.append(pin.getJointJacobian(m, d, base_joint_id(robot),
+                                      pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[3:])
+        r.append(pin.getFrameVelocity(dm, dd, ref.pelvis,
+                                      pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).angular)
+        wts += [10.0] * 3
+    Js = np.zeros((act_idx.size, m.nv))
+    Js[np.arange(act_idx.size), act_idx] = 1.0
+    vj = np.zeros(act_idx.size)
+    for qi, ai, sc, _ in ref.jmap:
+        vi = dm.joints[[j for j in range(1, dm.njoints) if dm.joints[j].idx_q <= qi
+                        < dm.joints[j].idx_q + dm.joints[j].nq][0]].idx_v
+        vj[ai] = sc * v_demo[vi]
+    J.append(Js)
+    r.append(vj)
+    wts += [0.1] * act_idx.size
+    J, r, w = np.vstack(J), np.concatenate(r), np.sqrt(np.array(wts))
+    N = scipy_null(C)
+    y = np.linalg.lstsq((w[:, None] * J) @ N, w * r, rcond=None)[0]
+    return N @ y
+
+
+def scipy_null(C: np.ndarray) -> np.ndarray:
+    """An orthonormal basis ``(n, n − rank)`` of the null space of ``C``."""
+    _, sv, Vt = np.linalg.svd(C)
+    rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
+    return Vt[rank:].T

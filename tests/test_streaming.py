@@ -1,0 +1,97 @@
+"""The streaming mode's per-frame inverse-dynamics QP (gdimitate/retarget/receding.py,
+streaming.py), judged by the independent audit (Pinocchio recomputation of the output's own
+q, v, a and wrenches) and by Pinocchio's own integration."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import gdimitate as gd
+from gdimitate.audit import audit
+from gdimitate.errors import InvalidInputError
+from gdimitate.kinematics import robot_motion
+
+SIDES = ("left", "right")
+FRAMES = 30  # the first step of the walk: single support, a touch-down, double support, lift-off
+
+
+@pytest.fixture(scope="module")
+def walk():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        human, demo, forces = gd.gait.human_walk_3d()
+        talos = gd.Robot.from_library("talos")
+    return human, demo, forces, talos
+
+
+def _stream(walk, n: int, audit_each: bool = False):
+    human, demo, forces, talos = walk
+    sa = gd.retarget.StreamingAdaptor(human, talos, "measured", dt=demo.dt, audit=audit_each)
+    v0 = pin.difference(human.model, demo.q[0], demo.q[1]) / (demo.t[1] - demo.t[0])
+    nq, nv = talos.model.nq, talos.model.nv
+    q, v, a = np.zeros((n, nq)), np.zeros((n, nv)), np.zeros((n, nv))
+    W = {s: np.zeros((n, 6)) for s in SIDES}
+    flags = []
+    for k in range(n):
+        f = {s: np.array([np.interp(demo.t[k], forces.t, forces[s].force[:, i])
+                          for i in range(3)]) for s in SIDES}
+        dt = demo.t[k] - demo.t[k - 1] if k else demo.dt
+        r = sa.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, forces=f,
+                    v_demo=v0 if k == 0 else None)
+        q[k], v[k] = r.q, r.v
+        if k:
+            a[k - 1] = r.previous_a
+            for s in SIDES:
+                W[s][k - 1] = r.previous_wrenches[s]
+            flags.append(r.previous_feasible)
+    a[-1], wl, last = sa.final()
+    flags.append(last)
+    for s in SIDES:
+        W[s][-1] = wl[s]
+    c = {s: np.asarray(demo.contact[s][:n], bool) for s in SIDES}
+    motion = robot_motion(talos, demo.t[:n], q, c).replace(v=v, a=a)
+    return sa, motion, W, flags
+
+
+def test_first_step_of_the_walk_is_audited_feasible_frame_by_frame(walk):
+    """Every frame of the walk's first step (left single support, the right foot's touch-down,
+    double support, the left foot's lift-off) passes every audited margin: base rows of
+    rnea − Σ Jᵀw within 1e-6 N, torque, velocity and position limits, cones, slip, stance-foot
+    velocity, floor, self-collision."""
+    sa, motion, W, _ = _stream(walk, FRAMES)
+    rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    assert rep.knot_feasible.all(), (np.flatnonzero(~rep.knot_feasible), rep.binding)
+    assert rep.base_residual.value <= 1e-6
+
+
+def test_frames_follow_the_integration_rule_exactly(walk):
+    """q_{k+1} = q_k ⊕ h v_{k+1} and v_{k+1} = v_k + h a_k (Pinocchio's integrate), to
+    round-off."""
+    _, motion, _, _ = _stream(walk, 12)
+    m = walk[3].model
+    for k in range(motion.T - 1):
+        h = motion.t[k + 1] - motion.t[k]
+        np.testing.assert_allclose(motion.v[k + 1], motion.v[k] + h * motion.a[k], atol=1e-12)
+        q_next = pin.integrate(m, motion.q[k], h * motion.v[k + 1])
+        np.testing.assert_allclose(motion.q[k + 1], q_next, atol=1e-12)
+
+
+def test_per_frame_flags_agree_with_the_whole_motion_audit(walk):
+    """``FrameResult.previous_feasible`` (each frame audited on the frames since its stances
+    began) equals the audit of the assembled motion, knot by knot."""
+    sa, motion, W, flags = _stream(walk, 20, audit_each=True)
+    rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    np.testing.assert_array_equal(np.array(flags, bool), rep.knot_feasible)
+
+
+def test_bad_demonstrator_velocity_is_refused(walk):
+    human, demo, forces, talos = walk
+    sa = gd.retarget.StreamingAdaptor(human, talos, "segment", dt=demo.dt, audit=False)
+    with pytest.raises(InvalidInputError, match="v_demo"):
+        sa.step(demo.q[0], {s: bool(demo.contact[s][0]) for s in SIDES}, v_demo=np.zeros(3))
+    with pytest.raises(InvalidInputError, match="final"):
+        sa.final()
