@@ -224,3 +224,39 @@ def test_plots_and_side_by_side_animation(walk, tmp_path):
         v.close()
     text = html.read_text()
     assert text.lstrip().startswith("<!DOCTYPE html>") and len(text) > 100_000
+
+
+def test_cop_margin_keeps_the_centre_of_pressure_inside_the_sole(robots):
+    """``ControllerGains.cop_margin``: the QP's wrenches keep their centre of pressure
+    (closed form −τ_y/f_z, τ_x/f_z) within (1 − margin) of the sole's half-sizes; without
+    it the same states put it further out (the check can fail). A margin of 1 or more is
+    refused."""
+    from gdimitate.contact import centre_of_pressure
+    from gdimitate.errors import SimulationError
+    from gdimitate.sim import ControllerGains
+
+    robot = robots["hoap2"]
+    sim = build_model(robot)
+    ref = Reference(robot, check_plan(robot, standing_plan(robot, 1.0)))
+    m = robot.model
+    rng = np.random.default_rng(3)
+    states = [(pin.integrate(m, robot.neutral, 0.05 * rng.normal(size=m.nv)),
+               1.5 * rng.normal(size=m.nv)) for _ in range(8)]
+
+    def reach(margin: float) -> float:
+        ctl = TrackingController(sim, ControllerGains(cop_margin=margin))
+        worst = 0.0
+        for q, v in states:
+            out = ctl.step(q, v, ref.at(0.5))
+            assert out.status >= 1
+            for s in SIDES:
+                c, w = sim.contacts[s], out.wrench[s]
+                if w[2] > 1e-6 * robot.mass * G:
+                    cop = centre_of_pressure(w)
+                    worst = max(worst, abs(cop[0]) / c.half_length, abs(cop[1]) / c.half_width)
+        return worst
+
+    assert reach(0.0) > 0.8
+    assert reach(0.2) <= 0.8 + 1e-6
+    with pytest.raises(SimulationError, match="cop_margin"):
+        ControllerGains(cop_margin=1.0)

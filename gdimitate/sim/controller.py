@@ -29,7 +29,7 @@ units (m/s², rad/s²).
 from __future__ import annotations
 
 from ctypes import c_int
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import daqp
 import numpy as np
@@ -56,6 +56,8 @@ class ControllerGains:
     Task weights [1/(m/s²)²]: ``w_stance``, ``w_com``, ``w_base``, ``w_swing``, ``w_posture``;
     ``w_wrench``: weight of the wrench regularisation ‖(w − w_plan)/s‖², s = (m·g for forces,
     m·g·ℓ for moments); ``w_acc``: a small ‖a‖² term that keeps the QP strictly convex.
+    ``cop_margin`` [-]: the fraction of the sole's half-length and half-width kept between the
+    centre of pressure and the sole's edges in the QP's wrench cones (0: the whole sole).
 
     The centre of mass outweighs the posture thirtyfold: in single support the contact force
     is m·(c̈ − g), so the centre-of-mass task is what sets the push the simulation is judged
@@ -80,12 +82,16 @@ class ControllerGains:
     w_posture: float = 1.0
     w_wrench: float = 1e-2
     w_acc: float = 1e-6
+    cop_margin: float = 0.0
 
     def __post_init__(self) -> None:
         for k, v in self.__dict__.items():
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
                 raise SimulationError(f"ControllerGains.{k} must be a finite number ≥ 0; got "
                                       f"{v!r}")
+        if self.cop_margin >= 1:
+            raise SimulationError("ControllerGains.cop_margin is a fraction of the sole's "
+                                  f"half-sizes, in [0, 1); got {self.cop_margin!r}")
         if self.w_acc <= 0 or self.w_posture <= 0:
             raise SimulationError("ControllerGains.w_acc and w_posture must be > 0 (they keep "
                                   "the QP strictly convex)")
@@ -170,7 +176,10 @@ class TrackingController:
         self.base_id = base_joint(robot)
         self.contacts = sim.contacts
         self.fid = {s: self.model.getFrameId(sim.contacts[s].frame) for s in SIDES}
-        self.cone = {s: sim.contacts[s].cone() for s in SIDES}
+        shrink = 1.0 - gains.cop_margin
+        self.cone = {s: replace(c, half_length=c.half_length * shrink,
+                                half_width=c.half_width * shrink).cone()
+                     for s, c in sim.contacts.items()}
         w0 = pendulum_frequency(robot)
         self.pd = {k: gains.pd(k, w0) for k in ("com", "base", "swing", "posture", "stance")}
         mg = robot.mass * float(np.linalg.norm(self.model.gravity.linear))
