@@ -63,6 +63,7 @@ class FrameReference:
         ys = [idt.oMf[im.getFrameId(imitator.legs[x].sole)].translation[1] for x in SIDES]
         self.sep = abs(ys[0] - ys[1])
         self.frames: list[dict] = []
+        self.heading: np.ndarray | None = None
         self.swing: dict = {x: None for x in SIDES}
         self.t_swing = FIRST_SWING
         self.lift = {x: None for x in SIDES}
@@ -164,6 +165,7 @@ class FrameReference:
         # foot placement feedback (capture point): a centre of mass ahead of its reference
         # by e (and ė) puts the swing foot ahead by e + ė/ω, ω = √(g/z)
         self._cp = (com[0][:2], com[1][:2], np.sqrt(9.81 / max(com[0][2], 1e-3)))
+        self.heading = f1["rot"]
         for x in SIDES:
             if nxt[x]:
                 self.lift[x] = None
@@ -222,12 +224,13 @@ class FrameReference:
         return v * (vmax / n) if n > vmax else v
 
     def _apart(self, x: str, goal: np.ndarray, feet: dict) -> np.ndarray:
-        """``goal`` in the other sole's frame kept at least :data:`SEPARATION` times the
-        neutral stance's lateral distance to its side, and at most :data:`MAX_STEP` leg
-        lengths ahead or behind it."""
+        """``goal`` kept at least :data:`SEPARATION` times the neutral stance's lateral
+        distance to its side of the other sole, and at most :data:`MAX_STEP` leg lengths ahead
+        or behind it, along the demonstrator's pelvis heading (the soles' own yaw follows its
+        toe-out)."""
         o = "right" if x == "left" else "left"
         other = feet[o]
-        R = other.rotation[:2, :2]
+        R = (self.heading if self.heading is not None else other.rotation)[:2, :2]
         fwd = R[:, 0] / max(np.linalg.norm(R[:, 0]), 1e-9)
         lat = np.array([-fwd[1], fwd[0]])
         sign = 1.0 if x == "left" else -1.0
