@@ -214,6 +214,8 @@ class FrameQP:
                              np.concatenate([kind0, kind]))
             x = x * S
             a_lin = x[:nv].copy()
+            if flag != 1:  # hard rows relaxed: the frame fails anyway; no refinement
+                break
         a = x[:nv].copy()
         W = {s: np.zeros(6) for s in SIDES}
         for i, s in enumerate(stance):
