@@ -175,3 +175,25 @@ def test_a_robot_whose_knee_is_not_a_pitch_joint_adapts_and_audits(tmp_path):
             poses = np.array(poses)
             assert np.abs(poses - poses[0]).max() <= 1e-3  # held (the audit's slip tolerance)
             assert np.abs(poses[:, 2, 3]).max() <= 1e-3  # on the floor
+
+
+def test_the_compiled_problem_cache_tells_knee_axes_apart(tmp_path):
+    """Two robots of one name whose knees differ only in the axis (30° vs 35° tilt, both
+    Pinocchio RevoluteUnaligned joints) must not share compiled derivatives: the adaptor's
+    cache key covers joint axes (it did not, and the second robot got the first's solution)."""
+    from gdimitate.retarget.problem import fingerprint
+
+    text = biped_urdf("tilted")
+    other = text
+    for sign in (1.0, -1.0):
+        a = f'axis xyz="{sign * np.sin(TILT)} {np.cos(TILT)} 0.0"'
+        b = f'axis xyz="{sign * np.sin(np.radians(35))} {np.cos(np.radians(35))} 0.0"'
+        assert a in other
+        other = other.replace(a, b)
+    keys = []
+    for i, t in enumerate((text, other, text)):
+        path = tmp_path / f"r{i}.urdf"
+        path.write_text(t)
+        keys.append(fingerprint(gd.Robot.from_urdf(path, name="same_name")))
+    assert keys[0] != keys[1]
+    assert keys[0] == keys[2]

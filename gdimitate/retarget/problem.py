@@ -56,12 +56,14 @@ than METIS here); ``ipopt=`` adds to them."""
 
 
 def fingerprint(robot: Robot) -> str:
-    """A digest of everything in the imitator the NLP's expressions depend on (joint
-    placements, inertias, contact frames, leg lengths)."""
+    """A digest of everything in the imitator the NLP's expressions depend on (joint types
+    and axes, joint placements, inertias, contact frames, leg lengths)."""
     m = robot.model
     h = hashlib.sha1()
     h.update(repr((robot.name, m.nq, m.nv, tuple(m.names), robot.base)).encode())
     for i in range(1, m.njoints):
+        axis = getattr(m.joints[i].extract(), "axis", None)  # unaligned joints: type says nothing
+        h.update(f"{m.joints[i].shortname()}:{None if axis is None else list(axis)}".encode())
         h.update(np.asarray(m.jointPlacements[i].homogeneous).tobytes())
         h.update(np.asarray(m.inertias[i].toDynamicParameters()).tobytes())
     for _side, c in sorted(robot.require_contacts().items()):
