@@ -1,21 +1,26 @@
 """What one demonstration frame asks of the imitator in the streaming mode: the references of
 the per-frame QP's tasks (:class:`~.receding.Tasks`), from the demonstrator's own kinematics.
 
-Positions map from the demonstrator's world to the imitator's by ``p ↦ s·p + o`` in the
-horizontal plane, ``s`` the ratio of the legs' lengths and ``o`` an offset that follows, with
-a 0.5-s time constant, where the imitator's stance feet really are against the demonstrator's
-(so that the centre of mass is asked to stay over the imitator's own support). Heights: the
-centre of mass keeps the imitator's starting height plus ``s`` times the demonstrator's change.
-Velocities and accelerations are central differences over the frames ``j − 1, j, j + 1`` (the
-streaming step of frame ``j + 1`` solves knot ``j``: no extra latency).
+Centre of mass. Along the walk, positions map by ``p ↦ k·p + o``: ``k`` the legs' ratio,
+cut so that a human step (:data:`STEP_RATIO` of its leg) becomes a step of :data:`MAX_STEP`
+robot legs (flat feet reach less far than a heel-strike and toe-off); ``o`` follows, with a
+:data:`TAU_OFFSET` time constant, where the imitator's stance soles are against the
+demonstrator's, so that the centre of mass keeps the demonstrator's place relative to its own
+support. Sideways (across the demonstrator's pelvis heading) it keeps the demonstrator's
+place between its two soles, scaled by the ratio of the soles' lateral spreads (the weight
+shift and sway in time with the steps). Heights: the imitator's starting height plus ``s``
+times the demonstrator's change. Velocities and accelerations are central differences over
+the frames ``j − 1, j, j + 1`` (the streaming step of frame ``j + 1`` solves knot ``j``: no
+extra latency).
 
-Swing feet land early and wait: a foot that leaves the floor follows a smooth arc (quintic
-in the horizontal plane, clearance ``0.08 ·`` leg length at mid-swing) to the landing point
-predicted from the demonstrator's foot, within 75 % of the last swing's duration (0.4 s
-before the first), and then rests flat on the floor, unloaded, until the demonstration's
-contact flag says it is in stance — so that it touches down still and flat whenever the
-flag comes. Its landing point keeps at least 80 % of the neutral stance's lateral
-separation from the other foot.
+Swing soles: a sole that leaves the floor follows a smooth arc (quintic in the horizontal
+plane, clearance ``0.08 ·`` leg length at mid-swing) to the capture point ``ξ = c + ċ/ω`` of
+the linear inverted pendulum over the stance sole, predicted for the expected touch-down
+(the last swing's duration; :data:`FIRST_SWING` before the first), landing within
+:data:`LAND` of that duration, and then rests flat on the floor, unloaded, until the
+demonstration's contact flag says it is in stance — so that it touches down still and flat.
+The landing point keeps at least :data:`SEPARATION` times the neutral stance's lateral
+distance from the other sole and at most :data:`MAX_STEP` legs ahead of or behind it.
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from .receding import Tasks
 __all__ = ["FrameReference"]
 
 LAND, FIRST_SWING, TAU_OFFSET, CLEARANCE, SEPARATION, RAMP = 0.95, 0.45, 0.15, 0.08, 1.0, 0.6
-TAU_COM, KEEP_GOING, MAX_STEP = 1.0, 0.0, 0.5
+KEEP_GOING, MAX_STEP, STEP_RATIO = 0.0, 0.5, 0.75
 
 
 class FrameReference:
@@ -57,6 +62,9 @@ class FrameReference:
                      for dj, (ij, sc, off) in bmap.joints.items() if ij in act_names]
         self.n_act = n
         self.leg = float(np.mean([imitator.legs[x].length for x in SIDES]))
+        #: horizontal scale of the centre of mass's path: the legs' ratio, cut so that the
+        #: demonstrator's steps (~STEP_RATIO of its leg) become steps of MAX_STEP legs
+        self.k = min(self.s, self.s * MAX_STEP / STEP_RATIO)
         self.clearance = CLEARANCE * self.leg
         im, idt = imitator.model, imitator.model.createData()
         pin.framesForwardKinematics(im, idt, imitator.neutral)
@@ -101,9 +109,8 @@ class FrameReference:
         with the demonstrator's velocity (else at rest: the centre of mass is led from where
         it stands to the demonstration's within :data:`RAMP` seconds)."""
         self.ramp = 1e-9 if moving else RAMP
-        self.track = None
         self.z0, self.zd0 = float(com0[2]), float(f0["com"][2])
-        self.off = self._centre(feet0, f0) - self.s * self._centre(f0["soles"], f0)
+        self.off = self._centre(feet0, f0) - self.k * self._centre(f0["soles"], f0)
         self.rot0, self.com0 = base_rot0, np.asarray(com0, float).copy()
         for x in SIDES:  # a foot in swing at the start rests on the floor, waiting
             if not f0["contact"][x]:
@@ -117,14 +124,15 @@ class FrameReference:
         return np.mean([poses[x].translation[:2] for x in down], axis=0)
 
     def _map(self, p: np.ndarray) -> np.ndarray:
-        return self.s * p[:2] + self.off
+        return self.k * p[:2] + self.off
 
     # ------------------------------------------------------------------ the tasks
-    def tasks(self, j: int, nxt: dict, feet: dict, anchors: dict, com: tuple) -> Tasks:
+    def tasks(self, j: int, nxt: dict, feet: dict, anchors: dict, robot_com: tuple) -> Tasks:
         """The tasks of knot ``j`` (frames ``j − 1 … j + 1`` must be in :attr:`frames`); ``nxt``
         the stance flags of knot ``j + 1``; ``feet`` {side: SE3} the imitator's soles at ``j``;
-        ``anchors`` {side: SE3} the poses the stance feet began their stance with; ``com``
-        ``(position (3,), velocity (3,))`` the imitator's centre of mass at ``j``."""
+        ``anchors`` {side: SE3} the poses the stance feet began their stance with;
+        ``robot_com`` ``(position (3,), velocity (3,))`` the imitator's centre of mass at
+        ``j``."""
         F = self.frames
         f0, f1, f2 = F[max(j - 1, 0)], F[j], F[min(j + 1, len(F) - 1)]
         h = max(f2["t"] - f0["t"], 1e-9)
@@ -133,7 +141,7 @@ class FrameReference:
             ctr = np.mean([anchors[x].translation[:2] for x in hs], axis=0)
             dem = np.mean([f1["soles"][x].translation[:2] for x in hs], axis=0)
             gain = min(1.0, (f2["t"] - f1["t"]) / TAU_OFFSET)
-            self.off = self.off + gain * (ctr - self.s * dem - self.off)
+            self.off = self.off + gain * (ctr - self.k * dem - self.off)
         com = [np.append(self._map(f["com"]), self.z0 + self.s * (f["com"][2] - self.zd0))
                for f in (f0, f1, f2)]
         hh = 0.5 * h
@@ -143,19 +151,9 @@ class FrameReference:
         b, db, ddb = _quintic((f1["t"] - F[0]["t"]) / R)  # from rest to the demonstration
         gap = com[1] - self.com0
         target = self.com0 + b * gap
-        # horizontally, the centre of mass follows the demonstrator's velocity (scaled) from
-        # where the imitator's reference was, drawn towards the support-relative position
-        # only slowly (TAU_COM): its own steps, placed for balance, set where it walks
-        if self.track is None:
-            self.track = target[:2].copy()
-        else:
-            dt1 = f1["t"] - F[j - 1]["t"] if j else 0.0
-            vel = self._cap(b * (com[1][:2] - com[0][:2]) / max(f1["t"] - f0["t"], 1e-9))
-            self.track = self.track + dt1 * vel + min(1.0, dt1 / TAU_COM) * (
-                target[:2] - self.track)
-        target[:2] = self.track
         cv = b * (com[2] - com[0]) / h + db / R * gap
         cv[:2] = self._cap(cv[:2])
+        self._shift(target, cv, nxt, feet, f1, f0, f2)
         tk = Tasks(com=target,
                    com_vel=cv,
                    com_acc=b * acc + ddb / R**2 * gap,
@@ -164,7 +162,8 @@ class FrameReference:
                    push=f1["push"], anchor=anchors)
         # foot placement feedback (capture point): a centre of mass ahead of its reference
         # by e (and ė) puts the swing foot ahead by e + ė/ω, ω = √(g/z)
-        self._cp = (com[0][:2], com[1][:2], np.sqrt(9.81 / max(com[0][2], 1e-3)))
+        c, cd = robot_com
+        self._cp = (c[:2], cd[:2], np.sqrt(9.81 / max(c[2], 1e-3)))
         self.heading = f1["rot"]
         for x in SIDES:
             if nxt[x]:
@@ -214,6 +213,27 @@ class FrameReference:
         if phi >= 1.0:  # resting on the floor until the touch-down
             return np.append(goal, 0.0), Rg, np.zeros(6), np.zeros(6), True
         return pos, R, np.concatenate([vel, om]), np.concatenate([acc, al]), False
+
+    def _shift(self, target: np.ndarray, cv: np.ndarray, nxt: dict, feet: dict,
+               f1: dict, f0: dict, f2: dict) -> None:
+        """Sideways (across the pelvis heading) the centre of mass keeps the demonstrator's
+        place between its two soles — its weight shift and sway — scaled from its soles'
+        lateral distance to the imitator's (a sway in time with the demonstrator's steps)."""
+        R = (f1["rot"] if f1["rot"] is not None else self.rot0)[:2, 0]
+        fwd = R / max(np.linalg.norm(R), 1e-9)
+        lat = np.array([-fwd[1], fwd[0]])
+
+        def spread(soles) -> tuple[float, float]:
+            y = [float(soles[x].translation[:2] @ lat) for x in SIDES]
+            return 0.5 * (y[0] + y[1]), max(abs(y[0] - y[1]), 1e-3)
+
+        dm, dw = spread(f1["soles"])
+        rm, rw = spread(feet)
+        k = rw / dw
+        y = rm + k * (float(f1["com"][:2] @ lat) - dm)
+        vy = k * float((f2["com"][:2] - f0["com"][:2]) @ lat) / max(f2["t"] - f0["t"], 1e-9)
+        target[:2] += (y - target[:2] @ lat) * lat
+        cv[:2] += (vy - cv[:2] @ lat) * lat
 
     def _cap(self, v: np.ndarray) -> np.ndarray:
         """A horizontal velocity ``v`` ``(2,)`` cut to the speed of steps of
@@ -291,15 +311,18 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
     if len(down) == 1:  # keep the swing sole clear of the stance sole
         o = [x for x in SIDES if x != down[0]][0]
         if moving:  # and, moving, put it where it will catch the centre of mass
-            cp = ref.s * f0["com"][:2] + com_vel[:2] * np.sqrt(f0["com"][2] / 9.81)
+            dem = f0["soles"][down[0]].translation[:2]
+            cp = (goals[down[0]].translation[:2] + ref.k * (f0["com"][:2] - dem)
+                  + com_vel[:2] * np.sqrt(f0["com"][2] / 9.81))
             fwd = com_vel[:2] / max(np.linalg.norm(com_vel[:2]), 1e-9)
             g = goals[o].translation[:2]
             goals[o].translation = np.r_[g + fwd * ((cp - g) @ fwd), 0.0]
         g = ref._apart(o, goals[o].translation[:2], goals)
         goals[o].translation = np.r_[g, goals[o].translation[2]]
     centre = np.mean([goals[x].translation for x in down], axis=0)
-    if moving:  # the demonstrator's centre of mass over its soles, scaled
-        centre = np.r_[ref.s * f0["com"][:2], 0.0]
+    if moving:  # where the demonstrator's centre of mass is relative to its soles, scaled
+        dem = np.mean([f0["soles"][x].translation[:2] for x in down], axis=0)
+        centre = np.r_[centre[:2] + ref.k * (f0["com"][:2] - dem), 0.0]
     rot = f0["rot"] if f0["rot"] is not None else np.eye(3)
     targets = f0["joints"]
     qa = _q_index(m, act_idx)
@@ -366,7 +389,7 @@ def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo
     pin.computeAllTerms(dm, dd, qd, v_demo)
     lin = [0, 2] if planar else [0, 1, 2]
     J = [pin.jacobianCenterOfMass(m, d, q)[lin]]
-    r = [ref.s * dd.vcom[0][lin]]
+    r = [ref.k * dd.vcom[0][lin]]
     wts = [30.0] * len(lin)
     if f0["rot"] is not None and ref.pelvis is not None:
         J.append(pin.getJointJacobian(m, d, base_joint_id(robot),

@@ -180,7 +180,7 @@ class StreamingAdaptor:
         if moving:
             dm, dd = self.demonstrator.model, self.demonstrator.model.createData()
             pin.centerOfMass(dm, dd, f0["q"], v_demo)
-            cv = self._ref.s * dd.vcom[0]
+            cv = self._ref.k * dd.vcom[0]
         q = initial_pose(self.imitator, self._ref, f0, self._act, cv)
         v0 = (initial_velocity(self.imitator, q, self._ref, f0, v_demo, self._act) if moving
               else np.zeros(self.imitator.model.nv))
