@@ -13,6 +13,8 @@ Gait-lab data: ``gdimitate.load_demonstration("model.osim", markers="trial.c3d")
 inverse kinematics, force plates to feet; :mod:`gdimitate.c3d`, imported on first use).
 The paper's planar case: ``gdimitate.adapt(demo, robot_m, imitator, "analytic")`` (Eq. 1).
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
+Scenario code (the demo, the paper's figures, the baselines) lives in :mod:`gdimitate.apps`,
+which is not API.
 """
 
 # Every public name is imported on first use (PEP 562 module ``__getattr__``), so that
