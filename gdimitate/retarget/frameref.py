@@ -35,6 +35,7 @@ __all__ = ["FrameReference"]
 
 LAND, FIRST_SWING, TAU_OFFSET, CLEARANCE, SEPARATION, RAMP = 0.95, 0.45, 0.15, 0.08, 1.0, 0.6
 KEEP_GOING, MAX_STEP, STEP_RATIO = 0.0, 0.5, 0.75
+REST_CLEARANCE = 0.03
 
 
 class FrameReference:
@@ -60,6 +61,10 @@ class FrameReference:
         self.neutral = np.array([imitator.neutral[imitator.idx_q(j)] for j in act_names])
         self.jmap = [(demonstrator.idx_q(dj), act_names.index(ij), sc, off)
                      for dj, (ij, sc, off) in bmap.joints.items() if ij in act_names]
+        held = np.ones(len(act_names), bool)
+        held[[ai for _, ai, _, _ in self.jmap]] = False
+        if act_names:
+            self.neutral = clear_rest(imitator, tuple(act_names), held, self.neutral)
         self.n_act = n
         self.leg = float(np.mean([imitator.legs[x].length for x in SIDES]))
         #: horizontal scale of the centre of mass's path: the legs' ratio, cut so that the
@@ -418,3 +423,40 @@ def scipy_null(C: np.ndarray) -> np.ndarray:
     _, sv, Vt = np.linalg.svd(C)
     rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
     return Vt[rank:].T
+
+
+def clear_rest(robot, act_names: tuple, held: np.ndarray, rest: np.ndarray,
+               clearance: float = REST_CLEARANCE, iterations: int = 12) -> np.ndarray:
+    """Rest targets ``(n_act,)`` of the joints no demonstrator joint drives (``held`` bool
+    ``(n_act,)``): their neutral values ``rest``, moved (within their limits) until the robot's
+    own collision geometries (:mod:`gdimitate.selfcollision`, the audit's check) are
+    ``clearance`` [m] apart at the neutral pose — a neutral pose with the arms against the
+    thighs (Talos) leaves no room for the pelvis to turn under them. Finite-difference
+    ascent of the smallest distance; ``rest`` itself when the robot has no collision
+    geometry or is clear already."""
+    from ..selfcollision import self_collision
+
+    sc = self_collision(robot)
+    if sc is None or not sc.pairs or not held.any():
+        return rest
+    m = robot.model
+    qi = np.array([m.joints[m.getJointId(n)].idx_q for n in act_names])[held]
+    lo, hi = m.lowerPositionLimit[qi], m.upperPositionLimit[qi]
+    q = robot.neutral.copy()
+    q[qi] = rest[held]
+    for _ in range(iterations):
+        d0 = float(sc.distances(q[None]).min())
+        if d0 >= clearance:
+            break
+        grad = np.zeros(qi.size)
+        for i, j in enumerate(qi):
+            qq = q.copy()
+            qq[j] = min(qq[j] + 0.02, hi[i]) if qq[j] + 0.02 <= hi[i] else max(qq[j] - 0.02, lo[i])
+            grad[i] = (float(sc.distances(qq[None]).min()) - d0) / (qq[j] - q[j])
+        n = float(np.linalg.norm(grad))
+        if n == 0.0:
+            break
+        q[qi] = np.clip(q[qi] + 0.05 * grad / n, lo, hi)
+    out = rest.copy()
+    out[held] = q[qi]
+    return out

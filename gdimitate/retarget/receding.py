@@ -78,7 +78,7 @@ class Gains:
     com: float = 8.0
     com_xy: float = 2.0
     w_com_xy: float = 30.0
-    w_com_xy_single: float = 0.3
+    w_com_xy_single: float = 300.0
     w_cop: float = 5.0
     base: float = 10.0
     swing: float = 18.0
@@ -234,7 +234,7 @@ class FrameQP:
 
         c, vc, dc, Jc = t["com"]
         kp, kd = _pd(g.com)
-        kp = np.array([g.com_xy**2, g.com_xy**2, kp])  # horizontally: mostly the velocity
+        kp = np.array([g.com_xy**2, kp, kp])  # along the walk (x): mostly the velocity
         acc = tk.com_acc + kp * (tk.com - c) + kd * (tk.com_vel - vc) - dc
         J.append(Jc[self.lin])
         r.append(acc[self.lin])
