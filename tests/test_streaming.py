@@ -95,3 +95,13 @@ def test_bad_demonstrator_velocity_is_refused(walk):
         sa.step(demo.q[0], {s: bool(demo.contact[s][0]) for s in SIDES}, v_demo=np.zeros(3))
     with pytest.raises(InvalidInputError, match="final"):
         sa.final()
+
+
+def test_the_whole_walk_streams_at_least_95_percent_feasible(walk):
+    """Issue 17's goal for the streaming mode, on the shipped 3-D walk → Talos with the
+    measured forces: at least 95 % of the frames pass the audit (the assembled motion, knot by
+    knot, as ``adapt(..., mode="per_frame").frame_feasible`` reports)."""
+    human, demo, forces, talos = walk
+    sa, motion, W, _ = _stream(walk, demo.T)
+    rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    assert rep.knot_feasible.mean() >= 0.95, (int(rep.knot_feasible.sum()), rep.binding)

@@ -21,6 +21,9 @@ the linear inverted pendulum over the stance sole, predicted for the expected to
 demonstration's contact flag says it is in stance — so that it touches down still and flat.
 The landing point keeps at least :data:`SEPARATION` times the neutral stance's lateral
 distance from the other sole and at most :data:`MAX_STEP` legs ahead of or behind it.
+
+Joints no demonstrator joint drives rest at their neutral values moved until the robot's own
+collision geometries are :data:`REST_CLEARANCE` apart (:func:`clear_rest`).
 """
 
 from __future__ import annotations
