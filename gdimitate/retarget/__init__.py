@@ -1,8 +1,9 @@
 """The whole-body, contact-consistent optimal adaptor (docs/design.md §6).
 
-One formulation, assembled from named parts and shared by the trajectory mode
-(:func:`adapt_optimal`, what ``gdimitate.adapt(..., method="optimal")`` runs) and the streaming
-mode (:class:`StreamingAdaptor`, ``mode="per_frame"``):
+One formulation, assembled from named parts, for the trajectory mode (:func:`adapt_optimal`,
+what ``gdimitate.adapt(..., method="optimal")`` runs); the streaming mode
+(:class:`StreamingAdaptor`, ``mode="per_frame"``) shares its body map, limits and soles and
+solves one whole-body inverse-dynamics QP per frame instead (:mod:`.receding`):
 
 - decision variables per knot (:mod:`.knot`): the imitator's full configuration ``q``, its
   velocity ``v`` and acceleration ``a`` (Pinocchio's conventions), one contact wrench per foot
