@@ -41,8 +41,9 @@ def main() -> None:
     robot, demo, forces = default_demonstration()
     imit = Robot.load(args.robot)
     print("| k | stride frequency [Hz] | cycle audit | solver | adapt [s] | steps walked "
-          f"(of {args.steps}) | network frequency / cycle − 1 |")
-    print("|---|---|---|---|---|---|---|")
+          f"(of {args.steps}) | network frequency / cycle − 1 | largest per-step error | "
+          "push RMS vs measured, worst step |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for k in args.factors:
         d, f = retimed(demo, forces, k)
         t = time.perf_counter()
@@ -52,8 +53,12 @@ def main() -> None:
         r = walk(cycle=cyc, forces=f, steps=args.steps, feedback_gain=args.gain).to_dict()
         walked = f"{r['steps_completed']}" + (" (fell)" if r["fell"] else "")
         err = r["frequency_hz"] / r["cycle_frequency_hz"] - 1 if r["frequency_hz"] else np.nan
+        rm = [x for x in r["per_step_force_direction_rmse_deg"] if x is not None and x == x]
+        step_err = r["frequency_error_max"]
         print(f"| {k:g} | {r['cycle_frequency_hz']:.3f} | {aud} | {cyc.solver.status} | "
-              f"{ta:.1f} | {walked} | {100 * err:+.2f} % |", flush=True)
+              f"{ta:.1f} | {walked} | {100 * err:+.2f} % | "
+              f"{'–' if step_err is None else f'{100 * step_err:.2f} %'} | "
+              f"{f'{max(rm):.1f}°' if rm else '–'} |", flush=True)
 
 
 if __name__ == "__main__":

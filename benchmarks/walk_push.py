@@ -52,9 +52,11 @@ def load_cycle(path: Path):
                            contacts=cs, feasible=bool(d["feasible"]))
 
 
-def cycle_of(name: str, cache: Path):
+def cycle_of(name: str, cache: Path, given: dict[str, Path] | None = None):
     from gdimitate.walk import periodic_cycle
 
+    if given and name in given:  # a cycle saved by save_cycle (e.g. adapted elsewhere)
+        return load_cycle(given[name])
     path = cache / f"cycle_{name}.npz"
     if not path.exists():
         t = time.perf_counter()
@@ -68,7 +70,7 @@ def cycle_of(name: str, cache: Path):
 def run(name: str, args, forces) -> list[dict]:
     from gdimitate.walk import WalkNetwork, WalkPush, walk
 
-    cyc = cycle_of(name, args.cache)
+    cyc = cycle_of(name, args.cache, dict(args.cycle))
     net = WalkNetwork.tune(cyc.robot, cyc.motion)
     mg = cyc.robot.mass * 9.81
     dirs = {"forward": (1.0, 0.0, 0.0)}
@@ -76,6 +78,8 @@ def run(name: str, args, forces) -> list[dict]:
         dirs["sideways"] = (0.0, 1.0, 0.0)
     rows = []
     for gain in args.gains:
+        if args.nominal_steps:
+            rows.append(nominal(name, cyc, forces, net, gain, args.nominal_steps))
         base = walk(cycle=cyc, forces=forces, steps=args.steps, network=net, feedback_gain=gain)
         rows.append(dict(robot=name, direction="none", gain=gain, push=0.0, trial=0,
                          survived=not base.fell, steps=base.steps_completed, rhythm=None))
@@ -97,12 +101,49 @@ def run(name: str, args, forces) -> list[dict]:
     return rows
 
 
+def nominal(name: str, cyc, forces, net, gain: float, steps: int) -> dict:
+    """The unpushed walk of ``steps`` steps: the issue's criteria (no fall; push RMS vs
+    measured per step ≤ 5°; the network's frequency within 1 % of the cycle's)."""
+    from gdimitate.walk import walk
+
+    t = time.process_time()
+    d = walk(cycle=cyc, forces=forces, steps=steps, network=net, feedback_gain=gain).to_dict()
+    rm = [x for x in d["per_step_force_direction_rmse_deg"] if x is not None]
+    row = dict(robot=name, direction="nominal", gain=gain, steps=d["steps_completed"],
+               requested=steps, fell=d["fell"], rmse_min=min(rm), rmse_max=max(rm),
+               over5=sum(x > 5.0 for x in rm), f=d["frequency_hz"],
+               f_cycle=d["cycle_frequency_hz"],
+               f_step_max=d["frequency_error_max"], rmse=rm, cpu_s=time.process_time() - t)
+    print(f"{name} gain {gain:g}, {steps} steps unpushed: {row['steps']} steps, "
+          f"fell {row['fell']}; "
+          f"push RMS vs measured per step {row['rmse_min']:.2f}–{row['rmse_max']:.2f}° "
+          f"({row['over5']} > 5°): {', '.join(f'{x:.2f}' for x in rm)}; frequency "
+          f"{row['f']:.4f} Hz vs {row['f_cycle']:.4f} ({row['f'] / row['f_cycle'] - 1:+.2%}), "
+          f"each step within {row['f_step_max']:.2%} ({row['cpu_s']:.0f} s CPU)", flush=True)
+    return row
+
+
+def nominal_table(rows: list[dict]) -> str:
+    out = ["| robot | feedback gain | steps | fell | push RMS vs measured per step | "
+           "frequency vs cycle's | largest per-step frequency error |",
+           "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["direction"] != "nominal":
+            continue
+        out.append(f"| {r['robot']} | {r['gain']:g} | {r['steps']}/{r['requested']} | "
+                   f"{'yes' if r['fell'] else 'no'} | {r['rmse_min']:.1f}–{r['rmse_max']:.1f}° "
+                   f"({r['over5']} of {len(r['rmse'])} > 5°) | {r['f']:.4f} Hz vs "
+                   f"{r['f_cycle']:.4f} "
+                   f"({r['f'] / r['f_cycle'] - 1:+.2%}) | {r['f_step_max']:.2%} |")
+    return "\n".join(out)
+
+
 def table(rows: list[dict]) -> str:
     out = ["| robot | push | feedback gain | largest push survived (all trials) [m·g, 0.1 s] "
            "| steps to rhythm at that push (per trial) | unpushed walk |",
            "|---|---|---|---|---|---|"]
     keys = sorted({(r["robot"], r["direction"], r["gain"]) for r in rows
-                   if r["direction"] != "none"})
+                   if r["direction"] not in ("none", "nominal")})
     for robot, d, g in keys:
         mine = [r for r in rows if (r["robot"], r["direction"], r["gain"]) == (robot, d, g)]
         ok = sorted({r["push"] for r in mine
@@ -125,7 +166,12 @@ def main() -> None:
     p.add_argument("--trials", type=int, default=2)
     p.add_argument("--steps", type=int, default=8)
     p.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "gdimitate" / "walk_push")
+    p.add_argument("--nominal-steps", type=int, default=0,
+                   help="also walk this many steps unpushed at each gain (the issue's criteria)")
     p.add_argument("--md", type=Path, default=None, help="also write the table there")
+    p.add_argument("--cycle", nargs="*", default=[], metavar="ROBOT=NPZ",
+                   type=lambda x: (x.split("=", 1)[0], Path(x.split("=", 1)[1])),
+                   help="use this saved cycle (save_cycle's .npz) for ROBOT")
     args = p.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("ignore")
@@ -136,7 +182,7 @@ def main() -> None:
     rows = []
     for name in args.robots:
         rows += run(name, args, forces)
-    md = table(rows)
+    md = nominal_table(rows) + "\n\n" + table(rows)
     print(md)
     print(f"({time.perf_counter() - t0:.0f} s)")
     if args.md:
