@@ -313,3 +313,70 @@ def test_sphere_rows_leave_out_pairs_within_the_margin_at_neutral():
     y0 = (R.T @ (data.oMf[model.getFrameId(fl)].translation
                  - data.oMf[model.getFrameId(fr)].translation))[1]
     assert y0 - least == pytest.approx(leg_d - MARGIN, abs=1e-9)
+
+
+def test_rest_pose_clears_the_limbs_the_neutral_pose_presses_together(g1):
+    """The adaptor holds unmapped joints near ``rest_pose``: iCub's neutral pose presses its
+    forearms against its chest (2.1 mm) and its hands against its hips (1.4 mm) — at its rest
+    pose every such active pair is at least REST_CLEAR apart, no pair the audit checks is
+    closer than min(its neutral distance, the margin) (coal's hull distances, recomputed
+    here), only arm/head joints moved, inside their limits; those pairs now get sphere rows
+    and none is left out. G1 has no such pair: its rest pose is its neutral pose."""
+    from gdimitate.retarget.parts.self_collision import (
+        MARGIN,
+        REST_CLEAR,
+        left_out_sphere_pairs,
+        rest_pose,
+        sphere_pairs,
+    )
+
+    np.testing.assert_array_equal(rest_pose(g1), g1.neutral)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        icub = gd.Robot.from_library("icub")
+    q = rest_pose(icub)
+    sc = self_collision(icub)
+    d0, d = sc.distances(icub.neutral), sc.distances(q)
+    pressed = {(a, b) for a, b, _ in left_out_sphere_pairs(icub)}
+    assert {("chest_0", "l_forearm_0"), ("l_hip_2_0", "l_hand_0")} <= pressed
+    for (a, b), x0, x in zip(sc.pairs, d0, d):
+        if (a, b) in pressed:
+            assert x >= REST_CLEAR - 1e-9, (a, b)
+        elif x0 >= 0:
+            assert x >= min(x0, MARGIN) - 1e-9, (a, b)
+    m = icub.model
+    moved = [m.names[j] for j in range(1, m.njoints) if m.joints[j].nq == 1
+             and abs(q[m.joints[j].idx_q] - icub.neutral[m.joints[j].idx_q]) > 1e-12]
+    assert moved and all(n.split("_")[1] in ("shoulder", "elbow", "wrist", "neck")
+                         for n in moved), moved
+    assert np.all(q <= m.upperPositionLimit + 1e-12) and np.all(q >= m.lowerPositionLimit - 1e-12)
+    assert not left_out_sphere_pairs(icub, q=q)
+    framed = {(fa, fb) for fa, _, _, fb, *_ in sphere_pairs(icub, q=q)}
+    assert ("torso_yaw", "l_wrist_prosup") in framed
+
+
+def test_posture_range_is_a_box_on_the_held_joints(g1):
+    """PostureRange bounds the held joints' q (rest pose ± HOLD_RANGE), not rows; the joints
+    the body map follows (or frozen ones) are left free of it."""
+    from types import SimpleNamespace
+
+    from gdimitate.retarget.bodymap import HOLD_RANGE
+    from gdimitate.retarget.knot import Layout
+    from gdimitate.retarget.parts import Bound, Spec
+    from gdimitate.retarget.parts.posture_range import PostureRange
+
+    idx = (7, 9, 12)
+    part = PostureRange(idx, (0.1, -0.2, 0.3), HOLD_RANGE)
+    assert isinstance(part, Bound)
+    var = Layout()
+    var.add("q", g1.model.nq)
+    ctx = SimpleNamespace(tg=SimpleNamespace(mapped=np.array([True, False, False]), T=4),
+                          lim=SimpleNamespace(frozen=np.array([False, False, True])))
+    spec = Spec(T=4, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
+                cone=False, clearance=0.0, leg_length=0.6, n_base=6, n_act=3)
+    ix, lo, hi = part.box(var, ctx, spec)
+    np.testing.assert_array_equal(ix, idx)
+    assert lo.shape == hi.shape == (4, 3)
+    assert np.all(np.isinf(lo[:, [0, 2]])) and np.all(np.isinf(hi[:, [0, 2]]))
+    np.testing.assert_allclose(lo[:, 1], -0.2 - HOLD_RANGE)
+    np.testing.assert_allclose(hi[:, 1], -0.2 + HOLD_RANGE)

@@ -42,8 +42,10 @@ from ..robot import Robot
 __all__ = ["BodyMap", "body_map", "ROLES", "UnmappedJointsWarning", "HOLD_RANGE", "arms_down",
            "following", "JointFollowing"]
 
-#: How far [rad] an imitator joint the body map leaves out may move from its neutral pose
-#: (a hard bound of the adaptor, :class:`~gdimitate.retarget.parts.posture_range.PostureRange`).
+#: How far [rad] an imitator joint the body map leaves out may move from its rest pose
+#: (:func:`~gdimitate.retarget.parts.self_collision.rest_pose`: the neutral pose with the limbs
+#: clear of each other; a hard bound of the adaptor,
+#: :class:`~gdimitate.retarget.parts.posture_range.PostureRange`).
 HOLD_RANGE = 0.1
 
 ROLES = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll",
@@ -54,7 +56,7 @@ ROLES = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"
 
 class UnmappedJointsWarning(UserWarning):
     """Some actuated joints of the imitator have no demonstrator joint: they are held near the
-    imitator's neutral pose by the posture cost."""
+    imitator's rest pose (its neutral pose with the limbs clear of each other)."""
 
 
 # role -> name pattern per naming family; {s} = side token of that family
@@ -246,7 +248,7 @@ class BodyMap:
         if missing:
             warnings.warn(f"body map {self.name!r}: {len(missing)} of {len(act)} actuated "
                           f"joints of {imitator.name} have no demonstrator joint and are held "
-                          f"near its neutral pose: {', '.join(missing)}", UnmappedJointsWarning,
+                          f"near its rest pose: {', '.join(missing)}", UnmappedJointsWarning,
                           stacklevel=3)
         return self
 

@@ -28,7 +28,8 @@ class Targets:
     (the demonstrator's scaled keypoints), ``foot`` ``{side: (T, 3, 3)}`` its sole frames'
     world rotations;
     ``segments`` ``(T, n_seg, 3, 3)`` world rotations; ``joints`` ``(T, n_act)`` joint targets
-    [rad] and ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
+    [rad] (unmapped joints: the rest pose, :func:`.parts.self_collision.rest_pose`) and
+    ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
     push on the ground (NaN where there is none; projected onto the x–z plane for planar
     imitators, which can only keep its sagittal direction); ``demo``: the resampled
     demonstration."""
@@ -168,7 +169,9 @@ def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bm
     foot = {s: rot[f] for s, f in zip(SIDES, soles)}
     segments = np.stack([rot[f] for f in seg_frames], axis=1) if seg_frames else \
         np.zeros((demo.T, 0, 3, 3))
-    joints = np.tile(imitator.neutral[[imitator.idx_q(j) for j in act_names]], (demo.T, 1))
+    from .parts.self_collision import rest_pose  # unmapped joints: the limbs clear
+
+    joints = np.tile(rest_pose(imitator)[[imitator.idx_q(j) for j in act_names]], (demo.T, 1))
     mapped = np.zeros(len(act_names), bool)
     for dj, (ij, scale, offset) in bmap.joints.items():
         if ij in act_names:

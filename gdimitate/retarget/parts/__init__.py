@@ -5,7 +5,7 @@ the weight layout, the elastic slacks, the row labels and the cache key follow f
 
 from __future__ import annotations
 
-from .base import Constraint, Cost, PairConstraint, Part, Spec, per_side_labels
+from .base import Bound, Constraint, Cost, PairConstraint, Part, Spec, per_side_labels
 from .base_dynamics import BaseDynamics
 from .cone import WrenchCone
 from .contact_hold import ContactHold
@@ -25,7 +25,7 @@ from .thigh import Thigh
 from .torque_limits import TorqueLimits
 from .wrench import WrenchRegularisation
 
-__all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Spec", "per_side_labels",
+__all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Bound", "Spec", "per_side_labels",
            "default_parts", "BaseDynamics", "TorqueLimits", "FlatContact", "ContactHold",
            "WrenchCone", "SwingClearance", "ForceDirection", "Integration", "QuaternionNorm",
            "Height", "Placement", "Shank", "Thigh", "Foot", "Segments", "Joints",

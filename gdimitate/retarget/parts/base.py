@@ -22,7 +22,7 @@ import numpy as np
 
 from ...robot import SIDES
 
-__all__ = ["Spec", "Part", "Cost", "Constraint", "PairConstraint", "per_side_labels"]
+__all__ = ["Spec", "Part", "Cost", "Constraint", "PairConstraint", "Bound", "per_side_labels"]
 
 
 @dataclass(frozen=True)
@@ -85,9 +85,14 @@ class Constraint(Part):
       schedule does not impose a row: the problem leaves such rows out of the solve);
     - :meth:`labels` one name per row (the report groups violations by label);
     - ``relaxable``: whether the least-infeasible solve may relax it (an L1 slack pair per row,
-      weight ``Weights.elastic``)."""
+      weight ``Weights.elastic``);
+    - ``screenable``: rows that are far from their bounds almost everywhere (self-collision):
+      a solve leaves such a row out at the knots where the start keeps it farther than
+      :data:`gdimitate.retarget.solve.SCREEN` (scaled units) from its bounds, re-checks every
+      left-out row on the result and solves again with those it does not meet."""
 
     relaxable: bool = False
+    screenable: bool = False
 
     def size(self, k) -> int:
         return int(self.rows(k).shape[0])
@@ -120,6 +125,20 @@ class PairConstraint(Part):
 
     def bounds(self, spec: Spec, n: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
         raise NotImplementedError
+
+
+class Bound(Part):
+    """A box on some of a knot's variables, stated as variable bounds rather than rows: IPOPT
+    keeps a variable bound out of the constraint Jacobian and the KKT system's constraint
+    rows. :meth:`box` gives, for a demonstration, the variables it bounds and their bounds;
+    the problem intersects them with the variables' other bounds (joint limits). A bound is
+    never relaxed (the least-infeasible solve keeps it)."""
+
+    def box(self, var, ctx, spec: Spec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(index (n,) into the knot's variables (layout ``var``), lo (T, n), hi (T, n))``
+        (``±inf`` where the box imposes nothing; ``ctx``: a
+        :class:`gdimitate.retarget.solve.Context`)."""
+        raise NotImplementedError  # pragma: no cover - interface
 
 
 def per_side_labels(label: str, n_per_side: int) -> list[str]:

@@ -1,12 +1,13 @@
 """The whole body, faithfully: the parts every whole-body adaptation adds to
 :func:`~.default_parts` for an imitator — the joints its body map leaves out held within
-:data:`~gdimitate.retarget.bodymap.HOLD_RANGE` of their neutral pose (:class:`.PostureRange`)
-and its limbs kept apart (:class:`.SelfCollision`, robots with collision geometry)."""
+:data:`~gdimitate.retarget.bodymap.HOLD_RANGE` of their rest pose (:class:`.PostureRange`;
+:func:`~.self_collision.rest_pose`: the neutral pose with the limbs moved clear of each
+other) and its limbs kept apart (:class:`.SelfCollision`, robots with collision geometry)."""
 
 from __future__ import annotations
 
 from .posture_range import PostureRange
-from .self_collision import SelfCollision, leg_separation, sphere_pairs
+from .self_collision import SelfCollision, leg_separation, rest_pose, sphere_pairs
 
 __all__ = ["body_parts"]
 
@@ -19,11 +20,11 @@ def body_parts(imitator, act_names) -> tuple:
     from ..bodymap import HOLD_RANGE
 
     out = []
+    rest = rest_pose(imitator)
     if act_names:
         idx = tuple(int(imitator.idx_q(j)) for j in act_names)
-        out.append(PostureRange(idx, tuple(float(imitator.neutral[i]) for i in idx),
-                                HOLD_RANGE))
-    pairs, legs = sphere_pairs(imitator), leg_separation(imitator)
+        out.append(PostureRange(idx, tuple(float(rest[i]) for i in idx), HOLD_RANGE))
+    pairs, legs = sphere_pairs(imitator, q=rest), leg_separation(imitator)
     if pairs or legs:
         out.append(SelfCollision(pairs, legs))
     return tuple(out)
