@@ -392,6 +392,8 @@ def test_millisecond_time_axis_is_refused_before_allocating():
     """entrain() of a 60 Hz clip whose time is in milliseconds grew to 22 GB; now refused."""
     import tracemalloc
 
+    import gdimitate.cpg  # noqa: F401 — its imports (numba, SciPy: ~56 MB of module code) are not the clip's
+
     robot, motion = _hoap2_walk(np.arange(150) * (1000.0 / 60))
     tracemalloc.start()
     t0 = time.perf_counter()
