@@ -242,7 +242,7 @@ def _cmd_walk(a: argparse.Namespace) -> int:
     with removed_on_failure(a.out):
         out = prepare_output_dir(a.out)
         return walk_command(out, _demonstration(a.demonstration, a), _robot(a.imitator, a),
-                            a.steps, a.gain, html=not a.no_html)
+                            a.steps, a.gain, html=not a.no_html, rate=a.rate)
 
 
 def _cmd_view(a: argparse.Namespace) -> int:
@@ -517,6 +517,8 @@ def _add_walk(sub) -> None:
     wk.add_argument("--gain", type=float, default=0.5,
                     help="feedback gain of the ground into the network (0: open loop) "
                          "(default: %(default)s)")
+    wk.add_argument("--rate", type=float, default=30.0,
+                    help="knots per second of the cycle's optimal solve (default: %(default)s)")
     wk.add_argument("--no-html", action="store_true", help="skip walk.html")
     wk.add_argument("--out", default="gdimitate-walk", help="output folder (default: %(default)s)")
     wk.set_defaults(func=_cmd_walk)

@@ -12,10 +12,12 @@ __all__ = ["walk_command"]
 
 
 def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html: bool = True,
-                 log=print) -> int:
+                 log=print, rate: float = 30.0) -> int:
     """Write a walk into ``out`` (``demo``: a loaded demonstration with ``robot``,
     ``motion``, ``forces``, or None for the shipped 3-D walk); exit status 0 when it walked
-    every step with a feasible cycle, :data:`~gdimitate.verdict.EXIT_NOT_FEASIBLE` otherwise."""
+    every step with a feasible cycle, :data:`~gdimitate.verdict.EXIT_NOT_FEASIBLE` otherwise.
+    ``rate`` [knots/s]: the cycle's knot rate (G1's solve at 30 spends its iteration budget
+    on the current adaptor and fails the audit; at 25 the audit passes)."""
     from . import periodic_cycle, walk
 
     if demo is None:
@@ -26,7 +28,7 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
     else:
         args, forces = (demo.motion, demo.robot), demo.forces
     log(f"[1/3] periodic cycle → {imitator.name} (whole-body optimal adaptor, periodic seam) …")
-    cycle, forces = periodic_cycle(args[0], args[1], imitator, forces)
+    cycle, forces = periodic_cycle(args[0], args[1], imitator, forces, rate)
     why = "feasible" if cycle.feasible else "NOT feasible: " + ", ".join(cycle.audit.binding[:4])
     log(f"      audit: {why}")
     log(f"[2/3] network + MuJoCo: {steps} steps, feedback gain {gain:g} …")
