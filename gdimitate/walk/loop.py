@@ -121,7 +121,7 @@ def step_bounds(pref: PeriodicReference, steps: int) -> np.ndarray:
     """Cycle values ``(steps + 1,)`` where steps begin: the right strike (fraction 0) and the
     left one (its fraction), alternating."""
     fl = pref.strike_fractions()["left"]
-    out = []
+    out: list[float] = []
     n = 0
     while len(out) < steps + 1:
         out += [n, n + fl]
@@ -195,11 +195,11 @@ def run_loop(robot: Robot, pref: PeriodicReference, net: WalkNetwork, steps: int
             if h < fall.min_height_ratio * ph or tilt > fall.max_tilt:
                 tr.fell_at = t
                 break
-            if push_c is not None and push_t0 is None and c >= push_c:
+            if push is not None and push_c is not None and push_t0 is None and c >= push_c:
                 push_t0 = t
                 tr.push_window = (t, t + push.duration)
-            on = push_t0 is not None and push_t0 <= t < push_t0 + push.duration
-            data.xfrc_applied[sim.base_body, :3] = push.force if on else 0.0
+            on = push is not None and push_t0 is not None and push_t0 <= t < push_t0 + push.duration
+            data.xfrc_applied[sim.base_body, :3] = push.force if push is not None and on else 0.0
             mujoco.mj_step(sim.mj, data)
             k += 1
     tr.arrays()
