@@ -147,6 +147,16 @@ class Motion:
         numbers)."""
         return np.gradient(self.q, self.t, axis=0)
 
+    def derivatives(self, who: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(v, a)``, each ``(T, nv)`` [rad/s, m/s; rad/s², m/s²], or
+        :class:`~gdimitate.errors.InvalidInputError` saying that ``who`` needs them and how to
+        add them."""
+        if self.v is None or self.a is None:
+            raise InvalidInputError(
+                f"{who} needs the motion's velocity and acceleration (motion.v, motion.a); add "
+                "them with gdimitate.motion.differentiate(robot.model, motion, cutoff_hz=...)")
+        return self.v, self.a
+
     def replace(self, **changes) -> Motion:
         """A copy with some fields replaced."""
         d: dict[str, Any] = dict(t=self.t, joint_names=self.joint_names, q=self.q,

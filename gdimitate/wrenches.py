@@ -95,11 +95,7 @@ def _validate(robot, motion, contacts, method, f_min):
     if motion.q.shape[1] != model.nq:
         raise InvalidInputError(f"motion.q has {motion.q.shape[1]} columns; {robot.name} has "
                                 f"nq = {model.nq}")
-    if motion.v is None or motion.a is None:
-        raise InvalidInputError(
-            "estimate_wrenches needs the motion's velocity and acceleration (motion.v, "
-            "motion.a); add them with gdimitate.motion.differentiate(robot.model, motion, "
-            "cutoff_hz=...)")
+    motion.derivatives("estimate_wrenches")
     for name in ("v", "a"):
         if getattr(motion, name).shape != (motion.T, model.nv):
             raise InvalidInputError(f"motion.{name} must be (T, nv) = ({motion.T}, "

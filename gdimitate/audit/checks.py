@@ -48,10 +48,7 @@ def _validate(robot, motion, wrenches, contacts, target, cone_half_angle):
     if motion.q.shape[1] != model.nq:
         raise InvalidInputError(f"motion.q has {motion.q.shape[1]} columns; {robot.name} has "
                                 f"nq = {model.nq}")
-    if motion.v is None or motion.a is None:
-        raise InvalidInputError(
-            "audit needs the motion's velocity and acceleration (motion.v, motion.a); add them "
-            "with gdimitate.motion.differentiate(robot.model, motion, cutoff_hz=...)")
+    motion.derivatives("audit")
     for name in ("v", "a"):
         x = getattr(motion, name)
         if x.shape != (T, model.nv):

@@ -34,7 +34,7 @@ def seam_errors(robot: Robot, motion: Motion, wrenches: dict[str, np.ndarray],
     "seam_contact"}`` (module docstring); ``direction`` ``(2,)``: the walking direction."""
     from ..retarget.periodic import shift_by_stride
 
-    q, v, a = motion.q, motion.v, motion.a
+    q, (v, a) = motion.q, motion.derivatives("the seam audit")
     shifted = shift_by_stride(robot, q[0], q[-1], direction)
     mg = robot.mass * float(np.linalg.norm(robot.model.gravity.linear))
     return {

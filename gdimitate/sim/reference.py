@@ -155,8 +155,9 @@ class Reference:
         self.foot_pos = {s: np.zeros((T, 3)) for s in SIDES}
         self.foot_rot = {s: np.zeros((T, 3, 3)) for s in SIDES}
         self.foot_va = {s: np.zeros((T, 2, 6)) for s in SIDES}
+        mv, ma = mo.derivatives("a plan")  # validated: (T, nv) each
         for k in range(T):
-            q, v, a = mo.q[k], mo.v[k], mo.a[k]
+            q, v, a = mo.q[k], mv[k], ma[k]
             pin.forwardKinematics(m, d, q, v, a)
             pin.updateFramePlacements(m, d)
             pin.centerOfMass(m, d, q, v, a)
@@ -207,9 +208,10 @@ class Reference:
             return np.einsum("nij,njk->nik", R[k], _exp3(al[:, None] * rel[k]))
 
         q = np.array([pin.interpolate(m, mo.q[i], mo.q[i + 1], a) for i, a in zip(k, al)])
-        v, com, bw, bz, brot = (lerp(mo.v), lerp(self.com), lerp(self.base_w),
+        mv, ma = mo.derivatives("a plan")
+        v, com, bw, bz, brot = (lerp(mv), lerp(self.com), lerp(self.base_w),
                                 lerp(self.base_z), slerp(self.base_rot))
-        a = mo.a[kc]
+        a = ma[kc]
         com[:, 2], bw[:, 1] = self.com[kc, 2], self.base_w[kc, 1]
         w = {s: p.wrenches[s][kc] for s in SIDES}
         st = {s: mo.contact[s][kc] for s in SIDES}

@@ -293,7 +293,7 @@ def simulate(robot: Robot, adapted: Any, *, demo_forces: ContactForces | None = 
     samples = ref.samples(t0 + control_period * np.arange(n_ctrl))
     wall, cpu = time.perf_counter(), time.process_time()
     with mujoco_warnings():
-        sim.set_state(data, mo.q[0], mo.v[0])
+        sim.set_state(data, mo.q[0], mo.derivatives("a plan")[0][0])
         steps = _run(sim, data, ctl, rec, ref, samples, fall, push, stop_on_fall, t0,
                      control_period, every, dt, n_ctrl)
     fails = rec.fails

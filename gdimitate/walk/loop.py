@@ -35,6 +35,7 @@ follows them and the network with it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -80,6 +81,9 @@ class WalkPush:
                                   f"duration > 0 s; got {self!r}")
 
 
+Series = Any  # a list while recording, an ndarray after Trace.arrays()
+
+
 @dataclass
 class Trace:
     """One run, sampled every control period (``N`` samples): ``t`` [s], ``q``, ``v``,
@@ -90,24 +94,25 @@ class Trace:
     read-out [rad]; ``onsets`` [(t, side)] the contact onsets; ``fell_at`` [s] or None;
     ``push_window`` (start, end) [s] or None."""
 
-    t: list = field(default_factory=list)
-    q: list = field(default_factory=list)
-    v: list = field(default_factory=list)
-    tau: list = field(default_factory=list)
-    cycles: list = field(default_factory=list)
-    ground: list = field(default_factory=list)
+    t: Series = field(default_factory=list)
+    q: Series = field(default_factory=list)
+    v: Series = field(default_factory=list)
+    tau: Series = field(default_factory=list)
+    cycles: Series = field(default_factory=list)
+    ground: Series = field(default_factory=list)
     force: dict = field(default_factory=lambda: {s: [] for s in SIDES})
     stance: dict = field(default_factory=lambda: {s: [] for s in SIDES})
-    height: list = field(default_factory=list)
-    plan_height: list = field(default_factory=list)
-    tilt: list = field(default_factory=list)
-    y: list = field(default_factory=list)
-    joints: list = field(default_factory=list)
+    height: Series = field(default_factory=list)
+    plan_height: Series = field(default_factory=list)
+    tilt: Series = field(default_factory=list)
+    y: Series = field(default_factory=list)
+    joints: Series = field(default_factory=list)
     onsets: list = field(default_factory=list)
     strike: dict = field(default_factory=dict)
     fell_at: float | None = None
     push_window: tuple[float, float] | None = None
 
+    # typed as recorded (lists); :meth:`arrays` turns them into the arrays the docstring gives
     def arrays(self) -> None:
         """Turn the recorded lists into arrays (in place)."""
         for name, val in list(self.__dict__.items()):

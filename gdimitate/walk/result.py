@@ -22,6 +22,7 @@ import numpy as np
 
 from ..contact import ContactForces
 from ..motion import Motion
+from ..result import AdaptedMotion
 from ..robot import SIDES, Robot
 from ..sim.periodic import PeriodicReference
 from .loop import Trace, step_bounds
@@ -40,7 +41,7 @@ class WalkResult:
     measured ``forces`` (or None)."""
 
     robot: Robot
-    cycle: Any
+    cycle: AdaptedMotion
     network: WalkNetwork
     reference: PeriodicReference
     trace: Trace
