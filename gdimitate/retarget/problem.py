@@ -17,6 +17,7 @@ Two levels, each cached:
 from __future__ import annotations
 
 import hashlib
+import sys
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -255,7 +256,10 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
     return _lru(_FORM, key, make)
 
 
-_SOURCE = codegen.source_digest(parts_module, knot_module, symbolic)
+# what the compiled functions' layout and expressions come from: this module (their layout),
+# codegen (how they are generated), the parts, the knot and the symbolic model
+_SOURCE = codegen.source_digest(parts_module, knot_module, symbolic, codegen,
+                                sys.modules[__name__])
 
 
 # ---------------------------------------------------------------------- all knots
