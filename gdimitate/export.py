@@ -61,6 +61,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import ExportError, FileFormatError, OutputError
+from .kinematics import base_joint_id
 from .motion import Motion, check_base_quaternion
 from .robot import PLANAR_BASE, SIDES, Robot
 from .safety import check_array_size, check_positive
@@ -125,19 +126,10 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
 
 
 # ---------------------------------------------------------------------- base pose
-def _base_joint(robot: Robot) -> int | None:
-    """Pinocchio id of the joint whose body is the floating base (None: fixed base)."""
-    if robot.base == "free":
-        return 1
-    if robot.base == "planar":
-        return robot.model.getJointId(PLANAR_BASE[-1])
-    return None
-
-
 def base_pose(robot: Robot, q: np.ndarray) -> np.ndarray:
     """The base link's world pose ``(T, 7)`` ``[x, y, z, qx, qy, qz, qw]`` for q ``(T, nq)``
     (forward kinematics; a free-flyer's is ``q[:, :7]`` up to the quaternion's sign)."""
-    j = _base_joint(robot)
+    j = base_joint_id(robot)
     m, d = robot.model, robot.model.createData()
     out = np.empty((len(q), 7))
     for k, qk in enumerate(q):

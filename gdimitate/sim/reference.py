@@ -24,8 +24,9 @@ import pinocchio as pin
 
 from ..contact import SoleContact
 from ..errors import PlanError
+from ..kinematics import base_joint_id
 from ..motion import Motion
-from ..robot import PLANAR_BASE, SIDES, Robot
+from ..robot import SIDES, Robot
 
 __all__ = ["Plan", "Reference", "Sample", "base_joint", "check_plan"]
 
@@ -46,10 +47,9 @@ class Plan:
 def base_joint(robot: Robot) -> int:
     """Pinocchio id of the joint whose body is the floating base: the free flyer, or the last
     of our planar base joints (``base_pitch``). :class:`PlanError` for a fixed base."""
-    if robot.base == "free":
-        return 1
-    if robot.base == "planar":
-        return int(robot.model.getJointId(PLANAR_BASE[-1]))
+    j = base_joint_id(robot)
+    if j is not None:
+        return j
     raise PlanError(f"{robot.name} has a fixed base; simulate() needs a floating base "
                     "(free flyer or planar x/z/pitch)")
 
