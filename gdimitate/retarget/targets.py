@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from ..contact import ContactForces
 from ..errors import InvalidInputError
+from ..kinematics import anchor_schedule
 from ..metrics import force_direction
 from ..motion import Motion
 from ..robot import SIDES, Robot
@@ -96,17 +97,8 @@ def schedule(demo: Motion, forces: ContactForces | None, rule: str) -> dict[str,
         raise InvalidInputError("the demonstration never touches the ground (no stance knot "
                                 "on either foot): nothing to push on")
     if rule == "anchor":
-        out = {s: np.zeros(demo.T, bool) for s in SIDES}
-        anchor, since = None, {s: -1 for s in SIDES}
-        for k in range(demo.T):
-            for s in SIDES:
-                since[s] = (since[s] if since[s] >= 0 else k) if c[s][k] else -1
-            if anchor is None or not c[anchor][k]:
-                down = [s for s in SIDES if c[s][k]]
-                anchor = min(down, key=lambda s: since[s]) if down else None
-            if anchor is not None:
-                out[anchor][k] = True
-        c = out
+        anchors = np.array(anchor_schedule(c), dtype=object)
+        c = {s: anchors == s for s in SIDES}
     return c
 
 
