@@ -468,7 +468,8 @@ class SymbolicModel:
         frames = tuple(frames)
 
         def make() -> ca.Function:
-            wrenches, extra = [], {}
+            wrenches: list = []
+            extra: dict = {}
             for c, name in enumerate(frames):
                 jid, (_, pf) = self._frame_placement(name)
                 w = ca.SX.sym(f"w{c}", 6)

@@ -395,15 +395,9 @@ def test_no_function_over_80_lines_besides_the_allowed_ones():
 
 
 # ------------------------------------------------------------------ static types
-#: files mypy still finds errors in, each being rewritten by another engineer (issue 19); the
-#: test prints them with their error counts. An error in any other file fails the test; a file
-#: listed here that has become clean warns so that it is removed. The coordinator empties it.
-MYPY_PENDING: tuple[str, ...] = (
-    "gdimitate/retarget/frameref.py", "gdimitate/retarget/parts/body.py",
-    "gdimitate/retarget/problem.py", "gdimitate/retarget/receding.py",
-    "gdimitate/retarget/solve.py", "gdimitate/retarget/streaming.py",
-    "gdimitate/retarget/targets.py", "gdimitate/symbolic.py",
-)
+#: files mypy may still find errors in (printed with their counts; a listed file that has
+#: become clean warns so that it is removed). Empty: mypy passes on the whole package.
+MYPY_PENDING: tuple[str, ...] = ()
 
 
 def test_mypy_passes_on_the_package():

@@ -28,6 +28,8 @@ collision geometries are :data:`REST_CLEARANCE` apart (:func:`clear_rest`).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pinocchio as pin
 
@@ -82,7 +84,7 @@ class FrameReference:
         self.heading: np.ndarray | None = None
         self.swing: dict = {x: None for x in SIDES}
         self.t_swing = FIRST_SWING
-        self.lift = {x: None for x in SIDES}
+        self.lift: dict[str, Any] = {x: None for x in SIDES}
 
     # ------------------------------------------------------------------ one frame
     def features(self, t: float, q_demo: np.ndarray, contact: dict, forces) -> dict:
@@ -106,7 +108,7 @@ class FrameReference:
                 elif self.force == "com":
                     d = com - soles[x].translation
             nd = np.linalg.norm(d) if d is not None else 0.0
-            push[x] = d / nd if nd > 1e-9 else None
+            push[x] = d / nd if d is not None and nd > 1e-9 else None
         return {"t": t, "q": q_demo, "com": com, "soles": soles, "joints": joints, "rot": rot,
                 "push": push, "contact": {x: bool(contact[x]) for x in SIDES}}
 
@@ -318,7 +320,7 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
     moving = com_vel is not None
     if len(down) == 1:  # keep the swing sole clear of the stance sole
         o = [x for x in SIDES if x != down[0]][0]
-        if moving:  # and, moving, put it where it will catch the centre of mass
+        if com_vel is not None:  # and, moving, put it where it will catch the centre of mass
             dem = f0["soles"][down[0]].translation[:2]
             cp = (goals[down[0]].translation[:2] + ref.k * (f0["com"][:2] - dem)
                   + com_vel[:2] * np.sqrt(f0["com"][2] / 9.81))
@@ -361,8 +363,8 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
         J.append(Js)
         e.append(targets - q[qa])
         w.append(np.full(act_idx.size, 0.1))
-        J, e, w = np.vstack(J), np.concatenate(e), np.concatenate(w)
-        dq = np.linalg.solve(J.T @ (w[:, None] * J) + 1e-6 * np.eye(m.nv), J.T @ (w * e))
+        Ja, ea, wa = np.vstack(J), np.concatenate(e), np.concatenate(w)
+        dq = np.linalg.solve(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv), Ja.T @ (wa * ea))
         q = pin.integrate(m, q, dq)
         q = np.clip(q, m.lowerPositionLimit, m.upperPositionLimit)
     return q
@@ -415,9 +417,9 @@ def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo
     J.append(Js)
     r.append(vj)
     wts += [0.1] * act_idx.size
-    J, r, w = np.vstack(J), np.concatenate(r), np.sqrt(np.array(wts))
+    Ja, ra, wa = np.vstack(J), np.concatenate(r), np.sqrt(np.array(wts))
     N = scipy_null(C)
-    y = np.linalg.lstsq((w[:, None] * J) @ N, w * r, rcond=None)[0]
+    y = np.linalg.lstsq((wa[:, None] * Ja) @ N, wa * ra, rcond=None)[0]
     return N @ y
 
 

@@ -20,6 +20,7 @@ import hashlib
 import sys
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -380,11 +381,12 @@ def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled
                        ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
     progress = Progress(f"progress_{BUILD_COUNT}", int(z.shape[0]), len(keep),
                         int(p.shape[0]))
-    opts = {"print_time": False, "iteration_callback": progress, "grad_f": grad_f,
-            "calc_lam_p": False, "no_nlp_grad": True,
-            "jac_g": jac_g, "hess_lag": hess, "ipopt": {**IPOPT_DEFAULTS, **ipopt}}
-    solver = ca.nlpsol(f"retarget_{BUILD_COUNT}", "ipopt", {"x": z, "p": p, "f": F, "g": Gs},
-                       opts)
+    opts: dict[str, Any] = {
+        "print_time": False, "iteration_callback": progress, "grad_f": grad_f,
+        "calc_lam_p": False, "no_nlp_grad": True,
+        "jac_g": jac_g, "hess_lag": hess, "ipopt": {**IPOPT_DEFAULTS, **ipopt}}
+    nlp: dict[str, Any] = {"x": z, "p": p, "f": F, "g": Gs}
+    solver = ca.nlpsol(f"retarget_{BUILD_COUNT}", "ipopt", nlp, opts)
     g_fun = ca.Function("g", [z, p], [G])
     BUILD_COUNT += 1
     return Compiled(solver, form, g_fun, T, keep, progress, row_labels(form, T))

@@ -30,6 +30,7 @@ says which frames it could not make feasible.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import daqp
 import numpy as np
@@ -149,7 +150,7 @@ class FrameQP:
         pin.forwardKinematics(m, d, q, v, np.zeros(nv))
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
-        t = {"feet": {}}
+        t: dict[str, Any] = {"feet": {}}
         for s in SIDES:
             f = self.fid[s]
             t["feet"][s] = (d.oMf[f].copy(), pin.getFrameVelocity(m, d, f, _LWA).vector.copy(),
@@ -234,8 +235,8 @@ class FrameQP:
 
         c, vc, dc, Jc = t["com"]
         kp, kd = _pd(g.com)
-        kp = np.array([g.com_xy**2, kp, kp])  # along the walk (x): mostly the velocity
-        acc = tk.com_acc + kp * (tk.com - c) + kd * (tk.com_vel - vc) - dc
+        kp_com = np.array([g.com_xy**2, kp, kp])  # along the walk (x): mostly the velocity
+        acc = tk.com_acc + kp_com * (tk.com - c) + kd * (tk.com_vel - vc) - dc
         J.append(Jc[self.lin])
         r.append(acc[self.lin])
         # horizontally in single support the centre of mass is left to its pendulum dynamics
@@ -365,7 +366,12 @@ class FrameQP:
 
 class _Rows:
     def __init__(self, n: int):
-        self.n, self.A, self.up, self.lo, self.sense, self.kind = n, [], [], [], [], []
+        self.n = n
+        self.A: list[np.ndarray] = []
+        self.up: list[np.ndarray] = []
+        self.lo: list[np.ndarray] = []
+        self.sense: list[np.ndarray] = []
+        self.kind: list[np.ndarray] = []
 
     def add(self, A, up, lo, sense, kind) -> None:
         self.A.append(A)

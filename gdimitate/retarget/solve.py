@@ -327,9 +327,11 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
     z = np.asarray(sol["x"]).ravel()
     if st.get("return_status") == "User_Requested_Stop" and stopper.reason:
         if stopper.reason == "settled":
+            assert stopper.best_x is not None  # it settles on a feasible iterate
             z = stopper.best_x
             st.update(success=True, return_status=PLATEAU)
         elif stopper.reason == "stalled":
+            assert stopper.least_x is not None  # it stalls after iterates were recorded
             z = stopper.least_x
             st.update(success=False, return_status=STALLED)
         else:

@@ -321,7 +321,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     t0 = time.perf_counter()
     for k in range(T):
         f_k = None
-        if force == "measured":
+        if force == "measured" and forces is not None:  # None refused above
             f_k = {s: np.array([np.interp(demo.t[k], forces.t, forces[s].force[:, i])
                                 for i in range(3)]) for s in SIDES}
         dt = demo.t[k] - demo.t[k - 1] if k else demo.dt
@@ -330,6 +330,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
         q[k], v[k] = r.q, r.v
         if k:
             a[k - 1] = r.previous_a
+            assert r.previous_wrenches is not None  # every frame after the first settles one
             for s in SIDES:
                 W[s][k - 1] = r.previous_wrenches[s]
         statuses.append(r.status)

@@ -7,11 +7,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from ..contact import ContactForces
 from ..errors import InvalidInputError
-from ..kinematics import anchor_schedule
+from ..kinematics import anchor_schedule, frame_placements
 from ..metrics import force_direction
 from ..motion import Motion
 from ..robot import SIDES, Robot
@@ -120,19 +119,6 @@ def direction_frame(d: np.ndarray, planar: bool) -> tuple[np.ndarray, np.ndarray
     return e1, e2
 
 
-def _paths(robot: Robot, q: np.ndarray, frames: list[str]) -> dict[str, np.ndarray]:
-    m, d = robot.model, robot.data
-    ids = {f: m.getFrameId(f) for f in frames}
-    out = {f: np.empty((len(q), 3)) for f in frames}
-    rot = {f: np.empty((len(q), 3, 3)) for f in frames}
-    for k, qk in enumerate(q):
-        pin.framesForwardKinematics(m, d, qk)
-        for f, i in ids.items():
-            out[f][k] = d.oMf[i].translation
-            rot[f][k] = d.oMf[i].rotation
-    return out, rot
-
-
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
@@ -149,8 +135,13 @@ def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bm
     seg_frames = list(bmap.segments)
     dc = demonstrator.contacts
     soles = [dc[s].frame if s in dc else legs[s].sole for s in SIDES]
-    pos, rot = _paths(demonstrator, demo.q, frames + seg_frames + soles)
-    height, placement, shank, thigh = {}, {}, {}, {}
+    placements = frame_placements(demonstrator, demo.q, frames + seg_frames + soles)
+    pos = {f: p.translation for f, p in placements.items()}
+    rot = {f: p.rotation for f, p in placements.items()}
+    height: dict[str, np.ndarray] = {}
+    placement: dict[str, np.ndarray] = {}
+    shank: dict[str, np.ndarray] = {}
+    thigh: dict[str, np.ndarray] = {}
     for s in SIDES:
         leg = legs[s]
         hip, knee, ankle = pos[leg.hip], pos[leg.knee], pos[leg.ankle or leg.sole]

@@ -19,7 +19,7 @@ def body_parts(imitator, act_names) -> tuple:
     geometry)."""
     from ..bodymap import HOLD_RANGE
 
-    out = []
+    out: list = []
     rest = rest_pose(imitator)
     if act_names:
         idx = tuple(int(imitator.idx_q(j)) for j in act_names)
