@@ -34,7 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..robot import SIDES
-from .receding import Tasks
+from .receding import Tasks, q_of_v
 
 __all__ = ["FrameReference"]
 
@@ -335,7 +335,7 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
         centre = np.r_[centre[:2] + ref.k * (f0["com"][:2] - dem), 0.0]
     rot = f0["rot"] if f0["rot"] is not None else np.eye(3)
     targets = f0["joints"]
-    qa = _q_index(m, act_idx)
+    qa = q_of_v(m, act_idx)
     for _ in range(iterations):
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
@@ -370,14 +370,6 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
     return q
 
 
-def _q_index(m, vi: np.ndarray) -> np.ndarray:
-    out = np.zeros(len(vi), int)
-    for j in range(1, m.njoints):
-        jm = m.joints[j]
-        for i, k in enumerate(vi):
-            if jm.idx_v <= k < jm.idx_v + jm.nv:
-                out[i] = jm.idx_q + (k - jm.idx_v)
-    return out
 
 
 def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo: np.ndarray,

@@ -132,7 +132,7 @@ class FrameQP:
         self.lim_v = np.flatnonzero(np.isfinite(vel) & (vel < 1e30) & (vel > 0))
         self.vel = vel[self.lim_v]
         self.pos = _position_rows(m, self.act_idx)
-        self.q_act = _q_of_v(m, self.act_idx)
+        self.q_act = q_of_v(m, self.act_idx)
         legs = {jm for x in SIDES for jm in m.supports[m.frames[self.fid[x]].parentJoint]}
         leg_v = {m.joints[j].idx_v for j in legs if j > 0}
         #: the legs follow the feet, centre of mass and base: their posture only regularises
@@ -431,7 +431,7 @@ def _flat(oMf: pin.SE3) -> pin.SE3:
     return pin.SE3(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), p)
 
 
-def _q_of_v(m, vi: np.ndarray) -> np.ndarray:
+def q_of_v(m, vi: np.ndarray) -> np.ndarray:
     """``q`` index of each 1-dof velocity index in ``vi`` (joints with nq = nv = 1)."""
     out = np.zeros(len(vi), int)
     for j in range(1, m.njoints):
