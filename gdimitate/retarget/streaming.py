@@ -23,13 +23,14 @@ task; ``dynamics`` needs the demonstrator's future accelerations.
 from __future__ import annotations
 
 import time
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
 from ..contact import ContactForces, SoleContact
-from ..errors import InvalidInputError, UnknownNameError
+from ..errors import GdimitateWarning, InvalidInputError, UnknownNameError
 from ..kinematics import robot_motion
 from ..motion import Motion
 from ..result import AdaptedMotion, compare
@@ -80,7 +81,8 @@ class StreamingAdaptor:
     (the per-frame QP has its own task weights, :class:`~.receding.Gains`); ``limits``,
     ``contact``: as for :func:`~.solve.adapt_optimal` (the ``"all"`` contact rule only);
     ``contacts``: sole overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``:
-    accepted and unused (no NLP runs); ``audit``: audit each frame in :meth:`step`
+    unused (no NLP runs; a non-default ``weights`` or any ``ipopt`` warns); ``audit``: audit
+    each frame in :meth:`step`
     (``FrameResult.previous_feasible``; False keeps the audit off the hot path: audit the
     assembled motion afterwards, as :func:`adapt_per_frame` does).
     """
@@ -101,6 +103,11 @@ class StreamingAdaptor:
         self.demonstrator, self.imitator, self.force, self.dt = (demonstrator, imitator, force,
                                                                  float(dt))
         self.weights, self.limits = weights or Weights(), limits or Limits()
+        if self.weights != Weights() or ipopt:  # said, not silently dropped
+            warnings.warn(GdimitateWarning(
+                "the per-frame mode ignores weights= and ipopt= (its QP has its own task "
+                "weights, gdimitate.retarget.receding.Gains; no NLP runs): use "
+                "mode='trajectory' for them"), stacklevel=2)
         self.audit = bool(audit)
         self.contacts: dict[str, SoleContact] = resolve_contacts(imitator, self.contact,
                                                                  contacts)
