@@ -44,6 +44,7 @@ __all__ = [
     "ContactForces",
     "wrench_cone",
     "wrench_cone_rows",
+    "PLANAR_CONE_ROWS",
     "cone_margin",
     "centre_of_pressure",
     "geometry_vertices",
@@ -96,13 +97,26 @@ class SoleContact:
         return SoleContact(**d)
 
 
+#: The rows of :func:`wrench_cone_rows` that a model moving in the x–z plane keeps (its
+#: wrench has f_y = τ_x = τ_z = 0): friction along x (0, 1), centre of pressure along x (6, 7).
+PLANAR_CONE_ROWS = (0, 1, 6, 7)
+
+
 def wrench_cone_rows(w, half_length, half_width, mu, cop_length=None, cop_width=None) -> list:
     """The 16 rows of the contact wrench cone, each ``≤ 0`` inside it (Caron et al. 2015,
     Eq. 4-6): friction (4), centre of pressure (4), yaw moment (8), for a wrench
-    ``w = [f_x, f_y, f_z, τ_x, τ_y, τ_z]`` (at the sole centre, in the sole frame).
+    ``w = [f_x, f_y, f_z, τ_x, τ_y, τ_z]`` [N, N·m] (at the sole centre, in the sole frame);
+    ``half_length``, ``half_width`` [m], ``mu`` [-]. Rows in order:
+
+    0–3 ``±f_x − μ f_z``, ``±f_y − μ f_z``; 4–7 ``±τ_x − Y_c f_z``, ``±τ_y − X_c f_z``;
+    8–15 for ``(s1, s2)`` in ``(+,+), (+,−), (−,+), (−,−)`` the pair
+    ``τ_min − τ_z`` and ``τ_z − τ_max`` of that corner sign choice.
 
     Written with ``+``, ``−`` and ``·`` only, so ``w`` and the parameters may be numbers, NumPy
-    arrays or symbolic expressions (CasADi): the one formula of the cone in the package.
+    arrays (``w[i]`` of shape ``(...)``: the rows come out elementwise) or symbolic
+    expressions (CasADi): the one formula of the cone in the package — the matrix
+    :func:`wrench_cone`, the optimiser's rows (``retarget.parts.cone``) and the audit's margins
+    (:func:`cone_margin`) are all taken from it.
     ``cop_length``/``cop_width``: the half-lengths of the centre-of-pressure rows (default the
     sole's; smaller ones keep the centre of pressure a margin inside the sole)."""
     fx, fy, fz, tx, ty, tz = (w[i] for i in range(6))
@@ -122,14 +136,16 @@ def wrench_cone_rows(w, half_length, half_width, mu, cop_length=None, cop_width=
     return rows
 
 
-def wrench_cone(half_length: float, half_width: float, mu: float) -> np.ndarray:
+def wrench_cone(half_length: float, half_width: float, mu: float,
+                cop_length: float | None = None, cop_width: float | None = None) -> np.ndarray:
     """The contact wrench cone of a rectangular sole, ``A`` ``(16, 6)`` with ``A @ w <= 0``
     exactly when the wrench ``w = [f_x, f_y, f_z, τ_x, τ_y, τ_z]`` (at the sole centre, in the
     sole frame) is produced by four corner forces inside their friction cones (Caron et al.
     2015, Eq. 4-6). Rows: friction (4), centre of pressure (4), yaw moment (8) — the
-    coefficients of :func:`wrench_cone_rows` (which are linear in ``w``)."""
+    coefficients of :func:`wrench_cone_rows` (which are linear in ``w``), ``cop_length``,
+    ``cop_width`` [m] as there."""
     return np.array(wrench_cone_rows(np.eye(6), float(half_length), float(half_width),
-                                     float(mu)), dtype=float) + 0.0
+                                     float(mu), cop_length, cop_width), dtype=float) + 0.0
 
 
 def cone_margin(contact: SoleContact, w: np.ndarray) -> dict[str, np.ndarray]:
@@ -150,11 +166,8 @@ def cone_margin(contact: SoleContact, w: np.ndarray) -> dict[str, np.ndarray]:
         px = np.where(fz > 0, -tau[..., 1] / np.where(fz > 0, fz, 1), np.inf)
         py = np.where(fz > 0, tau[..., 0] / np.where(fz > 0, fz, 1), np.inf)
     cop = np.minimum(X - np.abs(px), Y - np.abs(py))
-    tmin = (-mu * (X + Y) * fz + np.abs(Y * f[..., 0] - mu * tau[..., 0])
-            + np.abs(X * f[..., 1] - mu * tau[..., 1]))
-    tmax = (mu * (X + Y) * fz - np.abs(Y * f[..., 0] + mu * tau[..., 0])
-            - np.abs(X * f[..., 1] + mu * tau[..., 1]))
-    yaw = np.minimum(tau[..., 2] - tmin, tmax - tau[..., 2])
+    # min(τ_z − τ_min, τ_max − τ_z): the yaw rows 8–15 of the cone, each ≤ 0 inside
+    yaw = -np.max(wrench_cone_rows(np.moveaxis(w, -1, 0), X, Y, mu)[8:], axis=0)
     return {"normal": fz, "friction": mu - ratio, "cop": cop, "yaw": yaw}
 
 

@@ -142,3 +142,72 @@ def test_sole_overrides_and_missing_feet():
     with pytest.raises(InvalidInputError, match="unknown keys"):
         gd.Robot.from_urdf(t.urdf_path, legs, package_dir=t.package_dir,
                            contacts={"left": {"X": 1}})
+
+
+def test_optimiser_rows_and_numpy_cone_are_one_formula():
+    """The contact wrench cone is written once (``contact.wrench_cone_rows``). Its users agree
+    on random soles and wrenches: the optimiser's rows (``retarget.parts.cone.cone_rows`` on
+    CasADi symbols, evaluated by a ``casadi.Function``), the NumPy matrix ``wrench_cone``
+    (force estimation, the receding controller) and the audit's yaw margin ``cone_margin``.
+    Independent reference: rows written out by hand from Caron et al. (2015), Eq. 4-6, and the
+    yaw bounds τ_min/τ_max in their |·| form (the module docstring)."""
+    import casadi as ca
+
+    from gdimitate.contact import PLANAR_CONE_ROWS, wrench_cone_rows
+    from gdimitate.retarget.parts.cone import cone_rows, rows_per_side
+
+    ws, ps = ca.SX.sym("w", 6), ca.SX.sym("p", 6)
+    par = [ps[i] for i in range(6)]  # X, Y, mu, Xc, Yc, f_min
+    sym = {planar: ca.Function("rows", [ws, ps], [ca.vertcat(*cone_rows(ws, *par,
+                                                                           planar=planar))])
+           for planar in (False, True)}
+    assert [rows_per_side(p) for p in (False, True)] == [17, 5]
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    for _ in range(300):
+        X, Y, mu = rng.uniform(0.03, 0.15), rng.uniform(0.02, 0.08), rng.uniform(0.2, 1.2)
+        Xc, Yc, fmin = X - rng.uniform(0, 0.02), Y - rng.uniform(0, 0.01), rng.uniform(0, 50)
+        fz = rng.uniform(-50, 600)
+        w = rng.normal(size=6) * [mu * fz, mu * fz, 0, Y * fz, X * fz, mu * (X + Y) * fz]
+        w[2] = fz
+        fx, fy, _, tx, ty, tz = w
+        p = [X, Y, mu, Xc, Yc, fmin]
+        got = np.array(sym[False](w, p)).ravel()
+        # the NumPy users: the matrix, and the formula on arrays
+        A = wrench_cone(X, Y, mu, Xc, Yc)
+        scale = np.abs(A).sum(axis=1) * np.abs(w).max()
+        worst = max(worst, float(np.max(np.abs(got[:16] - A @ w) / scale)))
+        np.testing.assert_array_equal(got[:16], np.array(wrench_cone_rows(w, X, Y, mu, Xc, Yc)))
+        # by hand: friction, centre of pressure (margin-reduced), yaw (s1, s2) = (+,+), (−,−)
+        hand = {0: fx - mu * fz, 3: -fy - mu * fz, 5: -tx - Yc * fz, 6: ty - Xc * fz,
+                8: Y * fx + X * fy - mu * (X + Y) * fz - mu * tx - mu * ty - tz,
+                15: -Y * fx - X * fy - mu * (X + Y) * fz - mu * tx - mu * ty + tz,
+                16: fmin - fz}
+        for i, ref in hand.items():
+            assert got[i] == pytest.approx(ref, rel=1e-12, abs=1e-12 * np.abs(w).max())
+        # planar models: friction and centre of pressure along x, then f_min
+        wp = w * [1, 0, 1, 0, 1, 0]
+        planar = np.array(sym[True](wp, p)).ravel()
+        np.testing.assert_allclose(planar, [fx - mu * fz, -fx - mu * fz, ty - Xc * fz,
+                                            -ty - Xc * fz, fmin - fz], rtol=1e-12, atol=1e-9)
+        np.testing.assert_array_equal(planar[:4], np.array(sym[False](wp, p)).ravel()[
+            list(PLANAR_CONE_ROWS)])
+        # the audit's yaw margin: min(τ_z − τ_min, τ_max − τ_z)
+        tmin = -mu * (X + Y) * fz + abs(Y * fx - mu * tx) + abs(X * fy - mu * ty)
+        tmax = mu * (X + Y) * fz - abs(Y * fx + mu * tx) - abs(X * fy + mu * ty)
+        yaw = cone_margin(SoleContact("left", "f", X, Y, mu), w)["yaw"]
+        assert yaw == pytest.approx(min(tz - tmin, tmax - tz), rel=1e-12,
+                                    abs=1e-12 * np.abs(w).max())
+    assert worst < 1e-15  # the matrix product sums the same terms in another order
+
+
+def test_cone_margin_is_elementwise_over_wrenches():
+    """``cone_margin`` on ``(N, 6)`` wrenches equals it wrench by wrench (the yaw margin is taken
+    from the cone's rows with ``w[i]`` of shape ``(N,)``)."""
+    c = SoleContact("left", "f", 0.1, 0.05, 0.7)
+    W = np.random.default_rng(2).normal(size=(50, 6)) * [150, 150, 100, 20, 20, 15] + [
+        0, 0, 300, 0, 0, 0]
+    m = cone_margin(c, W)
+    for key, col in m.items():
+        assert col.shape == (50,)
+        np.testing.assert_array_equal(col, [cone_margin(c, w)[key] for w in W])

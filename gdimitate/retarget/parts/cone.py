@@ -6,10 +6,11 @@ wrench ``[f; τ]`` at the sole centre in the sole frame, half-lengths X, Y and f
 
     |f_x| ≤ μ f_z, |f_y| ≤ μ f_z, |τ_x| ≤ Y f_z, |τ_y| ≤ X f_z, τ_min ≤ τ_z ≤ τ_max
 
-(16 linear rows, :func:`gdimitate.contact.wrench_cone`), plus ``f_z ≥ f_min``. The centre-of-
-pressure rows use X − margin, Y − margin. X, Y and μ are parameters. Planar models keep the
-in-plane rows (friction along x, centre of pressure along x, f_z ≥ f_min). Rows are divided
-by m·g; relaxable. Swing feet carry no wrench (their variables are bounded to 0).
+(16 linear rows, :func:`gdimitate.contact.wrench_cone_rows`: the cone is written there once),
+plus ``f_z ≥ f_min``. The centre-of-pressure rows use X − margin, Y − margin. X, Y and μ are
+parameters. Planar models keep the in-plane rows (friction along x, centre of pressure along
+x: :data:`gdimitate.contact.PLANAR_CONE_ROWS`; f_z ≥ f_min). Rows are divided by m·g;
+relaxable. Swing feet carry no wrench (their variables are bounded to 0).
 """
 
 from __future__ import annotations
@@ -19,28 +20,24 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ...contact import PLANAR_CONE_ROWS, wrench_cone_rows
 from ...robot import SIDES
 from .base import Constraint, per_side_labels
 
 
 def rows_per_side(planar: bool) -> int:
-    return 5 if planar else 17
+    """Rows of one foot: the cone's (16, planar 4) and ``f_z ≥ f_min``."""
+    return (len(PLANAR_CONE_ROWS) if planar else 16) + 1
 
 
 def cone_rows(w, X, Y, mu, Xc, Yc, f_min, planar: bool) -> list:
-    """The rows (≤ 0 inside the cone) of a sole wrench ``w = [f; τ]`` (6,)."""
-    fx, fy, fz, tx, ty, tz = (w[i] for i in range(6))
+    """The rows (each ≤ 0 inside the cone) of a sole wrench ``w = [f; τ]`` (6,) [N, N·m]:
+    :func:`gdimitate.contact.wrench_cone_rows` (the one formula of the cone; planar models
+    keep its rows :data:`~gdimitate.contact.PLANAR_CONE_ROWS`), then ``f_min − f_z``."""
+    rows = wrench_cone_rows(w, X, Y, mu, cop_length=Xc, cop_width=Yc)
     if planar:
-        return [fx - mu * fz, -fx - mu * fz, ty - Xc * fz, -ty - Xc * fz, f_min - fz]
-    rows = [fx - mu * fz, -fx - mu * fz, fy - mu * fz, -fy - mu * fz,
-            tx - Yc * fz, -tx - Yc * fz, ty - Xc * fz, -ty - Xc * fz]
-    for s1 in (1.0, -1.0):
-        for s2 in (1.0, -1.0):
-            rows.append(s1 * Y * fx + s2 * X * fy - mu * (X + Y) * fz - s1 * mu * tx
-                        - s2 * mu * ty - tz)
-            rows.append(s1 * Y * fx + s2 * X * fy - mu * (X + Y) * fz + s1 * mu * tx
-                        + s2 * mu * ty + tz)
-    return rows + [f_min - fz]
+        rows = [rows[i] for i in PLANAR_CONE_ROWS]
+    return rows + [f_min - w[2]]
 
 
 @dataclass(frozen=True)
