@@ -5,9 +5,9 @@ ground reversed), ``e1``, ``e2`` complete it to an orthonormal frame (parameters
 The imitator's vector ``c`` is, by force model:
 
 - ``measured``, ``dynamics`` — its own contact force in world axes (divided by m·g);
-- ``segment`` — the reverse of its shank (ankle → knee, divided by the shank's 3-D length
-  ``Leg.segments[1]``, so a unit vector whatever the leg's joint axes): the paper's model,
-  under which Eq. (1) is the optimum;
+- ``segment`` — the reverse of its unit shank vector (ankle → knee, divided by the shank's
+  3-D length ``Leg.segments[1]``: :func:`.shank.unit_segment`, a unit vector whatever the
+  leg's joint axes): the paper's model, under which Eq. (1) is the optimum;
 - ``com`` — from its contact point to its centre of mass (divided by the leg length).
 
 Equality: ``e1·c = e2·c = 0``, ``d·c ≥ 0``. Cone of half-angle α:
@@ -25,6 +25,7 @@ import numpy as np
 
 from ...robot import SIDES
 from .base import Constraint, per_side_labels
+from .shank import unit_segment
 
 
 def rows_per_side(cone: bool) -> int:
@@ -37,7 +38,7 @@ def vector(k, side: str) -> ca.SX:
     if goal == "force":
         return k.wrench_world(side)[:3] / k.mg
     if goal == "segment":
-        return (k.knee[side] - k.ankle[side]) / k.leg[side].segments[1]
+        return -unit_segment(k, side, 1)
     return (k.com - k.sole_p[side]) / k.leg[side].length
 
 

@@ -1,6 +1,7 @@
 """Keypoint cost: per leg, the unit shank direction (knee → ankle, divided by the imitator's
 shank length) minus the demonstrator's (parameter ``shank_<side>``; weight ``shank``). Eq. (1)
-keeps it."""
+keeps it. :func:`unit_segment`, the imitator's unit thigh or shank vector, is shared with the
+thigh cost and the ``segment`` force model."""
 
 from __future__ import annotations
 
@@ -12,12 +13,19 @@ from ...robot import SIDES
 from .base import Cost
 
 
+def unit_segment(k, side: str, segment: int) -> ca.SX:
+    """``(3,)`` the imitator's unit vector along a leg segment, world axes: ``segment`` 0 the
+    thigh (hip → knee), 1 the shank (knee → ankle, or the sole without an ankle), the joint
+    positions' difference divided by the segment's 3-D length ``Leg.segments`` [m] (rigid, so
+    a unit vector at every configuration, whatever the leg's joint axes)."""
+    top, bottom = ((k.hip, k.knee), (k.knee, k.ankle))[segment]
+    return (bottom[side] - top[side]) / k.leg[side].segments[segment]
+
+
 @dataclass(frozen=True)
 class Shank(Cost):
     name: str = "shank"
     weight: str = "shank"
 
     def residual(self, k):
-        L = k.segment_lengths()
-        return ca.vertcat(*[(k.ankle[s] - k.knee[s]) / L[s][1] - k.P(f"shank_{s}")
-                            for s in SIDES])
+        return ca.vertcat(*[unit_segment(k, s, 1) - k.P(f"shank_{s}") for s in SIDES])

@@ -1,6 +1,6 @@
 """Keypoint cost: per leg, the unit thigh direction (hip → knee, divided by the imitator's thigh
-length) minus the demonstrator's (parameter ``thigh_<side>``; weight ``thigh``). Eq. (1) gives
-it up."""
+length: :func:`.shank.unit_segment`) minus the demonstrator's (parameter ``thigh_<side>``;
+weight ``thigh``). Eq. (1) gives it up."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import casadi as ca
 
 from ...robot import SIDES
 from .base import Cost
+from .shank import unit_segment
 
 
 @dataclass(frozen=True)
@@ -18,6 +19,4 @@ class Thigh(Cost):
     weight: str = "thigh"
 
     def residual(self, k):
-        L = k.segment_lengths()
-        return ca.vertcat(*[(k.knee[s] - k.hip[s]) / L[s][0] - k.P(f"thigh_{s}")
-                            for s in SIDES])
+        return ca.vertcat(*[unit_segment(k, s, 0) - k.P(f"thigh_{s}") for s in SIDES])
