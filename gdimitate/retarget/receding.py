@@ -326,11 +326,15 @@ class FrameQP:
             oMf, vel, dq, Jl, Jw = ahead[s]
             rest = not nxt[s] and s in tk.feet and tk.feet[s][4]
             if nxt[s] or rest:  # J(q_k) v_k = back towards the stance's (rest) pose: a Newton
-                if rest:  # row in a, q_k = q ⊕ h v_k, v_k = v + h a (both through a)
+                # row in a, q_k = q ⊕ h v_k, v_k = v + h a (both through a); the feedback u is
+                # read at knot j's pose (fixed: taken at q_k it would move with a, and the
+                # passes would close only half the rest gain's share per pass)
+                now = t["feet"][s][0]
+                if rest:
                     p, R = tk.feet[s][0], tk.feet[s][1]
-                    u = self.g.rest * pin.log6(oMf.actInv(pin.SE3(R, p))).vector / h
+                    u = self.g.rest * pin.log6(now.actInv(pin.SE3(R, p))).vector / h
                 elif s in tk.anchor:
-                    u = self.g.hold * pin.log6(oMf.actInv(tk.anchor[s])).vector / h
+                    u = self.g.hold * pin.log6(now.actInv(tk.anchor[s])).vector / h
                 else:  # touch-down: still
                     u = np.zeros(6)
                 # the midpoint rule ½ (J(q_j) + J(q_k)) v_k = u: the sole moves by h·u over
