@@ -23,7 +23,9 @@ _LIBS: list | None = None
 
 _TARGETS = (
     # (package whose folder holds the library, glob, get, set)
-    ("casadi", "libcasadi-tp-openblas.so*", "openblas_get_num_threads",
+    # the wheel ships .so, .so.0 and .so.0.3 as three copies (no symlinks): IPOPT's MUMPS
+    # loads the one its soname names, and a thread count set on another copy changes nothing
+    ("casadi", "libcasadi-tp-openblas.so.0", "openblas_get_num_threads",
      "openblas_set_num_threads"),
     ("casadi", "libgomp*.so*", "omp_get_max_threads", "omp_set_num_threads"),
     ("numpy", "../numpy.libs/libscipy_openblas*.so*", "scipy_openblas_get_num_threads64_",
