@@ -76,23 +76,6 @@ class AdaptationReport:
         }
 
 
-def _jsonable(v: Any) -> Any:
-    """Plain JSON types: NumPy scalars → numbers, arrays → (nested) lists, NaN/inf → None."""
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return _jsonable(v.tolist())
-    if isinstance(v, (np.bool_, bool)):
-        return bool(v)
-    if isinstance(v, (np.integer, int)):
-        return int(v)
-    if isinstance(v, (np.floating, float)):
-        return float(v) if np.isfinite(v) else None
-    return v
-
-
 @dataclass(frozen=True)
 class AdaptedMotion:
     """An adaptation's result.

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields, is_dataclass
-from typing import Any, NamedTuple
+from dataclasses import dataclass, field, fields
+from typing import NamedTuple
 
 import numpy as np
+
+from ..jsonable import jsonable
 
 __all__ = [
     "AuditTolerances",
@@ -215,27 +217,6 @@ class SelfCollisionAudit:
     excluded: tuple[tuple[str, str, float], ...] = ()
 
 
-def _json(x: object) -> Any:
-    """JSON-safe copy: NaN/inf → None, NumPy → Python, tuples → lists."""
-    if isinstance(x, Mapping):
-        return {str(k): _json(v) for k, v in x.items()}
-    if hasattr(x, "_asdict"):
-        return _json(x._asdict())
-    if is_dataclass(x) and not isinstance(x, type):
-        return {f.name: _json(getattr(x, f.name)) for f in fields(x)}
-    if isinstance(x, np.ndarray):
-        return [_json(v) for v in x.tolist()]
-    if isinstance(x, (list, tuple)):
-        return [_json(v) for v in x]
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    return x
-
-
 @dataclass(frozen=True, eq=False)
 class AuditReport:
     """The recomputed feasibility of a motion with its contact wrenches.
@@ -303,8 +284,8 @@ class AuditReport:
     def to_dict(self) -> dict:
         """Everything but the arrays ``tau`` and ``knot_checks`` as plain JSON types (NaN and
         inf become ``None``)."""
-        return _json({f.name: getattr(self, f.name) for f in fields(self)
-                      if f.name not in ("tau", "knot_checks")})
+        return jsonable({f.name: getattr(self, f.name) for f in fields(self)
+                         if f.name not in ("tau", "knot_checks")})
 
     def summary(self, only_failed: bool = False) -> str:
         """A text table: one line per check (value, bound, unit, worst knot, status)."""

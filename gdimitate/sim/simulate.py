@@ -25,6 +25,7 @@ import pinocchio as pin
 
 from ..contact import ContactForces
 from ..errors import GdimitateWarning, PlanError, SimulationError
+from ..jsonable import jsonable
 from ..motion import Motion
 from ..robot import SIDES, Robot
 from ..safety import check_array_size
@@ -107,41 +108,28 @@ class SimMetrics:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (NaN → ``None``; per-stance slips as lists)."""
-        def num(x: Any) -> Any:
-            if isinstance(x, dict):
-                return {str(k): num(v) for k, v in x.items()}
-            if isinstance(x, (list, tuple)):
-                return [num(v) for v in x]
-            if isinstance(x, (bool, np.bool_)):
-                return bool(x)
-            if isinstance(x, (int, np.integer)):
-                return int(x)
-            if isinstance(x, (float, np.floating)):
-                return float(x) if np.isfinite(x) else None
-            return x
-
         def agree(d: dict[str, DirectionAgreement] | None) -> Any:
-            return None if d is None else {s: num(a.__dict__) for s, a in d.items()}
+            return None if d is None else {s: jsonable(a.__dict__) for s, a in d.items()}
 
         return {
-            "fell": self.fell, "fall_time_s": num(self.fall_time),
+            "fell": self.fell, "fall_time_s": jsonable(self.fall_time),
             "fall_reason": self.fall_reason,
             "criteria": {"min_height_ratio": self.criteria.min_height_ratio,
                          "max_tilt_rad": self.criteria.max_tilt},
-            "slip_max_m": num(self.slip_max),
+            "slip_max_m": jsonable(self.slip_max),
             "slip": [{"side": x.side, "start_s": x.start, "end_s": x.end,
-                      "slip_m": num(x.slip)} for x in self.slip],
+                      "slip_m": jsonable(x.slip)} for x in self.slip],
             "force_vs_plan": agree(self.force_vs_plan),
             "force_vs_demo": agree(self.force_vs_demo),
-            "cop_margin_min_m": num(self.cop_margin_min),
-            "torque_saturation": num(self.torque_saturation),
-            "torque_saturation_per_joint": num(self.torque_saturation_per_joint),
-            "joint_rmse": num(self.joint_rmse),
-            "joint_rmse_per_joint": num(self.joint_rmse_per_joint),
-            "base_position_rmse_m": num(self.base_position_rmse),
-            "qp_failures": self.qp_failures, "ms_per_step": num(self.ms_per_step),
-            "cpu_ms_per_step": num(self.cpu_ms_per_step),
-            "plan_stance_foot_speed_max_m_s": num(self.plan_stance_foot_speed_max),
+            "cop_margin_min_m": jsonable(self.cop_margin_min),
+            "torque_saturation": jsonable(self.torque_saturation),
+            "torque_saturation_per_joint": jsonable(self.torque_saturation_per_joint),
+            "joint_rmse": jsonable(self.joint_rmse),
+            "joint_rmse_per_joint": jsonable(self.joint_rmse_per_joint),
+            "base_position_rmse_m": jsonable(self.base_position_rmse),
+            "qp_failures": self.qp_failures, "ms_per_step": jsonable(self.ms_per_step),
+            "cpu_ms_per_step": jsonable(self.cpu_ms_per_step),
+            "plan_stance_foot_speed_max_m_s": jsonable(self.plan_stance_foot_speed_max),
         }
 
 

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..contact import ContactForces
+from ..jsonable import jsonable
 from ..motion import Motion
 from ..result import AdaptedMotion
 from ..robot import SIDES, Robot
@@ -160,7 +161,7 @@ class WalkResult:
 
         out = Path(out)
         d = self.to_dict()
-        (out / "walk.json").write_text(json.dumps(_clean(d), indent=2, default=_json))
+        (out / "walk.json").write_text(json.dumps(jsonable(d), indent=2, default=str))
         tr = self.trace
         np.savez_compressed(out / "walk_trajectory.npz", t=tr.t, q=tr.q, v=tr.v, tau=tr.tau,
                             cycles=tr.cycles, ground_phase=tr.ground, y=tr.y,
@@ -199,22 +200,3 @@ def _angle_deg(a: np.ndarray, b: np.ndarray, planar: bool) -> np.ndarray:
         return np.degrees((d + np.pi) % (2 * np.pi) - np.pi)
     c = np.sum(a * b, axis=1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
     return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
-
-
-def _clean(x: Any) -> Any:
-    """NaN/inf → None (JSON has neither), recursively."""
-    if isinstance(x, dict):
-        return {k: _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    return x
-
-
-def _json(x: object) -> object:
-    if isinstance(x, (np.floating, np.integer)):
-        return x.item()
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    return str(x)
