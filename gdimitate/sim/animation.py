@@ -44,26 +44,16 @@ def show_simulation(robot: Robot, result: SimResult, *, gap: float = 1.0, fps: f
     also write the self-contained page there; ``viewer``: draw into this viewer (cleared
     first); ``port``/``open_browser``: for a new viewer; ``camera``: position (3,) [m].
     """
-    from ..viz import Viewer
+    from ..viz.compare import animated_scene
 
-    own = viewer is None
-    v = Viewer.start(port, open_browser) if viewer is None else viewer
-    try:
-        if not own:
-            v.clear()
-        min_force = 0.01 * robot.mass * 9.81
+    min_force = 0.01 * robot.mass * 9.81
+
+    def draw(v: Viewer) -> None:
         v.show(robot, result.plan_motion(), name="plan", offset=(0.0, -gap / 2, 0.0),
                force_directions=_directions(result.plan_forces, min_force),
                color=(0.55, 0.75, 1.0), opacity=0.6)
         v.show(robot, result.motion(), name="simulation", offset=(0.0, gap / 2, 0.0),
                force_directions=_directions(result.contact_forces, min_force))
-        v.animate(fps=fps)
-        if camera is not None:
-            v.look_at_track("simulation", camera)
-        if html is not None:
-            v.save_html(html)
-    except BaseException:
-        if own:
-            v.close()
-        raise
-    return v
+
+    return animated_scene(draw, track="simulation", fps=fps, html=html, viewer=viewer,
+                          port=port, open_browser=open_browser, camera=camera)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -12,7 +12,7 @@ from .animate import PushDirections
 from .scene import Style
 from .viewer import Viewer, leg_length
 
-__all__ = ["compare"]
+__all__ = ["compare", "animated_scene"]
 
 _GHOST_COLOR = (0.55, 0.75, 1.0)
 
@@ -53,27 +53,47 @@ def compare(demonstrator: object, demo_motion: object, imitator: object,
     """
     if layout not in ("side", "ghost"):
         raise ViewerError(f"unknown layout {layout!r}; valid layouts: 'side', 'ghost'")
-    own = viewer is None
-    v = Viewer.start(port, open_browser, style=style) if viewer is None else viewer
-    try:
-        if not own:
-            v.clear()
+
+    def draw(v: Viewer) -> None:
         if layout == "side":
             v.show(demonstrator, demo_motion, name="demonstrator", offset=(0, -gap / 2, 0),
                    force_directions=demo_force)
             v.show(imitator, imitator_motion, name="imitator", offset=(0, gap / 2, 0),
                    force_directions=imitator_force)
-        else:
-            if ghost_scale is None:
-                ratio = leg_length(imitator) / leg_length(demonstrator)
-                ghost_scale = ratio if np.isfinite(ratio) and ratio > 0 else 1.0
-            v.show(imitator, imitator_motion, name="imitator", force_directions=imitator_force)
-            v.show(demonstrator, demo_motion, name="demonstrator", scale=ghost_scale,
-                   color=_GHOST_COLOR, opacity=v.style.ghost_opacity,
-                   force_directions=demo_force, foot_paths=False)
+            return
+        scale = ghost_scale
+        if scale is None:
+            ratio = leg_length(imitator) / leg_length(demonstrator)
+            scale = ratio if np.isfinite(ratio) and ratio > 0 else 1.0
+        v.show(imitator, imitator_motion, name="imitator", force_directions=imitator_force)
+        v.show(demonstrator, demo_motion, name="demonstrator", scale=scale,
+               color=_GHOST_COLOR, opacity=v.style.ghost_opacity,
+               force_directions=demo_force, foot_paths=False)
+
+    return animated_scene(draw, track="imitator", fps=fps, html=html, viewer=viewer,
+                          port=port, open_browser=open_browser, camera=camera, style=style)
+
+
+def animated_scene(draw: Callable[[Viewer], None], *, track: str, fps: float = 30.0,
+                   html: str | os.PathLike[str] | None = None, viewer: Viewer | None = None,
+                   port: int | None = None, open_browser: bool = False,
+                   camera: Sequence[float] | None = None,
+                   style: Style | None = None) -> Viewer:
+    """A scene shown and animated, the one sequence of :func:`compare` and
+    :func:`gdimitate.sim.animation.show_simulation`: ``viewer`` cleared (or a new viewer
+    started with ``port``, ``open_browser``, ``style``), ``draw(viewer)`` adds the robots,
+    then the animation at ``fps``, the camera at ``camera`` (3,) [m] looking along the path of
+    track ``track``, and the self-contained page written to ``html``. A viewer started here
+    is closed if any of it fails; returns the viewer."""
+    own = viewer is None
+    v = Viewer.start(port, open_browser, style=style) if viewer is None else viewer
+    try:
+        if not own:
+            v.clear()
+        draw(v)
         v.animate(fps=fps)
         if camera is not None:
-            v.look_at_track("imitator", camera)
+            v.look_at_track(track, camera)
         if html is not None:
             v.save_html(html)
     except BaseException:
