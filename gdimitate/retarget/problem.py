@@ -25,7 +25,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .. import symbolic
+from .. import contact, symbolic
 from ..robot import Robot
 from ..symbolic import SymbolicModel
 from . import codegen
@@ -258,8 +258,9 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
 
 
 # what the compiled functions' layout and expressions come from: this module (their layout),
-# codegen (how they are generated), the parts, the knot and the symbolic model
-_SOURCE = codegen.source_digest(parts_module, knot_module, symbolic, codegen,
+# codegen (how they are generated), the parts, the knot, the symbolic model and the contact
+# wrench cone the cone part evaluates (contact.wrench_cone_rows)
+_SOURCE = codegen.source_digest(parts_module, knot_module, symbolic, codegen, contact,
                                 sys.modules[__name__])
 
 
