@@ -68,3 +68,36 @@ def test_cache_dir_follows_the_environment(tmp_path, monkeypatch):
     monkeypatch.delenv(codegen.ENV)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert codegen.cache_dir() == tmp_path / "xdg" / "gdimitate"
+
+
+def test_source_digest_covers_every_module_the_compiled_expressions_import():
+    """The compiled-derivative cache key digests the source of the modules the per-knot
+    expressions are written in; a module they import from gdimitate but the digest leaves out
+    (the cone rows moved to gdimitate/contact.py once) would let an edit load a stale library."""
+    import ast
+    from pathlib import Path
+
+    from gdimitate.retarget import problem
+
+    root = Path(problem.__file__).parents[1]  # gdimitate/
+    digested = set()
+    for mod in problem.SOURCE_MODULES:
+        p = Path(mod.__file__)
+        digested |= set(p.parent.rglob("*.py")) if p.name == "__init__.py" else {p}
+    writers = [root / "retarget" / "knot.py",
+               root / "symbolic.py", *(root / "retarget" / "parts").glob("*.py")]
+    missing = set()
+    for f in writers:
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level:
+                base = f.parent
+                for _ in range(node.level - 1):
+                    base = base.parent
+                parts = (node.module or "").split(".") if node.module else []
+                target = base.joinpath(*parts)
+                names = [target / f"{a.name}.py" for a in node.names] if not parts else []
+                for cand in [target.with_suffix(".py"), target / "__init__.py", *names]:
+                    if cand.exists() and cand.resolve() not in {d.resolve() for d in digested}:
+                        missing.add(str(cand.relative_to(root)))
+    missing.discard("errors.py")  # exception classes only: nothing of an expression
+    assert not missing, f"imported by the compiled expressions but not digested: {missing}"

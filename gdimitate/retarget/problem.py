@@ -25,10 +25,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .. import contact, symbolic
+from .. import contact, selfcollision, symbolic
+from .. import robot as robot_module
 from ..robot import Robot
 from ..symbolic import SymbolicModel
-from . import codegen
+from . import bodymap, codegen
 from . import knot as knot_module
 from . import parts as parts_module
 from .interrupt import Progress
@@ -259,9 +260,11 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
 
 # what the compiled functions' layout and expressions come from: this module (their layout),
 # codegen (how they are generated), the parts, the knot, the symbolic model and the contact
-# wrench cone the cone part evaluates (contact.wrench_cone_rows)
-_SOURCE = codegen.source_digest(parts_module, knot_module, symbolic, codegen, contact,
-                                sys.modules[__name__])
+# wrench cone the cone part evaluates (contact.wrench_cone_rows); every module these import
+# from gdimitate is listed (tests/test_retarget_codegen.py checks it)
+SOURCE_MODULES = (parts_module, knot_module, symbolic, codegen, contact, robot_module,
+                  selfcollision, bodymap, sys.modules[__name__])
+_SOURCE = codegen.source_digest(*SOURCE_MODULES)
 
 
 # ---------------------------------------------------------------------- all knots
