@@ -22,8 +22,9 @@ demonstration's contact flag says it is in stance — so that it touches down st
 The landing point keeps at least :data:`SEPARATION` times the neutral stance's lateral
 distance from the other sole and at most :data:`MAX_STEP` legs ahead of or behind it.
 
-Joints no demonstrator joint drives rest at their neutral values moved until the robot's own
-collision geometries are :data:`REST_CLEARANCE` apart (:func:`clear_rest`).
+Joints no demonstrator joint drives rest at the robot's rest pose
+(:func:`.parts.self_collision.rest_pose`, the trajectory mode's, with a wider clearance:
+:data:`REST_MARGIN`, :data:`REST_CLEARANCE`).
 """
 
 from __future__ import annotations
@@ -40,7 +41,10 @@ __all__ = ["FrameReference"]
 
 LAND, FIRST_SWING, TAU_OFFSET, CLEARANCE, SEPARATION, RAMP = 0.95, 0.45, 0.15, 0.08, 1.0, 0.6
 KEEP_GOING, MAX_STEP, STEP_RATIO = 0.0, 0.5, 0.75
-REST_CLEARANCE = 0.03
+#: the rest pose (:func:`.parts.self_collision.rest_pose`): pairs of collision geometries
+#: closer than REST_MARGIN [m] at the neutral pose moved REST_CLEARANCE [m] apart (the
+#: trajectory mode's 1 cm / 1.5 cm left Talos's hands against its swinging thighs)
+REST_MARGIN, REST_CLEARANCE = 0.02, 0.025
 
 
 class FrameReference:
@@ -59,17 +63,16 @@ class FrameReference:
         self.knee = {x: dm.getJointId(demonstrator.legs[x].knee) for x in SIDES}
         self.ankle = {x: dm.getFrameId(demonstrator.legs[x].ankle or demonstrator.legs[x].sole)
                       for x in SIDES}
-        pelvis = [dseg for dseg, iseg in bmap.segments.items()
-                  if iseg in ("base_link", imitator.model.frames[2].name)]
-        self.pelvis = dm.getFrameId(pelvis[0]) if pelvis else None
+        self.pelvis, self.base_off, self.root0 = _pelvis(demonstrator, imitator, bmap)
         n = len(act_names)
         self.neutral = np.array([imitator.neutral[imitator.idx_q(j)] for j in act_names])
         self.jmap = [(demonstrator.idx_q(dj), act_names.index(ij), sc, off)
                      for dj, (ij, sc, off) in bmap.joints.items() if ij in act_names]
-        held = np.ones(len(act_names), bool)
-        held[[ai for _, ai, _, _ in self.jmap]] = False
-        if act_names:
-            self.neutral = clear_rest(imitator, tuple(act_names), held, self.neutral)
+        if act_names:  # the joints no demonstrator joint drives: the rest pose, limbs clear
+            from .parts.self_collision import rest_pose
+
+            rest = rest_pose(imitator, REST_MARGIN, REST_CLEARANCE)
+            self.neutral = rest[[imitator.idx_q(j) for j in act_names]]
         self.n_act = n
         self.leg = float(np.mean([imitator.legs[x].length for x in SIDES]))
         #: horizontal scale of the centre of mass's path: the legs' ratio, cut so that the
@@ -78,8 +81,12 @@ class FrameReference:
         self.clearance = CLEARANCE * self.leg
         im, idt = imitator.model, imitator.model.createData()
         pin.framesForwardKinematics(im, idt, imitator.neutral)
-        ys = [idt.oMf[im.getFrameId(imitator.legs[x].sole)].translation[1] for x in SIDES]
-        self.sep = abs(ys[0] - ys[1])
+        # the least lateral distance of the soles: the hips' (legs straight down; G1's neutral
+        # legs splay its soles 24 cm apart, 0.37 leg: a sway that wide needs a lateral centre
+        # of pressure its 6-cm soles do not have), and the soles side by side
+        ys = [idt.oMi[im.getJointId(imitator.legs[x].hip)].translation[1] for x in SIDES]
+        widths = [self_contact.half_width for self_contact in imitator.require_contacts().values()]
+        self.sep = max(abs(ys[0] - ys[1]), 2 * max(widths) + 0.02)
         self.frames: list[dict] = []
         self.heading: np.ndarray | None = None
         self.swing: dict = {x: None for x in SIDES}
@@ -97,6 +104,7 @@ class FrameReference:
         for qi, ai, sc, off in self.jmap:
             joints[ai] = sc * q_demo[qi] + off
         rot = data.oMf[self.pelvis].rotation.copy() if self.pelvis is not None else None
+        base = rot @ self.base_off if rot is not None else None
         push = {}
         for x in SIDES:
             d = None
@@ -110,7 +118,7 @@ class FrameReference:
             nd = np.linalg.norm(d) if d is not None else 0.0
             push[x] = d / nd if d is not None and nd > 1e-9 else None
         return {"t": t, "q": q_demo, "com": com, "soles": soles, "joints": joints, "rot": rot,
-                "push": push, "contact": {x: bool(contact[x]) for x in SIDES}}
+                "base": base, "push": push, "contact": {x: bool(contact[x]) for x in SIDES}}
 
     def start(self, f0: dict, com0: np.ndarray, feet0: dict, base_rot0: np.ndarray,
               moving: bool) -> None:
@@ -167,14 +175,14 @@ class FrameReference:
         tk = Tasks(com=target,
                    com_vel=cv,
                    com_acc=b * acc + ddb / R**2 * gap,
-                   base_rot=f1["rot"] if f1["rot"] is not None else self.rot0, feet={},
+                   base_rot=f1["base"] if f1["base"] is not None else self.rot0, feet={},
                    joints=f1["joints"], joints_vel=(f2["joints"] - f0["joints"]) / h,
                    push=f1["push"], anchor=anchors)
         # foot placement feedback (capture point): a centre of mass ahead of its reference
         # by e (and ė) puts the swing foot ahead by e + ė/ω, ω = √(g/z)
         c, cd = robot_com
         self._cp = (c[:2], cd[:2], np.sqrt(9.81 / max(c[2], 1e-3)))
-        self.heading = f1["rot"]
+        self.heading = f1["rot"] if f1["rot"] is not None else self.rot0 @ self.root0.T
         for x in SIDES:
             if nxt[x]:
                 self.lift[x] = None
@@ -229,7 +237,7 @@ class FrameReference:
         """Sideways (across the pelvis heading) the centre of mass keeps the demonstrator's
         place between its two soles — its weight shift and sway — scaled from its soles'
         lateral distance to the imitator's (a sway in time with the demonstrator's steps)."""
-        R = (f1["rot"] if f1["rot"] is not None else self.rot0)[:2, 0]
+        R = (f1["rot"] if f1["rot"] is not None else self.rot0 @ self.root0.T)[:2, 0]
         fwd = R / max(np.linalg.norm(R), 1e-9)
         lat = np.array([-fwd[1], fwd[0]])
 
@@ -272,6 +280,30 @@ class FrameReference:
     def touched_down(self, x: str, duration: float) -> None:
         """A swing of ``duration`` [s] ended (the next estimate of a swing's duration)."""
         self.t_swing = float(duration)
+
+
+def _pelvis(demonstrator, imitator, bmap) -> tuple[int | None, np.ndarray, np.ndarray]:
+    """``(demonstrator frame id of the body-map segment on the imitator's base joint — its
+    pelvis — or None, the constant rotation (3, 3) from that frame to the imitator's base
+    joint, the imitator's base rotation (3, 3) at its neutral pose)``: both neutral poses face
+    +x, so the demonstrator's pelvis rotation ``R`` becomes the base rotation ``R @ offset``
+    (iCub's base joint is turned by π about z at its neutral pose: its ``root_link`` looks
+    back)."""
+    from ..kinematics import base_joint_id
+
+    im, dm = imitator.model, demonstrator.model
+    root = base_joint_id(imitator)
+    idata, ddata = im.createData(), dm.createData()
+    pin.framesForwardKinematics(im, idata, imitator.neutral)
+    root0 = idata.oMi[root].rotation.copy()
+    seg = [d for d, i in bmap.segments.items()
+           if im.existFrame(i) and im.frames[im.getFrameId(i)].parentJoint == root
+           and dm.existFrame(d)]
+    if not seg:
+        return None, np.eye(3), root0
+    fid = dm.getFrameId(seg[0])
+    pin.framesForwardKinematics(dm, ddata, demonstrator.neutral)
+    return fid, ddata.oMf[fid].rotation.T @ root0, root0
 
 
 def _quintic(phi: float) -> tuple[float, float, float]:
@@ -333,7 +365,7 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
     if moving:  # where the demonstrator's centre of mass is relative to its soles, scaled
         dem = np.mean([f0["soles"][x].translation[:2] for x in down], axis=0)
         centre = np.r_[centre[:2] + ref.k * (f0["com"][:2] - dem), 0.0]
-    rot = f0["rot"] if f0["rot"] is not None else np.eye(3)
+    rot = f0["base"] if f0["base"] is not None else ref.root0
     targets = f0["joints"]
     qa = q_of_v(m, act_idx)
     for _ in range(iterations):
@@ -420,40 +452,3 @@ def scipy_null(C: np.ndarray) -> np.ndarray:
     _, sv, Vt = np.linalg.svd(C)
     rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
     return Vt[rank:].T
-
-
-def clear_rest(robot, act_names: tuple, held: np.ndarray, rest: np.ndarray,
-               clearance: float = REST_CLEARANCE, iterations: int = 12) -> np.ndarray:
-    """Rest targets ``(n_act,)`` of the joints no demonstrator joint drives (``held`` bool
-    ``(n_act,)``): their neutral values ``rest``, moved (within their limits) until the robot's
-    own collision geometries (:mod:`gdimitate.selfcollision`, the audit's check) are
-    ``clearance`` [m] apart at the neutral pose — a neutral pose with the arms against the
-    thighs (Talos) leaves no room for the pelvis to turn under them. Finite-difference
-    ascent of the smallest distance; ``rest`` itself when the robot has no collision
-    geometry or is clear already."""
-    from ..selfcollision import self_collision
-
-    sc = self_collision(robot)
-    if sc is None or not sc.pairs or not held.any():
-        return rest
-    m = robot.model
-    qi = np.array([m.joints[m.getJointId(n)].idx_q for n in act_names])[held]
-    lo, hi = m.lowerPositionLimit[qi], m.upperPositionLimit[qi]
-    q = robot.neutral.copy()
-    q[qi] = rest[held]
-    for _ in range(iterations):
-        d0 = float(sc.distances(q[None]).min())
-        if d0 >= clearance:
-            break
-        grad = np.zeros(qi.size)
-        for i, j in enumerate(qi):
-            qq = q.copy()
-            qq[j] = min(qq[j] + 0.02, hi[i]) if qq[j] + 0.02 <= hi[i] else max(qq[j] - 0.02, lo[i])
-            grad[i] = (float(sc.distances(qq[None]).min()) - d0) / (qq[j] - q[j])
-        n = float(np.linalg.norm(grad))
-        if n == 0.0:
-            break
-        q[qi] = np.clip(q[qi] + 0.05 * grad / n, lo, hi)
-    out = rest.copy()
-    out[held] = q[qi]
-    return out

@@ -47,6 +47,9 @@ PROXIMAL = 3
 #: :func:`rest_pose` moves the limbs until the pairs within the margin at the neutral pose
 #: are this far apart [m].
 REST_CLEAR = 1.5 * MARGIN
+#: ... by steps of at most this much on any joint [rad] (a linearised distance is good for a
+#: few centimetres: uncut, the steps for 3 cm swung Talos's arms by 2.4 rad)
+MAX_REST_STEP = 0.1
 
 
 @dataclass(frozen=True)
@@ -293,7 +296,9 @@ def _clear_limbs(robot, sc, q: np.ndarray, margin: float, clear: float, groups: 
             qe[i] += 1e-4
             G[:, c] = (sc.distances(qe)[bad] - d[bad]) / 1e-4
         want = np.array([clear if i in watch else floor[i] for i in bad]) + 1e-3 - d[bad]
-        q[iq] = np.clip(q[iq] + np.linalg.lstsq(G, want, rcond=None)[0], lo, hi)
+        dq = np.linalg.lstsq(G, want, rcond=None)[0]
+        dq *= min(1.0, MAX_REST_STEP / max(float(np.max(np.abs(dq))), 1e-12))
+        q[iq] = np.clip(q[iq] + dq, lo, hi)
     return q
 
 
