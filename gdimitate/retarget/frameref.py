@@ -45,6 +45,10 @@ KEEP_GOING, MAX_STEP, STEP_RATIO = 0.0, 0.5, 0.75
 #: closer than REST_MARGIN [m] at the neutral pose moved REST_CLEARANCE [m] apart (the
 #: trajectory mode's 1 cm / 1.5 cm left Talos's hands against its swinging thighs)
 REST_MARGIN, REST_CLEARANCE = 0.02, 0.025
+#: the walking speed is cut to STEP_SPEED steps of MAX_STEP legs per step period (the rest
+#: of the step's reach is the capture-point feedback's); STEP_PERIOD: the first estimate
+#: of the step period, in swing durations
+STEP_SPEED, STEP_PERIOD = 0.8, 1.3
 
 
 class FrameReference:
@@ -91,6 +95,10 @@ class FrameReference:
         self.heading: np.ndarray | None = None
         self.swing: dict = {x: None for x in SIDES}
         self.t_swing = FIRST_SWING
+        #: the step period [s]: between the last two touch-downs (before them, STEP_PERIOD
+        #: swing durations)
+        self.t_step = STEP_PERIOD * FIRST_SWING
+        self._t_down: float | None = None
         self.lift: dict[str, Any] = {x: None for x in SIDES}
 
     # ------------------------------------------------------------------ one frame
@@ -254,10 +262,14 @@ class FrameReference:
         cv[:2] += (vy - cv[:2] @ lat) * lat
 
     def _cap(self, v: np.ndarray) -> np.ndarray:
-        """A horizontal velocity ``v`` ``(2,)`` cut to the speed of steps of
-        :data:`MAX_STEP` leg lengths in 1.25 swing durations (flat feet reach less far than a
-        heel-strike and toe-off: the demonstrator's scaled stride is out of reach)."""
-        vmax = MAX_STEP * self.leg / (1.25 * self.t_swing)
+        """A horizontal velocity ``v`` ``(2,)`` [m/s] cut to :data:`STEP_SPEED` steps of
+        :data:`MAX_STEP` leg lengths per step period (the time between the last two
+        touch-downs; flat feet reach less far than a heel-strike and toe-off: the
+        demonstrator's scaled stride is out of reach). The period is the demonstration's, the
+        leg the robot's: a short robot walks at the human's cadence with short steps (G1's
+        first cap, per 1.25 swings, let it run 10 % faster than its steps could follow and it
+        fell in the second step)."""
+        vmax = STEP_SPEED * MAX_STEP * self.leg / self.t_step
         n = float(np.linalg.norm(v))
         return v * (vmax / n) if n > vmax else v
 
@@ -277,9 +289,14 @@ class FrameReference:
         side = max(float(step @ lat) * sign, SEPARATION * self.sep)
         return other.translation[:2] + along * fwd + sign * side * lat
 
-    def touched_down(self, x: str, duration: float) -> None:
-        """A swing of ``duration`` [s] ended (the next estimate of a swing's duration)."""
+    def touched_down(self, x: str, duration: float, t: float | None = None) -> None:
+        """A swing of ``duration`` [s] ended at time ``t`` [s] (the next estimates of a
+        swing's duration and of the step period)."""
         self.t_swing = float(duration)
+        if t is not None:
+            if self._t_down is not None and t > self._t_down:
+                self.t_step = float(t - self._t_down)
+            self._t_down = float(t)
 
 
 def _pelvis(demonstrator, imitator, bmap) -> tuple[int | None, np.ndarray, np.ndarray]:

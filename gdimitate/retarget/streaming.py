@@ -237,7 +237,7 @@ class StreamingAdaptor:
             if flags[s] and not prev[s]:  # touch-down: the stance's pose is this one
                 self._anchor[s] = data.oMf[self._fid[s]].copy()
                 if s in self._lift:
-                    self._ref.touched_down(s, t - self._lift.pop(s))
+                    self._ref.touched_down(s, t - self._lift.pop(s), t)
             elif not flags[s]:
                 self._anchor.pop(s, None)
                 if prev[s]:
