@@ -1,21 +1,27 @@
 """Streaming adaptor: frames per second and audited feasibility (issue 17).
 
-Run: ``python benchmarks/streaming.py [--robot talos] [--frames 200] [--force measured]
-[--baseline-rev edd0e2f] [--baseline-frames 200]``.
+Run: ``python benchmarks/streaming.py [--robots talos,g1,icub,romeo] [--frames 200]
+[--force measured] [--baseline-rev ff13e49] [--baseline-frames 200]`` (``--robot talos`` is
+``--robots talos``).
 
 The shipped real 3-D walk (with its measured forces) is streamed frame by frame into
-``gdimitate.retarget.StreamingAdaptor`` for ``--robot``. Frames per second are counted after a
-warm-up (the first five frames), in wall-clock and in CPU time (``time.process_time``: the
-machine is shared); every frame is then judged by :func:`gdimitate.audit.audit`
-on the assembled motion (knot by knot, the same verdict ``adapt(..., mode="per_frame")
-.frame_feasible`` reports), and the checks that fail most often are listed with the number
-of frames each fails. Where the adaptor's ``step`` takes ``v_demo`` (the demonstrator's
-velocity at the first frame), it is given, as ``adapt(..., mode="per_frame")`` does. The
-same-run baseline is the streaming of ``--baseline-rev`` (a git revision of this repository,
-extracted with ``git archive`` into a temporary folder and run in its own process: by default
-the tree before the inverse-dynamics QP — one linearised Gauss–Newton QP of the two-knot
-window per frame; ``7b16d65`` is the one before issue 17, an IPOPT solve per frame) over
-``--baseline-frames`` frames. The machine's load average is printed with the table.
+``gdimitate.retarget.StreamingAdaptor`` for each of ``--robots``, one process per robot and
+revision, one after the other (the machine is shared: nothing runs in parallel). Frames per
+second are counted after a warm-up (the first five frames), in wall-clock and in CPU time
+(``time.process_time``: the machine is shared); every frame is then judged by
+:func:`gdimitate.audit.audit` on the assembled motion (knot by knot, the same verdict
+``adapt(..., mode="per_frame").frame_feasible`` reports), and the checks that fail most often
+are listed with the number of frames each fails. Where the adaptor's ``step`` takes
+``v_demo`` (the demonstrator's velocity at the first frame), it is given, as
+``adapt(..., mode="per_frame")`` does.
+
+The same-run baseline is the streaming of ``--baseline-rev`` (a git revision of this
+repository, extracted with ``git archive`` into a temporary folder and run in its own process)
+for the same robots over ``--baseline-frames`` frames: by default ``ff13e49``, the inverse-
+dynamics QP before its references were made robot-relative (G1 19/205, iCub 0/205 frames
+feasible); ``edd0e2f`` is the tree before the inverse-dynamics QP (a Gauss–Newton QP of the
+two-knot window per frame), ``7b16d65`` the one before issue 17 (an IPOPT solve per frame). The
+machine's load average is printed with the table.
 """
 
 from __future__ import annotations
@@ -111,26 +117,28 @@ def row(label: str, r: dict) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--robot", default="talos")
+    ap.add_argument("--robots", default="talos",
+                    help="comma-separated library robots, e.g. talos,g1,icub,romeo")
+    ap.add_argument("--robot", default=None, help="one robot (the same as --robots NAME)")
     ap.add_argument("--frames", type=int, default=200)
     ap.add_argument("--force", default="measured")
-    ap.add_argument("--baseline-rev", default="edd0e2f",
+    ap.add_argument("--baseline-rev", default="ff13e49",
                     help="git revision streamed as the same-run baseline ('' for none)")
     ap.add_argument("--baseline-frames", type=int, default=200)
     a = ap.parse_args()
-    rows = [f"streaming the shipped 3-D walk → {a.robot} (force={a.force}); goal ≥ 200 "
-            "frames/s after warm-up, ≥ 95 % of frames audited feasible", "",
-            "| streaming | frames/s wall (of CPU time) | audited feasible frames | checks failed "
-            "most (frames) "
-            "| frame solves |",
-            "|---|---|---|---|---|"]
-    rows.append(row("this tree: inverse-dynamics QP per frame",
-                    run(ROOT, a.robot, a.frames, a.force)))
-    if a.baseline_rev:
-        with tempfile.TemporaryDirectory() as tmp:
-            base = checkout(a.baseline_rev, tmp)
-            rows.append(row(f"baseline {a.baseline_rev}",
-                            run(base, a.robot, a.baseline_frames, a.force)))
+    robots = [a.robot] if a.robot else [r.strip() for r in a.robots.split(",") if r.strip()]
+    rows = [f"streaming the shipped 3-D walk (force={a.force}); goal ≥ 200 frames/s after "
+            "warm-up, ≥ 95 % of frames audited feasible", "",
+            "| robot | streaming | frames/s wall (of CPU time) | audited feasible frames "
+            "| checks failed most (frames) | frame solves |",
+            "|---|---|---|---|---|---|"]
+    with tempfile.TemporaryDirectory() as tmp:
+        base = checkout(a.baseline_rev, tmp) if a.baseline_rev else None
+        for robot in robots:
+            rows.append(row(f"{robot} | this tree", run(ROOT, robot, a.frames, a.force)))
+            if base is not None:
+                rows.append(row(f"{robot} | baseline {a.baseline_rev}",
+                                run(base, robot, a.baseline_frames, a.force)))
     rows.append("")
     rows.append(f"load average (1, 5, 15 min): {os.getloadavg()}, {os.cpu_count()} CPUs")
     print("\n".join(rows))
