@@ -191,6 +191,13 @@ class StreamingAdaptor:
         q = initial_pose(self.imitator, self._ref, f0, self._act, cv)
         v0 = (initial_velocity(self.imitator, q, self._ref, f0, v_demo, self._act) if moving
               else np.zeros(self.imitator.model.nv))
+        # scaled down, as a whole (the soles stay still), into the joints' velocity limits
+        # (Romeo's hips: 2.1 rad/s, the demonstrator's swing hip moves faster)
+        vel = np.asarray(self._audit_robot.model.velocityLimit)[self._act]
+        ok = np.isfinite(vel) & (vel > 0)
+        peak = np.abs(v0[self._act][ok]) / vel[ok] if ok.any() else np.zeros(1)
+        if peak.size and peak.max() > 0.9:
+            v0 = v0 * (0.9 / peak.max())
         m, data = self.imitator.model, self.imitator.model.createData()
         pin.framesForwardKinematics(m, data, q)
         feet = {s: data.oMf[self._fid[s]].copy() for s in SIDES}
