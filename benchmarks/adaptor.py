@@ -62,9 +62,10 @@ _CHILD = textwrap.dedent("""
     out = {}
     calls = ("fresh", "second") if sys.argv[3] == "2" else ("fresh",)
     for label in calls:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         r = gd.adapt(demo, h, robot, method="optimal", verbose=False, **kw)
         out[label] = time.perf_counter() - t0
+        out[label + "_cpu"] = time.process_time() - c0
         out[label + "_iterations"] = r.solver.iterations
         out[label + "_status"] = r.solver.status
     out["import_s"] = t0 - t_import if len(calls) == 1 else None
@@ -135,13 +136,14 @@ def main() -> None:
     ap.add_argument("--robots", default="talos,g1,icub,romeo")
     ap.add_argument("--baseline-rev", default="7b16d65")
     ap.add_argument("--baseline", default="talos",
-                    help="robots also adapted by --baseline-rev (comma-separated, or '')")
+                    help="robots and cases also adapted by --baseline-rev (comma-separated, "
+                         "or '')")
     ap.add_argument("--cases", default="hoap2,cmu,clip")
     ap.add_argument("--no-first", action="store_true",
                     help="skip Talos's first-time-ever run (an empty cache: its compilation)")
     a = ap.parse_args()
     rows = _Rows(["| case | goal | first time ever | fresh process | second call | iterations "
-                  "| peak memory | audit | same-run baseline (second call, iterations) |",
+                  "| peak memory | audit | same-run baseline (second call, CPU, iterations) |",
                   "|---|---|---|---|---|---|---|---|---|"])
     base_tree = None
     tmp = tempfile.TemporaryDirectory()
@@ -161,11 +163,13 @@ def main() -> None:
         if base_tree is not None and name in a.baseline.split(","):
             b = child(base_tree, name, a.knots)
             base = (f"error: {b['error']!r}" if "error" in b else
-                    f"{b['second']:.1f} s ({b['second_iterations']} it.); "
-                    f"ratio {r['second'] / b['second']:.2f}")
+                    f"{b['second']:.1f} s, CPU {b['second_cpu']:.1f} s "
+                    f"({b['second_iterations']} it., {b['peak_mb']:.0f} MB, {_audit(b)}); "
+                    f"CPU ratio {r['second_cpu'] / b['second_cpu']:.2f}")
         goal = "≤ 3 min / ≤ 30 s / ≤ 10 s" if name == "talos" else "≤ 15 s second call"
         rows.append(f"| 3-D walk → {name}, {r['knots']} knots | {goal}, ≤ 150 it., ≤ 2 GB | "
-                    f"{first} | {r['process_s']:.1f} s | {r['second']:.1f} s | "
+                    f"{first} | {r['process_s']:.1f} s | {r['second']:.1f} s "
+                    f"(CPU {r['second_cpu']:.1f} s) | "
                     f"{r['second_iterations']} | {r['peak_mb']:.0f} MB | {_audit(r)} | {base} |")
     labels = {"hoap2": ("sagittal walk → HOAP-2 (CLI)", "≤ 10 s"),
               "cmu": ("CMU BVH → G1 (CLI)", "≤ 60 s"),
@@ -175,9 +179,17 @@ def main() -> None:
         if "error" in r:
             rows.append(f"| {labels[case][0]} | | error: {r['error']!r} | | | | | | |")
             continue
+        base = ""
+        if base_tree is not None and case in a.baseline.split(","):
+            b = child(base_tree, case, 0, 1)
+            base = (f"error: {b['error']!r}" if "error" in b else
+                    f"adapt {b['fresh']:.1f} s, CPU {b['fresh_cpu']:.1f} s "
+                    f"({b['fresh_iterations']} it., {_audit(b)}); "
+                    f"CPU ratio {r['fresh_cpu'] / b['fresh_cpu']:.2f}")
         rows.append(f"| {labels[case][0]}, {r['knots']} knots | {labels[case][1]}, ≤ 150 it. | "
-                    f"| {r['process_s']:.1f} s (adapt {r['fresh']:.1f} s) | | "
-                    f"{r['fresh_iterations']} | {r['peak_mb']:.0f} MB | {_audit(r)} | |")
+                    f"| {r['process_s']:.1f} s (adapt {r['fresh']:.1f} s, CPU "
+                    f"{r['fresh_cpu']:.1f} s) | | "
+                    f"{r['fresh_iterations']} | {r['peak_mb']:.0f} MB | {_audit(r)} | {base} |")
     p = planar_case2()
     rows.append(f"| Case II → HOAP-2-sized, {p['knots']} knots | ≤ 1 s second call | "
                 f"| {p['first']:.2f} s | {p['cached']:.2f} s | | | "

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..kinematics import actuated_v_indices, base_v_indices
 from ..robot import SIDES, Robot
 from ..symbolic import SymbolicModel
 
@@ -55,15 +56,10 @@ class Layout:
 
 
 def base_dofs(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
-    """``(base velocity indices, actuated velocity indices)`` of the imitator: the free-flyer's
-    6 or the planar base's 3 unactuated rows, and every other joint's."""
-    m = robot.model
-    nb = 6 if robot.base == "free" else 0
-    base = list(range(nb))
-    if robot.base == "planar":
-        base = [robot.idx_v(j) for j in ("base_x", "base_z", "base_pitch")]
-    act = [i for i in range(m.nv) if i not in base]
-    return np.array(base, int), np.array(act, int)
+    """``(base velocity indices (nb,), actuated velocity indices (nv − nb,))`` of the
+    imitator (:func:`gdimitate.kinematics.base_v_indices`, :func:`~gdimitate.kinematics.
+    actuated_v_indices`)."""
+    return base_v_indices(robot), actuated_v_indices(robot)
 
 
 class Knot:

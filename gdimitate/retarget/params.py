@@ -15,7 +15,20 @@ import numpy as np
 from ..contact import DEFAULT_MU
 from ..errors import InvalidInputError
 
-__all__ = ["DEFAULT_RATE", "Weights", "Limits", "Contact"]
+__all__ = ["DEFAULT_RATE", "Weights", "Limits", "Contact", "IPOPT_DEFAULTS"]
+
+IPOPT_DEFAULTS = {
+    "print_level": 0, "sb": "yes", "tol": 1e-8, "constr_viol_tol": 1e-8,
+    "acceptable_tol": 1e-6, "acceptable_constr_viol_tol": 1e-7, "acceptable_iter": 5,
+    "max_iter": 150, "mu_strategy": "adaptive", "linear_solver": "mumps",
+    "mumps_pivot_order": 0, "mumps_permuting_scaling": 0, "mumps_scaling": 0,
+    "fixed_variable_treatment": "make_parameter", "bound_relax_factor": 0.0,
+}
+"""IPOPT options (MUMPS, the solver of the PyPI CasADi wheel, with AMD ordering: steadier
+than METIS here; no MUMPS scaling: its permuting scaling and row/column scaling are computed
+at every factorisation and cost more than they save — G1 100 knots 23.1 → 9.9 s CPU, Talos
+28.4 → 24.7 s, the same optimum; docs/design.md §6); ``ipopt=`` adds to them. Kept here,
+not in :mod:`.problem`, so that tuning them does not change the compiled functions' key."""
 
 #: Default knot rate [knots/s] of the trajectory mode: the demonstration is resampled onto a
 #: grid of this rate. 50 Hz resolves walking (steps of ~0.5 s, contact phases of 0.1–0.6 s)

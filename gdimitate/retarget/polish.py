@@ -1,7 +1,7 @@
 """Exact consistency of a solution before it is reported (docs/design.md §6, §12).
 
 IPOPT stops once its iterate is feasible to its constraint tolerance and the cost has stopped
-moving (:data:`~.problem.IPOPT_DEFAULTS`), so the equality rows hold to ~1e-6 in their scaled
+moving (:data:`~.params.IPOPT_DEFAULTS`), so the equality rows hold to ~1e-6 in their scaled
 units rather than to round-off. Before the motion is reported, the equalities are made exact
 on the output's own numbers — nothing is clipped and no inequality is touched:
 

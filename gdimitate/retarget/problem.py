@@ -25,7 +25,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .. import contact, selfcollision, symbolic
+from .. import contact, kinematics, selfcollision, symbolic
 from .. import robot as robot_module
 from ..robot import Robot
 from ..symbolic import SymbolicModel
@@ -34,6 +34,7 @@ from . import knot as knot_module
 from . import parts as parts_module
 from .interrupt import Progress
 from .knot import Flags, Knot
+from .params import IPOPT_DEFAULTS
 from .parts import Constraint, Cost, PairConstraint, Part, Spec
 from .parts.seam import SeamConstraint, seam_functions
 
@@ -47,15 +48,6 @@ _SYM: OrderedDict[str, SymbolicModel] = OrderedDict()
 BUILD_COUNT = 0
 """How many NLPs this process has built (a cached call leaves it unchanged)."""
 
-IPOPT_DEFAULTS = {
-    "print_level": 0, "sb": "yes", "tol": 1e-8, "constr_viol_tol": 1e-8,
-    "acceptable_tol": 1e-6, "acceptable_constr_viol_tol": 1e-7, "acceptable_iter": 5,
-    "max_iter": 150, "mu_strategy": "adaptive", "linear_solver": "mumps",
-    "mumps_pivot_order": 0, "fixed_variable_treatment": "make_parameter",
-    "bound_relax_factor": 0.0,
-}
-"""IPOPT options (MUMPS, the solver of the PyPI CasADi wheel, with AMD ordering: steadier
-than METIS here); ``ipopt=`` adds to them."""
 
 
 def fingerprint(robot: Robot) -> str:
@@ -263,7 +255,7 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
 # wrench cone the cone part evaluates (contact.wrench_cone_rows); every module these import
 # from gdimitate is listed (tests/test_retarget_codegen.py checks it)
 SOURCE_MODULES = (parts_module, knot_module, symbolic, codegen, contact, robot_module,
-                  selfcollision, bodymap, sys.modules[__name__])
+                  selfcollision, bodymap, kinematics, sys.modules[__name__])
 _SOURCE = codegen.source_digest(*SOURCE_MODULES)
 
 

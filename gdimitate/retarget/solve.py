@@ -12,7 +12,7 @@ import numpy as np
 
 from ..contact import SoleContact
 from ..errors import InvalidInputError, SolverError, UnknownNameError
-from ..kinematics import robot_motion
+from ..kinematics import actuated_v_indices, robot_motion
 from ..metrics import FORCE_MODELS
 from ..motion import Motion
 from ..robot import SIDES, Robot
@@ -22,7 +22,7 @@ from .bodymap import body_map
 from .info import SolverInfo, Unmet, limited_robot, resolve_contacts
 from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
-from .knot import Flags, base_dofs
+from .knot import Flags
 from .params import DEFAULT_RATE, Contact, Limits, Weights
 from .parts import Bound, default_parts, liftoff_knots
 from .parts.body import body_parts
@@ -34,7 +34,7 @@ from .threads import single_thread
 __all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "STOPS", "Numbers",
            "Context", "setup", "problem_for", "run_solver", "unmet", "package", "wrenches_of",
            "limited_robot", "resolve_contacts", "solve_budgeted", "near_bounds", "rescreen",
-           "SCREEN", "SCREEN_KNOTS"]
+           "SCREEN", "SCREEN_KNOTS", "WARM_START"]
 
 MODES = ("trajectory", "per_frame")
 STOPS = ("settled", "converged")
@@ -296,11 +296,23 @@ def unmet(c: pb.Compiled, num: Numbers, z: np.ndarray, tol: float) -> tuple[Unme
     return tuple(sorted(out, key=lambda u: -u.violation))
 
 
+WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-6,
+              "warm_start_bound_push": 1e-6, "warm_start_bound_frac": 1e-6,
+              "warm_start_slack_bound_push": 1e-6, "warm_start_slack_bound_frac": 1e-6,
+              "warm_start_mult_bound_push": 1e-6}
+"""IPOPT options of a re-solve after screened rows came back (:func:`solve_budgeted`): it
+starts from the previous solve's iterate and multipliers (the new rows' at 0) with a small
+barrier parameter instead of restarting the barrier from the defaults."""
+
+
 def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verbose: bool,
-               label: str, stop: str = "settled", budget: int = MAX_ITERATIONS
-               ) -> tuple[np.ndarray, dict]:
+               label: str, stop: str = "settled", budget: int = MAX_ITERATIONS,
+               lam: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:
     """One IPOPT solve from ``x0`` ``(n_x, T)`` of at most ``budget`` iterations; returns
-    ``(z, stats)``. ``stop``: one of :data:`STOPS`. The hard solve (``elastic`` False) also
+    ``(z, stats)``; ``stats["lam"]`` = ``(λ_x (n_x·T,), λ_g (ng,))``, the final multipliers,
+    λ_g over every row (0 on the rows the solve left out). ``lam``: multipliers of the same
+    shapes to start from (a solver compiled with :data:`WARM_START`). ``stop``: one of
+    :data:`STOPS`. The hard solve (``elastic`` False) also
     ends when its constraint violation stalls (:class:`~.stopping.Plateau`), returning the
     least-violating iterate with status :data:`STALLED`; the least-infeasible solve
     (``elastic``: the relaxable rows' slacks free where their bound applies) never stalls."""
@@ -317,14 +329,20 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
                       budget=max(int(budget), 1))
     if elastic:
         stopper.stall_after = 10**9
+    args = {"x0": x0.T.ravel(), "p": num.P.T.ravel(), "lbx": lbx.T.ravel(),
+            "ubx": ubx.T.ravel(), "lbg": lbg, "ubg": ubg}
+    if lam is not None:
+        args.update(lam_x0=lam[0], lam_g0=lam[1][num.keep])
     with guard(verbose, lbg, ubg, label, stopper), single_thread():
         try:
-            sol = c.solver(x0=x0.T.ravel(), p=num.P.T.ravel(), lbx=lbx.T.ravel(),
-                           ubx=ubx.T.ravel(), lbg=lbg, ubg=ubg)
+            sol = c.solver(**args)
         except RuntimeError as e:
             raise SolverError(f"IPOPT could not run the optimal adaptor's NLP: {e}") from None
     st = dict(c.solver.stats())
     z = np.asarray(sol["x"]).ravel()
+    lam_g = np.zeros(num.lbg.size)
+    lam_g[num.keep] = np.asarray(sol["lam_g"]).ravel()
+    st["lam"] = (np.asarray(sol["lam_x"]).ravel(), lam_g)
     if st.get("return_status") == "User_Requested_Stop" and stopper.reason:
         if stopper.reason == "settled":
             assert stopper.best_x is not None  # it settles on a feasible iterate
@@ -388,8 +406,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
         demo, forces = periodic_stride(demo, forces)
         rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
     demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
-    _, act = base_dofs(imitator)
-    act_names = limits.resolve(imitator, act, o["limits"]).names
+    act_names = limits.resolve(imitator, actuated_v_indices(imitator), o["limits"]).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
                                o["contact"].rule)
     t0 = time.perf_counter()
@@ -453,22 +470,25 @@ def solve_budgeted(c: pb.Compiled, num: Numbers, tol: float, verbose: bool, labe
     (:func:`rescreen`; ``num`` is updated). Returns ``(compiled, z, IPOPT's stats, unmet,
     iterations, elastic)``."""
     T, iters, hard = num.spec.T, 0, MAX_ITERATIONS - MIN_ELASTIC
-    x = num.x0
+    x, lam = num.x0, None
     while True:
-        z, st = run_solver(c, num, x, False, verbose, label, stop, budget=hard - iters)
+        z, st = run_solver(c, num, x, False, verbose, label, stop, budget=hard - iters,
+                           lam=lam)
         iters += int(st.get("iter_count", 0))
         back = rescreen(c, num, z, tol)
-        if back.size:  # rows the result violates join the problem
+        if back.size:  # rows the result violates join the problem, warm-started
             num.keep = np.union1d(num.keep, back)
             num.screened = np.setdiff1d(num.screened, back)
-            c, _ = pb.compiled(c.form, T, num.keep, ipopt)
+            c, _ = pb.compiled(c.form, T, num.keep, {**(ipopt or {}), **WARM_START})
+            lam = st["lam"]
         if not back.size or iters >= hard:
             break
         x = z.reshape(T, -1).T
     bad = unmet(c, num, z, tol)
     if not (bad or back.size or not st.get("success")):
         return c, z, st, bad, iters, False
-    # the least-infeasible solve, in the same budget
+    # the least-infeasible solve, in the same budget (IPOPT's own start: no warm start)
+    c, _ = pb.compiled(c.form, T, num.keep, ipopt)
     z2, st2 = run_solver(c, num, z.reshape(T, -1).T, True, verbose, "least-infeasible", stop,
                          budget=max(MAX_ITERATIONS - iters, MIN_ELASTIC))
     iters += int(st2.get("iter_count", 0))
