@@ -2,7 +2,7 @@
 the per-frame QP's tasks (:class:`~.receding.Tasks`), from the demonstrator's own kinematics.
 
 Centre of mass. Along the walk, positions map by ``p ↦ k·p + o``: ``k`` the legs' ratio,
-cut so that a human step (:data:`STEP_RATIO` of its leg) becomes a step of :data:`MAX_STEP`
+cut so that a human step (:data:`STEP_RATIO` of its leg) becomes a step of :func:`max_step`
 robot legs (flat feet reach less far than a heel-strike and toe-off); ``o`` follows, with a
 :data:`TAU_OFFSET` time constant, where the imitator's stance soles are against the
 demonstrator's, so that the centre of mass keeps the demonstrator's place relative to its own
@@ -49,6 +49,9 @@ REST_MARGIN, REST_CLEARANCE = 0.02, 0.025
 #: of the step's reach is the capture-point feedback's); STEP_PERIOD: the first estimate
 #: of the step period, in swing durations
 STEP_SPEED, STEP_PERIOD = 0.8, 1.3
+#: a robot whose linear inverted pendulum diverges by more than e^DIVERGENCE over a swing of
+#: FIRST_SWING seconds takes steps shorter than MAX_STEP legs by the excess factor
+DIVERGENCE = 1.7
 
 
 class FrameReference:
@@ -81,7 +84,8 @@ class FrameReference:
         self.leg = float(np.mean([imitator.legs[x].length for x in SIDES]))
         #: horizontal scale of the centre of mass's path: the legs' ratio, cut so that the
         #: demonstrator's steps (~STEP_RATIO of its leg) become steps of MAX_STEP legs
-        self.k = min(self.s, self.s * MAX_STEP / STEP_RATIO)
+        self.step = max_step(imitator)
+        self.k = min(self.s, self.s * self.step / STEP_RATIO)
         self.clearance = CLEARANCE * self.leg
         im, idt = imitator.model, imitator.model.createData()
         pin.framesForwardKinematics(im, idt, imitator.neutral)
@@ -269,7 +273,7 @@ class FrameReference:
         leg the robot's: a short robot walks at the human's cadence with short steps (G1's
         first cap, per 1.25 swings, let it run 10 % faster than its steps could follow and it
         fell in the second step)."""
-        vmax = STEP_SPEED * MAX_STEP * self.leg / self.t_step
+        vmax = STEP_SPEED * self.step * self.leg / self.t_step
         n = float(np.linalg.norm(v))
         return v * (vmax / n) if n > vmax else v
 
@@ -285,7 +289,7 @@ class FrameReference:
         lat = np.array([-fwd[1], fwd[0]])
         sign = 1.0 if x == "left" else -1.0
         step = goal - other.translation[:2]
-        along = float(np.clip(step @ fwd, -MAX_STEP * self.leg, MAX_STEP * self.leg))
+        along = float(np.clip(step @ fwd, -self.step * self.leg, self.step * self.leg))
         side = max(float(step @ lat) * sign, SEPARATION * self.sep)
         return other.translation[:2] + along * fwd + sign * side * lat
 
@@ -297,6 +301,23 @@ class FrameReference:
             if self._t_down is not None and t > self._t_down:
                 self.t_step = float(t - self._t_down)
             self._t_down = float(t)
+
+
+def max_step(robot) -> float:
+    """The longest step [legs] of ``robot`` at the demonstration's cadence: :data:`MAX_STEP`,
+    cut by ``exp(DIVERGENCE − ω T)`` where the robot's linear inverted pendulum
+    (``ω = √(g / z)``, ``z`` its neutral centre-of-mass height above the soles [m]) diverges by
+    more than ``e^DIVERGENCE`` over a swing of ``T`` = :data:`FIRST_SWING` [s]. A small robot
+    walking at a human's cadence has more time to fall per step than its size allows: iCub
+    (ω T = 2.0) fell in its second step with half-leg steps (40 of 205 frames of the 3-D walk
+    feasible) and keeps 177 with 0.36-leg ones; Talos (1.5), G1 and Romeo (1.7) keep half a
+    leg."""
+    m, d = robot.model, robot.model.createData()
+    pin.framesForwardKinematics(m, d, robot.neutral)
+    c = pin.centerOfMass(m, d, robot.neutral)
+    sole = min(d.oMf[m.getFrameId(robot.legs[x].sole)].translation[2] for x in SIDES)
+    w = np.sqrt(9.81 / max(float(c[2] - sole), 1e-3))
+    return MAX_STEP * min(1.0, float(np.exp(DIVERGENCE - w * FIRST_SWING)))
 
 
 def _pelvis(demonstrator, imitator, bmap) -> tuple[int | None, np.ndarray, np.ndarray]:
