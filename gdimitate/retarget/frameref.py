@@ -52,6 +52,9 @@ STEP_SPEED, STEP_PERIOD = 0.8, 1.3
 #: a robot whose linear inverted pendulum diverges by more than e^DIVERGENCE over a swing of
 #: FIRST_SWING seconds takes steps shorter than MAX_STEP legs by the excess factor
 DIVERGENCE = 1.7
+#: the landing point is fixed from this fraction of the swing on (moved later, a sole low over
+#: the floor chased it sideways: iCub's lagged 4 cm, touched the floor and was dragged)
+FREEZE = 0.75
 
 
 class FrameReference:
@@ -211,7 +214,7 @@ class FrameReference:
         L = self.lift[x]
         T = LAND * self.t_swing
         phi = min((t - L["t0"]) / T, 1.0)
-        if L["goal"] is None or phi < 0.9:
+        if L["goal"] is None or phi < FREEZE:
             sole = f1["soles"][x]
             # the capture point ξ = c + ċ/ω at the expected touch-down, diverging from the
             # stance sole p as ξ(t + τ) = p + (ξ − p) e^{ωτ} (linear inverted pendulum),
