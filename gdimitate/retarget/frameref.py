@@ -313,8 +313,8 @@ def max_step(robot) -> float:
     more than ``e^DIVERGENCE`` over a swing of ``T`` = :data:`FIRST_SWING` [s]. A small robot
     walking at a human's cadence has more time to fall per step than its size allows: iCub
     (ω T = 2.0) fell in its second step with half-leg steps (40 of 205 frames of the 3-D walk
-    feasible) and keeps 177 with 0.36-leg ones; Talos (1.5), G1 and Romeo (1.7) keep half a
-    leg."""
+    feasible; 177 with 0.36-leg ones, the value this gives); Talos (1.5), G1 and Romeo (1.7)
+    keep half a leg."""
     m, d = robot.model, robot.model.createData()
     pin.framesForwardKinematics(m, d, robot.neutral)
     c = pin.centerOfMass(m, d, robot.neutral)
