@@ -108,17 +108,21 @@ def test_the_whole_walk_streams_at_least_95_percent_feasible(walk):
     assert rep.knot_feasible.mean() >= 0.95, (int(rep.knot_feasible.sum()), rep.binding)
 
 
-def test_the_whole_walk_streams_into_g1_at_least_97_percent_feasible(walk):
-    """The same walk into G1 (33 kg, legs 0.64 m, soles 6 cm wide, ankles 35 N·m): the
-    references are robot-relative (steps of at most half its leg per the demonstration's step
-    period, its soles at least its hips' distance apart, its pelvis frame's neutral offset), so
-    at least 97 % of the frames pass the independent audit of the assembled motion (measured:
-    202 of 205; before, 19 of 205 — the robot fell in its second step)."""
+@pytest.mark.parametrize("name", ["g1", "icub"])
+def test_the_whole_walk_streams_into_g1_and_icub_at_least_97_percent_feasible(walk, name):
+    """The same walk into G1 (33 kg, legs 0.64 m, soles 6 cm wide, ankles 35 N·m) and iCub
+    (28 kg, legs 0.44 m, its base joint turned by π at its neutral pose): the references are
+    robot-relative (steps of at most half a leg — iCub 0.36, its pendulum falls faster over a
+    human swing — per the demonstration's step period, the soles at least the hips' distance
+    apart, the pelvis frame's neutral offset) and the QP keeps the robot's own collision
+    geometries apart, so at least 97 % of the frames pass the independent audit of the
+    assembled motion (measured: 205 of 205 for both; before, G1 19 and iCub 0 of 205 — both
+    fell in their second step)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        g1 = gd.Robot.from_library("g1")
+        robot = gd.Robot.from_library(name)
     demo = walk[1]
-    sa, motion, W, _ = _stream(walk, demo.T, robot=g1)
+    sa, motion, W, _ = _stream(walk, demo.T, robot=robot)
     rep = audit(sa._audit_robot, motion, W, sa.contacts)
     assert rep.knot_feasible.mean() >= 0.97, (int(rep.knot_feasible.sum()), rep.binding)
     assert rep.base_residual.value <= 1e-6
