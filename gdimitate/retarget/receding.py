@@ -487,10 +487,8 @@ def _cone(c, margin: float) -> np.ndarray:
     pyramid inside the circular cone) and the centre-of-pressure rows ``margin`` inside."""
     from ..contact import wrench_cone
 
-    A = wrench_cone(c.half_length, c.half_width, c.mu / np.sqrt(2))
-    A[4:6, 2] = -(c.half_width - margin)
-    A[6:8, 2] = -(c.half_length - margin)
-    return A
+    return wrench_cone(c.half_length, c.half_width, c.mu / np.sqrt(2),
+                       cop_length=c.half_length - margin, cop_width=c.half_width - margin)
 
 
 def _across(d: np.ndarray) -> np.ndarray:
