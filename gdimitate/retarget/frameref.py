@@ -320,7 +320,16 @@ def max_step(robot) -> float:
     c = pin.centerOfMass(m, d, robot.neutral)
     sole = min(d.oMf[m.getFrameId(robot.legs[x].sole)].translation[2] for x in SIDES)
     w = np.sqrt(9.81 / max(float(c[2] - sole), 1e-3))
-    return MAX_STEP * min(1.0, float(np.exp(DIVERGENCE - w * FIRST_SWING)))
+    step = MAX_STEP * min(1.0, float(np.exp(DIVERGENCE - w * FIRST_SWING)))
+    # the swing sole covers two steps in a swing, peaking at 1.875 times its mean speed (the
+    # quintic): at most what the slowest sagittal leg joint turns the leg by at its limit
+    vel = [float(m.velocityLimit[m.joints[m.getJointId(n)].idx_v]) for x in SIDES
+           for n in (robot.legs[x].hip, robot.legs[x].knee, robot.legs[x].ankle)
+           if n and m.existJointName(n)]
+    vel = [v for v in vel if np.isfinite(v) and 0 < v < 1e30]
+    if vel:
+        step = min(step, min(vel) * FIRST_SWING / (2 * 1.875))
+    return step
 
 
 def _pelvis(demonstrator, imitator, bmap) -> tuple[int | None, np.ndarray, np.ndarray]:
