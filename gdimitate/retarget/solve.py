@@ -467,8 +467,9 @@ def solve_budgeted(c: pb.Compiled, num: Numbers, tol: float, verbose: bool, labe
     """The hard solve, then — when it fails — the least-infeasible one, in
     :data:`MAX_ITERATIONS` together. A hard solve whose result violates rows the solve left
     out (``num.screened``) is solved again from its result with those rows back
-    (:func:`rescreen`; ``num`` is updated). Returns ``(compiled, z, IPOPT's stats, unmet,
-    iterations, elastic)``."""
+    (:func:`rescreen`; ``num`` is updated) — unless it stalled (:data:`STALLED`): then the
+    rows join the least-infeasible solve, which gets the iterations. Returns ``(compiled, z,
+    IPOPT's stats, unmet, iterations, elastic)``."""
     T, iters, hard = num.spec.T, 0, MAX_ITERATIONS - MIN_ELASTIC
     x, lam = num.x0, None
     while True:
@@ -481,8 +482,8 @@ def solve_budgeted(c: pb.Compiled, num: Numbers, tol: float, verbose: bool, labe
             num.screened = np.setdiff1d(num.screened, back)
             c, _ = pb.compiled(c.form, T, num.keep, {**(ipopt or {}), **WARM_START})
             lam = st["lam"]
-        if not back.size or iters >= hard:
-            break
+        if not back.size or iters >= hard or st.get("return_status") == STALLED:
+            break  # a stalled hard solve gains nothing from more rows: relax them instead
         x = z.reshape(T, -1).T
     bad = unmet(c, num, z, tol)
     if not (bad or back.size or not st.get("success")):
