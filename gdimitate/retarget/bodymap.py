@@ -16,7 +16,8 @@ OpenSim human (``hip_flexion_r``, ``knee_angle_r``, ``ankle_angle_r``, ``lumbar_
 the planar HOAP-2-sized model. Joints are paired by *role* (hip pitch/roll/yaw, knee, ankle
 pitch/roll, torso pitch/roll/yaw, shoulder pitch/roll/yaw, elbow); each pair's ``scale`` is
 ±1, the sign of the dot product of the two joint axes in the world frame (a pair whose axes
-are not within 60° of each other is dropped) — legs and torso at the robots' neutral poses,
+are not within 60° of each other is dropped) — legs and torso at the robots' neutral poses
+(a BVH skeleton's at :func:`legs_down`: its rest pose may splay the legs, CMU's by 20°),
 arms at their arms-down poses (:func:`arms_down`: a BVH T-pose's upper arms rolled down,
 Romeo's forward-pointing arms pitched down), the ``offset`` mapping the one onto the other.
 A demonstrator without arms (gait2354's subject01) maps none: the imitator's arms are then
@@ -40,7 +41,7 @@ from ..errors import InvalidInputError, UnknownNameError
 from ..robot import Robot
 
 __all__ = ["BodyMap", "body_map", "ROLES", "UnmappedJointsWarning", "HOLD_RANGE", "arms_down",
-           "following", "JointFollowing"]
+           "legs_down", "following", "JointFollowing"]
 
 #: How far [rad] an imitator joint the body map leaves out may move from its rest pose
 #: (:func:`~gdimitate.retarget.parts.self_collision.rest_pose`: the neutral pose with the limbs
@@ -288,14 +289,71 @@ def arms_down(robot: Robot, family: str | None = None) -> np.ndarray:
     return q
 
 
+#: Families whose zero pose is a capture's calibration pose rather than a standing one: their
+#: legs may hang splayed (CMU's skeletons: each hip→ankle line 20° out of the vertical), so
+#: leg roles are paired at :func:`legs_down` instead of the zero pose.
+_SPLAYED_LEGS = ("bvh",)
+
+
+def _leg_tilt(robot: Robot, q: np.ndarray, side: str) -> float:
+    """Frontal-plane angle [rad] of the ``side`` leg's hip→ankle line from the downward
+    vertical at ``q`` (the free-flyer turned by ``robot.base_rotation`` to face +x, z up;
+    positive: the ankle towards +y)."""
+    q = q.copy()
+    if robot.base == "free":
+        q[3:7] = pin.Quaternion(np.asarray(robot.base_rotation)).coeffs()
+    leg = robot.legs[side]
+    m, d = robot.model, robot.data
+    pin.forwardKinematics(m, d, q)
+    hip = d.oMi[m.getJointId(leg.hip)].translation
+    ank = d.oMi[m.getJointId(leg.ankle)].translation if leg.ankle else \
+        (pin.updateFramePlacements(m, d), d.oMf[m.getFrameId(leg.sole)].translation)[1]
+    v = ank - hip
+    return float(np.arctan2(v[1], -v[2]))
+
+
+def legs_down(robot: Robot, family: str | None = None) -> np.ndarray:
+    """The robot's neutral pose with, for families whose zero pose may splay the legs
+    (:data:`_SPLAYED_LEGS`), each hip-roll joint turned so that the hip→ankle line hangs
+    vertically in the frontal plane (a standing subject's legs; found by a secant search on
+    :func:`_leg_tilt`, to 1e-9 rad) — where leg roles are paired, the offset mapping this
+    pose onto the imitator's neutral (its standing pose). Other families: the neutral pose.
+    A hip-roll joint that cannot bring the line within 1e-3 rad of vertical is left at 0."""
+    fam = family or _family(robot) or ""
+    q = robot.neutral.copy()
+    if fam not in _SPLAYED_LEGS:
+        return q
+    names = _role_names(fam)
+    for side in ("left", "right"):
+        joint = names.get(f"{side}_hip_roll")
+        if joint is None or not robot.model.existJointName(joint) or side not in robot.legs:
+            continue
+        i = robot.idx_q(joint)
+        qa, qb = q.copy(), q.copy()
+        qb[i] = 0.1
+        ta, tb = _leg_tilt(robot, qa, side), _leg_tilt(robot, qb, side)
+        for _ in range(20):
+            if abs(tb) < 1e-9 or abs(tb - ta) < 1e-15:
+                break
+            x = qb[i] - tb * (qb[i] - qa[i]) / (tb - ta)
+            qa, ta = qb, tb
+            qb = qb.copy()
+            qb[i] = x
+            tb = _leg_tilt(robot, qb, side)
+        if abs(tb) < 1e-3 and abs(qb[i]) < np.pi / 2:
+            q[i] = qb[i]
+    return q
+
+
 def _preset_joints(demonstrator: Robot, imitator: Robot, fd: str, fi: str
                    ) -> dict[str, tuple[str, float, float]]:
     """Role-paired joints: ``scale`` = the sign of the two world axes' dot product (pairs
-    more than 60° apart dropped); legs and torso compared at the neutral poses (offset 0),
-    arms at the arms-down poses, the offset mapping one onto the other."""
+    more than 60° apart dropped); legs and torso compared at the legs-down poses
+    (:func:`legs_down`: the neutral pose but for a splayed BVH rest pose), arms at the
+    arms-down poses, the offset mapping one onto the other."""
     rd, ri = _role_names(fd), _role_names(fi)
-    qd = {False: demonstrator.neutral, True: arms_down(demonstrator, fd)}
-    qi = {False: imitator.neutral, True: arms_down(imitator, fi)}
+    qd = {False: legs_down(demonstrator, fd), True: arms_down(demonstrator, fd)}
+    qi = {False: legs_down(imitator, fi), True: arms_down(imitator, fi)}
     joints = {}
     for role, dn in rd.items():
         iname = ri.get(role)
@@ -309,7 +367,7 @@ def _preset_joints(demonstrator: Robot, imitator: Robot, fd: str, fi: str
         if abs(c) >= 0.5:
             sign = float(np.sign(c))
             offset = (float(qi[arm][imitator.idx_q(iname)])
-                      - sign * float(qd[arm][demonstrator.idx_q(dn)])) if arm else 0.0
+                      - sign * float(qd[arm][demonstrator.idx_q(dn)]))
             joints[dn] = (iname, sign, offset)
     return joints
 
