@@ -396,10 +396,23 @@ def test_legs_soles_and_contact_frames():
         assert 0.2 < 2 * c.half_length < 0.3  # an adult's foot, ankle to toe tip [m]
     # a shape per segment for the viewer: bones + one box per foot
     assert robot.visual_model is not None and robot.visual_model.ngeoms >= 25
-    # at the zero pose (all channels 0, base upright) each sole plane is at the height of the
-    # foot's lowest point (toe joint / toe end), the two sole frames on it
+    # with the legs hanging (all channels 0 but the hip rolls that undo the rest pose's 20°
+    # splay: gdimitate.retarget.bodymap.legs_down; base upright) each sole plane is at the
+    # height of the foot's lowest point (toe joint / toe end), the two sole frames on it
+    # (issue 17: measured at the splayed zero pose, the soles stood 23° on edge in stance)
+    from gdimitate.retarget.bodymap import legs_down
+
     m, d = robot.model, robot.data
-    pin.framesForwardKinematics(m, d, pin.neutral(m))
+    q = pin.neutral(m)
+    hang = legs_down(robot)
+    # the splay from the file's knee and ankle OFFSETs (lateral, down; cmu_02_01.bvh)
+    splay = {"Left": np.arctan2(2.59720 + 2.49236, 7.13576 + 6.84770),
+             "Right": -np.arctan2(2.59502 + 2.46780, 7.12977 + 6.78024)}
+    for side in ("Left", "Right"):
+        i = robot.idx_q(f"{side}UpLeg_Zrotation")
+        assert hang[i] == pytest.approx(-splay[side], abs=1e-3)  # robot.base_rotation: 2e-4
+        q[i] = -splay[side]
+    pin.framesForwardKinematics(m, d, q)
     for s, side in (("left", "Left"), ("right", "Right")):
         sole = d.oMf[m.getFrameId(f"{s}_sole_contact")].translation[2]
         assert d.oMf[m.getFrameId(f"{s}_sole")].translation[2] == pytest.approx(sole, abs=1e-12)

@@ -121,3 +121,30 @@ def test_cmu_clip_hip_roll_targets_are_near_zero(g1):
         assert abs(np.degrees(offset)) == pytest.approx(np.degrees(np.arctan2(5.0896, 13.9835)),
                                                         abs=0.2)
         assert abs(np.degrees(target.mean())) < 5.0, (dn, np.degrees(target.mean()))
+
+
+def test_cmu_soles_flat_in_stance_and_legs_reach():
+    """The shipped CMU clip: measured with the legs hanging, each sole frame lies within 6° of
+    flat on average over its detected stance frames (Pinocchio FK; at the splayed rest pose
+    it stood 23° on edge), and ``Leg.length`` (thigh + shank) is the leg's reach: no frame's
+    hip→ankle distance exceeds it (before: 0.790 m against up to 0.838 m), within 1 mm of
+    the bones' 3-D lengths (file OFFSETs: |(2.5972, −7.13576)| + |(2.49236, −6.8477)| CMU
+    units of 0.056444 m)."""
+    from gdimitate.gait import human_walk_path
+    from gdimitate.kinematics import frame_placements
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot, motion = read_bvh(human_walk_path().parents[1] / "cmu_02_01" / "cmu_02_01.bvh")
+    bones = (np.hypot(2.5972, 7.13576) + np.hypot(2.49236, 6.8477)) * 0.056444
+    for side in ("left", "right"):
+        f = robot.contacts[side].frame
+        R = frame_placements(robot, motion.q, [f])[f].rotation[motion.contact[side]]
+        roll = np.degrees(np.arctan2(R[:, 2, 1], R[:, 2, 2]))
+        assert abs(roll.mean()) < 6.0, (side, roll.mean())
+        leg = robot.legs[side]
+        P = frame_placements(robot, motion.q, [leg.hip, leg.ankle])
+        span = np.linalg.norm(P[leg.ankle].translation - P[leg.hip].translation, axis=1)
+        assert span.max() <= leg.length
+        if side == "left":
+            assert leg.length == pytest.approx(bones, abs=1e-3)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -21,12 +21,15 @@ from .contacts import ContactRule, detect_contacts, estimate_floor, sole_corners
 from .inertia import segment_inertias
 from .parse import BVHFile, parse_bvh
 from .skeleton import (
+    LegChain,
     detect_scale,
     find_legs,
     hip_height_units,
+    leg_splay,
     measure_sole,
     pitch_channel,
     world_turn,
+    zero_pose,
 )
 from .urdf import ChannelJoint, skeleton_urdf
 
@@ -235,7 +238,30 @@ def _skeleton_robot(bvh: BVHFile, name: str, C: np.ndarray, scale: float, mass: 
         Path(urdf_path).write_text(xml)
     robot = Robot(name, model, visual, leg_spec, urdf_path=Path(urdf_path) if urdf_path
                   else None, contacts=sole_contacts, collision_model=collision)
+    for s, ch in chains.items():
+        thigh, shank = hanging_extents(bvh, ch, C, C.T @ np.array([1.0, 0.0, 0.0]))
+        robot.legs[s] = replace(robot.legs[s], thigh=thigh * scale, shank=shank * scale)
     return robot, xml, cmap, unmatched
+
+
+def hanging_extents(bvh: BVHFile, leg: LegChain, C: np.ndarray, fwd: np.ndarray
+                    ) -> tuple[float, float]:
+    """The thigh's and shank's extents in the sagittal plane [file units] with the leg
+    hanging — turned about the subject's forward unit ``fwd`` ``(3,)`` (file axes) by
+    −:func:`~.skeleton.leg_splay` — which is what :class:`~gdimitate.legs.Leg`'s ``thigh`` and
+    ``shank`` mean (the reach walks are normalised by). Measured at a rest pose that splays the
+    legs they would be short by the splay's cosine (CMU: 0.79 m instead of 0.84 m, so that
+    the subject's hip height in stance read 1.02 legs, more than a leg's reach)."""
+    pos, _ = zero_pose(bvh)
+    up = C.T @ np.array([0.0, 0.0, 1.0])
+    theta = leg_splay(bvh, leg, up, fwd)
+    k = np.array([[0.0, -fwd[2], fwd[1]], [fwd[2], 0.0, -fwd[0]], [-fwd[1], fwd[0], 0.0]])
+    down = np.eye(3) - np.sin(theta) * k + (1.0 - np.cos(theta)) * (k @ k)  # turn by -theta
+    out = []
+    for a, b in ((leg.hip, leg.knee), (leg.knee, leg.ankle)):
+        v = down @ (pos[b] - pos[a])
+        out.append(float(np.hypot(v @ fwd, v @ up)))
+    return out[0], out[1]
 
 
 def _stance(contacts, corners: dict[str, np.ndarray], t: np.ndarray, hip_height: float,

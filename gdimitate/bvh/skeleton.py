@@ -18,7 +18,7 @@ from ..errors import BVHError, LegDetectionError
 from .parse import BVHFile
 
 __all__ = ["UP_TURNS", "UNITS", "world_turn", "zero_pose", "detect_scale", "hip_height_units",
-           "LegChain", "find_legs", "Sole", "measure_sole", "pitch_channel"]
+           "LegChain", "find_legs", "Sole", "measure_sole", "leg_splay", "pitch_channel"]
 
 #: Constant rotations ``C`` (x_ours = C · x_bvh) for the supported BVH up axes. ``"y"``: BVH Y
 #: up and the subject facing +Z (the common convention: CMU, MotionBuilder, Mixamo) → our x
@@ -208,12 +208,39 @@ HEEL_RATIO = 0.25
 SOLE_WIDTH_RATIO = 0.35
 
 
+def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix ``(3, 3)`` by ``angle`` [rad] about the unit ``axis`` (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
+
+
+def leg_splay(bvh: BVHFile, leg: LegChain, up: np.ndarray, fwd: np.ndarray) -> float:
+    """Frontal-plane angle [rad] of ``leg``'s hip→ankle line from the downward vertical at
+    the zero pose (file axes; ``up``, ``fwd`` unit vectors, ``fwd`` horizontal; positive:
+    turned about ``fwd`` from −``up`` towards ``up × fwd``). A rest pose may splay the legs
+    (CMU's skeletons: ≈ ±20°); a standing subject's legs hang at 0."""
+    pos, _ = zero_pose(bvh)
+    v = pos[leg.ankle] - pos[leg.hip]
+    return float(math.atan2(v @ np.cross(up, fwd), -(v @ up)))
+
+
+def _forward(pts: list[np.ndarray], a: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """The horizontal direction ``(3,)`` (not normalised) from the ankle ``a`` to the most
+    distal of the foot's points ``pts``."""
+    far = max(pts, key=lambda p: float(np.linalg.norm((p - a) - ((p - a) @ up) * up)))
+    return (far - a) - ((far - a) @ up) * up
+
+
 def measure_sole(bvh: BVHFile, leg: LegChain, C: np.ndarray, scale: float) -> Sole:
-    """The sole rectangle of ``leg`` at the zero pose: the plane through the lowest point of
-    the foot (ankle, toe joint, End Sites below the ankle), from the heel (:data:`HEEL_RATIO`
-    of the ankle-to-toe-tip distance behind the ankle: a BVH skeleton has no heel point) to the
-    foot's most distal point (the toe's End Site, else the toe joint, else the foot's own End
-    Site), along the horizontal direction from the ankle to that point."""
+    """The sole rectangle of ``leg``, measured with the leg hanging — the foot turned about
+    the subject's forward axis by −:func:`leg_splay` about the ankle, as the hip's roll would
+    turn it: a foot flat under a splayed rest pose's leg stands on its edge once the leg hangs
+    under the hip (CMU's by 20°), so the sole is the plane of the hanging foot — and expressed
+    at the zero pose: the plane through the lowest point of the foot (ankle, toe joint, End
+    Sites below the ankle), from the heel (:data:`HEEL_RATIO` of the ankle-to-toe-tip distance
+    behind the ankle: a BVH skeleton has no heel point) to the foot's most distal point (the
+    toe's End Site, else the toe joint, else the foot's own End Site), along the horizontal
+    direction from the ankle to that point."""
     pos, ends = zero_pose(bvh)
     up = C.T @ np.array([0.0, 0.0, 1.0])
     a = pos[leg.ankle]
@@ -222,9 +249,11 @@ def measure_sole(bvh: BVHFile, leg: LegChain, C: np.ndarray, scale: float) -> So
     if len(pts) < 2:
         raise BVHError(f"{bvh.path}: the {leg.side} foot {bvh.joints[leg.ankle].name!r} has no "
                        "toe joint or End Site to measure its length from")
-    far = max(pts, key=lambda p: float(np.linalg.norm((p - a) - ((p - a) @ up) * up)))
+    axis = C.T @ np.array([1.0, 0.0, 0.0])  # the subject's forward (file axes)
+    back = _turn(axis, leg_splay(bvh, leg, up, axis))  # hanging pose -> zero pose
+    pts = [a + back.T @ (p - a) for p in pts]
+    fwd = _forward(pts, a, up)
     low = min(float(p @ up) for p in pts)
-    fwd = (far - a) - ((far - a) @ up) * up
     length = float(np.linalg.norm(fwd))
     if length * scale < 0.02:
         raise BVHError(f"{bvh.path}: the {leg.side} foot is {length * scale:.3f} m long at the "
@@ -235,6 +264,6 @@ def measure_sole(bvh: BVHFile, leg: LegChain, C: np.ndarray, scale: float) -> So
     heel, toe = below - fwd * HEEL_RATIO * length, below + fwd * length
     total = (1 + HEEL_RATIO) * length * scale
     R = np.column_stack([fwd, np.cross(up, fwd), up])
-    return Sole(centre=(heel + toe) / 2 * scale - a * scale, below_ankle=(below - a) * scale,
-                rotation=R, length=total, width=SOLE_WIDTH_RATIO * total,
-                height=float(a @ up - low) * scale)
+    return Sole(centre=back @ ((heel + toe) / 2 - a) * scale,
+                below_ankle=back @ (below - a) * scale, rotation=back @ R, length=total,
+                width=SOLE_WIDTH_RATIO * total, height=float(a @ up - low) * scale)
