@@ -156,24 +156,6 @@ class Knot:
                 frames, [self.wrench_world(s) for s in SIDES])
         return self.memo["torques"]
 
-    def segment_lengths(self) -> dict[str, tuple[float, float]]:
-        """Per side the imitator's 3-D ``(|knee − hip|, |ankle − knee|)`` [m] (rigid, so
-        measured once at the neutral pose with Pinocchio)."""
-        if "segment_lengths" not in self.memo:
-            import pinocchio as pin
-
-            r = self.robot
-            pin.framesForwardKinematics(r.model, r.data, r.neutral)
-            out = {}
-            for s in SIDES:
-                leg = r.legs[s]
-                p = {j: r.data.oMf[r.model.getFrameId(j)].translation for j in
-                     (leg.hip, leg.knee, leg.ankle or leg.sole)}
-                out[s] = (float(np.linalg.norm(p[leg.knee] - p[leg.hip])),
-                          float(np.linalg.norm(p[leg.ankle or leg.sole] - p[leg.knee])))
-            self.memo["segment_lengths"] = out
-        return self.memo["segment_lengths"]
-
     def wrench_local(self, side: str) -> ca.SX:
         """``(6,)`` ``[f; τ]`` [N, N·m] of a foot in its sole frame (planar: f_y = τ_x = τ_z =
         0). The decision variables are this wrench divided by m·g (scaling: a standing foot's
