@@ -373,8 +373,8 @@ def _bump(phi: float) -> tuple[float, float, float]:
 def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
                  com_vel: np.ndarray | None, iterations: int = 100) -> np.ndarray:
     """The first frame's configuration ``(nq,)`` (the robot at rest): stance soles flat on
-    the floor and swing soles flat at half the clearance, both under the demonstrator's scaled
-    soles, the centre of mass over the stance soles, the base at 92 % of its neutral height
+    the floor and swing soles flat on it too (resting), both under the demonstrator's
+    scaled soles, the centre of mass over the stance soles, the base at 92 % of its neutral height
     with the demonstrator's pelvis orientation, the other joints near their targets — damped
     Gauss–Newton steps on the configuration's Lie group. ``com_vel`` ``(3,)`` [m/s]: the
     demonstrator's scaled centre-of-mass velocity, for a start with its velocity
@@ -417,7 +417,7 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
         centre = np.r_[centre[:2] + ref.k * (f0["com"][:2] - dem), 0.0]
     rot = f0["base"] if f0["base"] is not None else ref.root0
     targets = f0["joints"]
-    qa = q_of_v(m, act_idx)
+    qa, vl = q_of_v(m, act_idx), _leg_dofs(m, fids, act_idx)  # vl: held at their limits
     for _ in range(iterations):
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
@@ -446,12 +446,49 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
         e.append(targets - q[qa])
         w.append(np.full(act_idx.size, 0.1))
         Ja, ea, wa = np.vstack(J), np.concatenate(e), np.concatenate(w)
-        dq = np.linalg.solve(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv), Ja.T @ (wa * ea))
-        q = pin.integrate(m, q, dq)
+        q = pin.integrate(m, q, _bounded_step(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv),
+                                              Ja.T @ (wa * ea), m, q, vl))
         q = np.clip(q, m.lowerPositionLimit, m.upperPositionLimit)
     return q
 
 
+
+def _leg_dofs(m, fids: dict, act_idx: np.ndarray) -> np.ndarray:
+    """The velocity indices (sorted) of the actuated joints ``act_idx`` that carry the sole
+    frames ``fids`` {side: frame id} of model ``m`` (the legs)."""
+    act = set(act_idx.tolist())
+    return np.array(sorted({m.joints[j].idx_v for x in SIDES
+                            for j in m.supports[m.frames[fids[x]].parentJoint]
+                            if j > 0 and m.joints[j].idx_v in act}), int)
+
+
+def _bounded_step(A: np.ndarray, b: np.ndarray, m, q: np.ndarray,
+                  act_idx: np.ndarray) -> np.ndarray:
+    """The Gauss–Newton step ``(nv,)`` solving ``A dq = b`` (``A`` ``(nv, nv)``) at the
+    configuration ``q`` ``(nq,)`` of model ``m`` with the 1-dof joints ``act_idx`` (velocity
+    indices) that are at a position limit the step would push past held still — an active
+    set, so that the other joints take up what they cannot. Clipping the step afterwards
+    instead stalls (the rest of the step assumed the held joint's share): iCub's swing sole
+    at the CMU walk's first pose stayed 1.9 mm under the floor, tilted 1.1°, its hip roll at
+    its 17° limit; it landed so and its stance held it there (penetration > 1 mm at every
+    frame). :func:`initial_pose` holds the legs' joints only — they carry the soles, whose
+    rows are the hard ones; holding the arms too (Talos's arm_left_2 at its limit) moved
+    Talos's start by 4 mm, and its CMU walk then failed from frame 76 instead of 167."""
+    qi = q_of_v(m, act_idx)
+    qa, lo, up = q[qi], m.lowerPositionLimit[qi], m.upperPositionLimit[qi]
+    free = np.ones(b.size, bool)
+    dq = np.linalg.solve(A, b)
+    for _ in range(4):
+        push = dq[act_idx]
+        held = ((qa >= up - 1e-9) & (push > 0)) | ((qa <= lo + 1e-9) & (push < 0))
+        held &= free[act_idx]
+        if not held.any():
+            break
+        free[act_idx[held]] = False
+        sub = np.flatnonzero(free)
+        dq = np.zeros(b.size)
+        dq[sub] = np.linalg.solve(A[np.ix_(sub, sub)], b[sub])
+    return dq
 
 
 def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo: np.ndarray,
