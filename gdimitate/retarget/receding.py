@@ -499,16 +499,6 @@ def _across(d: np.ndarray) -> np.ndarray:
     return np.array([e1, np.cross(d, e1)])
 
 
-def _flat(oMf: pin.SE3) -> pin.SE3:
-    """The sole pose on the floor nearest ``oMf``: z = 0, its yaw kept, roll and pitch zero."""
-    R = oMf.rotation
-    yaw = np.arctan2(R[1, 0], R[0, 0])
-    c, s = np.cos(yaw), np.sin(yaw)
-    p = oMf.translation.copy()
-    p[2] = 0.0
-    return pin.SE3(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), p)
-
-
 def q_of_v(m, vi: np.ndarray) -> np.ndarray:
     """``q`` index of each 1-dof velocity index in ``vi`` (joints with nq = nv = 1)."""
     out = np.zeros(len(vi), int)
