@@ -73,3 +73,73 @@ def test_budget_stops_the_solve():
     p = _rule(budget=7, settle=False)
     stops = [p.update(1.0, np.zeros(1), np.array([0.0, 0.0])) for _ in range(7)]
     assert stops == [False] * 6 + [True] and p.reason == "budget"
+
+
+def test_feasible_iterates_count_only_once_the_barrier_parameter_is_small():
+    """A feasible iterate at μ > mu_tol (1e-8) is no candidate: a monotone-μ trace whose
+    cheapest feasible iterate comes at μ = 1.8e-7 (the paper's Case I, which it missed Eq. (1)
+    by 1.96e-6 rad) settles only on the iterates after μ fell to 7.5e-11."""
+    p = _rule(window=3)
+    assert p.mu_tol == 1e-8
+    # (cost, g0 [N], mu): feasible and cheapest but at a large μ, then μ small
+    trace = [(1.6959, 0.0, 1.8e-7), (1.71, 0.0, 1.8e-7), (1.7227, 0.0, 7.5e-11),
+             (1.72265, 0.0, 7.5e-11), (1.72264, 0.0, 7.5e-11), (1.72264, 0.0, 7.5e-11)]
+    stops = [p.update(f, np.array([f]), np.array([g0, 0.0]), mu) for f, g0, mu in trace]
+    assert stops == [False] * 5 + [True] and p.reason == "settled"
+    assert p.best_f == pytest.approx(1.72264) and p.mu_trace[0] == 1.8e-7
+
+
+def test_the_barrier_parameter_reaches_the_rule_from_ipopt():
+    """The μ the stopping rule gets at each iteration is IPOPT's own (its statistics after
+    the solve, iteration by iteration), on min (x−1)² + (y−2)² s.t. x + y ≤ 2.5."""
+    import casadi as ca
+
+    from gdimitate.retarget.interrupt import Progress, guard
+
+    x = ca.MX.sym("x", 2)
+    cb = Progress("mu_probe", 2, 1, 0)
+    s = ca.nlpsol("s", "ipopt", {"x": x, "f": (x[0] - 1) ** 2 + (x[1] - 2) ** 2,
+                                 "g": x[0] + x[1]},
+                  {"iteration_callback": cb, "ipopt.print_level": 0, "print_time": 0,
+                   "ipopt.sb": "yes"})
+    p = Plateau(np.array([-10.0]), np.array([2.5]), np.array([1.0]), settle=False)
+    with guard(False, np.array([-10.0]), np.array([2.5]), "", p, s):
+        s(x0=[0, 0], lbg=-10, ubg=2.5, lbx=-5, ubx=5)
+    mu = s.stats()["iterations"]["mu"]
+    assert len(mu) >= 3 and p.mu_trace == pytest.approx(list(mu), rel=0, abs=0)
+    assert mu[-1] < 1e-8 < mu[0]
+
+
+def test_kept_heap_keeps_freed_blocks_in_the_process():
+    """Inside :func:`kept_heap` a freed 64-MB block is reused without page faults (counted by
+    the kernel, getrusage's minor faults): 16,384 faults (64 MB of 4-kB pages) when glibc
+    unmaps it on free (a block of that size is mmap-ed by default), none when it is kept."""
+    import ctypes
+    import resource
+    import sys
+
+    from gdimitate.retarget.solve import kept_heap
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("glibc's mallopt")
+    libc = ctypes.CDLL("libc.so.6")
+    libc.malloc.restype = ctypes.c_void_p
+    libc.free.argtypes = [ctypes.c_void_p]
+    n = 64 << 20
+
+    def faults() -> int:
+        def once():  # allocate, touch every page, free
+            p = libc.malloc(ctypes.c_size_t(n))
+            ctypes.memset(p, 1, n)
+            libc.free(p)
+
+        once()
+        once()
+        n0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        once()
+        return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - n0
+
+    assert faults() >= n // 4096
+    with kept_heap():
+        assert faults() < 100
+    assert faults() >= n // 4096  # glibc's defaults are back

@@ -12,6 +12,7 @@ also prints the iteration number, the objective and the largest constraint viola
 
 from __future__ import annotations
 
+import math
 import signal
 import sys
 import threading
@@ -33,6 +34,7 @@ class _State:
     t0 = 0.0
     label = ""
     stopper = None
+    solver: ca.Function | None = None
 
 
 STATE = _State()
@@ -74,7 +76,7 @@ class Progress(ca.Callback):
         g = np.asarray(arg[out.index("g")]).ravel()
         f = float(arg[out.index("f")])
         stop = STATE.stopper is not None and STATE.stopper.update(
-            f, np.asarray(arg[out.index("x")]), g)
+            f, np.asarray(arg[out.index("x")]), g, _barrier())
         if STATE.verbose and (self._it == 1 or self._it % STATE.every == 0):
             viol = 0.0
             if STATE.lbg is not None and g.size:
@@ -85,13 +87,26 @@ class Progress(ca.Callback):
         return [1 if STATE.interrupted or stop else 0]
 
 
+def _barrier() -> float:
+    """IPOPT's barrier parameter μ at the current iterate (in its scaled objective's units),
+    read from the running solver's statistics (CasADi records IPOPT's intermediate-callback
+    values, ``mu`` among them, before it calls the iteration callback); 0 when no solver is
+    set."""
+    if STATE.solver is None:
+        return 0.0
+    mu = STATE.solver.stats().get("iterations", {}).get("mu", ())
+    return float(mu[-1]) if len(mu) else math.inf
+
+
 @contextmanager
-def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = "", stopper=None):
+def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = "", stopper=None,
+          solver: ca.Function | None = None):
     """Run a solve with the SIGINT flag handler installed (main thread only), progress
-    settings and an optional stopping rule; raises ``KeyboardInterrupt`` after the solve when
-    Ctrl-C arrived."""
+    settings and an optional stopping rule, which is given IPOPT's barrier parameter of each
+    iterate from ``solver`` (the nlpsol that runs); raises ``KeyboardInterrupt`` after the
+    solve when Ctrl-C arrived."""
     STATE.interrupted = False
-    STATE.stopper = stopper
+    STATE.stopper, STATE.solver = stopper, solver
     STATE.verbose, STATE.lbg, STATE.ubg, STATE.label = verbose, lbg, ubg, label
     STATE.t0 = time.perf_counter()
     main = threading.current_thread() is threading.main_thread()
@@ -104,6 +119,7 @@ def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = "", stop
     try:
         yield STATE
     finally:
+        STATE.solver = None
         if main:
             signal.signal(signal.SIGINT, old)
     if STATE.interrupted:
