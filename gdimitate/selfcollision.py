@@ -12,7 +12,12 @@ are left out and listed (:attr:`SelfCollision.excluded`): no motion could keep t
 
 Distances are computed by coal (GJK/EPA, signed: negative inside each other) between convex
 shapes: meshes are replaced by their convex hulls (conservative — a hull is never farther from
-anything than its mesh), primitives (spheres, cylinders, boxes, capsules) are kept.
+anything than its mesh), primitives (spheres, cylinders, boxes, capsules) are kept. A Y-up
+Collada mesh is turned back as the URDF placed it (:mod:`gdimitate.meshes`, the same rotation
+the sole measurement and the viewer apply): as loaded, iCub's meshes lie 90° off their links —
+thighs horizontal, the chest in front of the torso, each foot across its leg — so the left
+thigh sat 1.5 cm from the chest and the left foot 1 mm from the right ankle at the neutral
+pose, and the adaptor's sphere rows, cut from those shapes, held the thighs off the chest.
 """
 
 from __future__ import annotations
@@ -23,8 +28,9 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InvalidInputError
+from .meshes import ASSIMP_Y_UP_UNDO, collada_y_up
 
-__all__ = ["SelfCollision", "self_collision", "limb_groups", "TRUNK"]
+__all__ = ["SelfCollision", "self_collision", "limb_groups", "placement", "TRUNK"]
 
 TRUNK = "trunk"
 #: Default clearance [m] below which a pair at the neutral pose is left out.
@@ -119,18 +125,29 @@ class SelfCollision:
 
 
 def _convex(geom: pin.GeometryModel) -> pin.GeometryModel:
-    """A copy whose meshes are their convex hulls."""
+    """A copy whose meshes are their convex hulls, Y-up Collada meshes placed as their URDF
+    means (:func:`placement`)."""
     import coal
 
     out = pin.GeometryModel()
     for g in geom.geometryObjects:
         g = g.copy()
+        g.placement = placement(g)
         shape = g.geometry
         if isinstance(shape, coal.BVHModelBase):
             shape.buildConvexHull(False, "Qt")
             g.geometry = shape.convex
         out.addGeometryObject(g)
     return out
+
+
+def placement(g: pin.GeometryObject) -> pin.SE3:
+    """The placement of a geometry object's vertices (as Pinocchio loaded them) in its parent
+    joint's frame: ``g.placement``, times the rotation back to the file's raw coordinates for
+    a Y-up Collada mesh (:data:`gdimitate.meshes.ASSIMP_Y_UP_UNDO`)."""
+    if g.meshPath and collada_y_up(g.meshPath):
+        return g.placement * pin.SE3(ASSIMP_Y_UP_UNDO, np.zeros(3))
+    return g.placement
 
 
 def self_collision(robot, margin: float = NEUTRAL_MARGIN) -> SelfCollision | None:

@@ -155,8 +155,8 @@ def test_hand_through_the_pelvis_fails_the_audit(g1):
 def test_the_real_walk_copied_onto_the_robots_is_clear(name):
     """The shipped 3-D walk, joint angles copied onto the robot (arms at their neutral pose):
     no limb comes within 1 mm of another or of the trunk over the whole clip (measured:
-    G1 7.8 mm, Talos 5.1 mm, Romeo 19.7 mm). (iCub's copy is not clear: its thigh hull meets
-    its chest at 0.33 rad of hip and 0.31 rad of torso pitch — coal's mesh distance agrees.)"""
+    G1 7.8 mm, Talos 5.1 mm, Romeo 19.7 mm). (iCub's copy is not clear: its right thigh's
+    hull goes 8.0 mm into its root link's, 0.5 mm apart at the neutral pose.)"""
     from gdimitate.apps.baselines import joint_copy
 
     with warnings.catch_warnings():
@@ -316,12 +316,14 @@ def test_sphere_rows_leave_out_pairs_within_the_margin_at_neutral():
 
 
 def test_rest_pose_clears_the_limbs_the_neutral_pose_presses_together(g1):
-    """The adaptor holds unmapped joints near ``rest_pose``: iCub's neutral pose presses its
-    forearms against its chest (2.1 mm) and its hands against its hips (1.4 mm) — at its rest
-    pose every such active pair is at least REST_CLEAR apart, no pair the audit checks is
-    closer than min(its neutral distance, the margin) (coal's hull distances, recomputed
-    here), only arm/head joints moved, inside their limits; those pairs now get sphere rows
-    and none is left out. G1 has no such pair: its rest pose is its neutral pose."""
+    """The adaptor holds unmapped joints near ``rest_pose``: Talos's neutral pose holds its
+    wrists and grippers within the margin of its thighs (8.7–9.6 mm) — at its rest pose every
+    such active pair is at least REST_CLEAR apart, no pair the audit checks is closer than
+    min(its neutral distance, the margin) (coal's hull distances, recomputed here), only arm
+    and head joints moved, inside their limits; those pairs now get sphere rows and none is
+    left out. G1 has no such pair: its rest pose is its neutral pose. (Until its Y-up Collada
+    meshes were turned as its URDF means, iCub was this test's robot: its forearms then sat
+    2.1 mm from a chest mesh lying in front of its torso.)"""
     from gdimitate.retarget.parts.self_collision import (
         MARGIN,
         REST_CLEAR,
@@ -333,26 +335,28 @@ def test_rest_pose_clears_the_limbs_the_neutral_pose_presses_together(g1):
     np.testing.assert_array_equal(rest_pose(g1), g1.neutral)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        icub = gd.Robot.from_library("icub")
-    q = rest_pose(icub)
-    sc = self_collision(icub)
-    d0, d = sc.distances(icub.neutral), sc.distances(q)
-    pressed = {(a, b) for a, b, _ in left_out_sphere_pairs(icub)}
-    assert {("chest_0", "l_forearm_0"), ("l_hip_2_0", "l_hand_0")} <= pressed
+        talos = gd.Robot.from_library("talos")
+    q = rest_pose(talos)
+    sc = self_collision(talos)
+    d0, d = sc.distances(talos.neutral), sc.distances(q)
+    pressed = {(a, b) for a, b, _ in left_out_sphere_pairs(talos)}
+    assert {("leg_left_3_link_0", "arm_left_6_link_0"),
+            ("leg_right_3_link_0", "gripper_right_motor_double_link_0")} <= pressed
     for (a, b), x0, x in zip(sc.pairs, d0, d):
         if (a, b) in pressed:
             assert x >= REST_CLEAR - 1e-9, (a, b)
         elif x0 >= 0:
             assert x >= min(x0, MARGIN) - 1e-9, (a, b)
-    m = icub.model
-    moved = [m.names[j] for j in range(1, m.njoints) if m.joints[j].nq == 1
-             and abs(q[m.joints[j].idx_q] - icub.neutral[m.joints[j].idx_q]) > 1e-12]
-    assert moved and all(n.split("_")[1] in ("shoulder", "elbow", "wrist", "neck")
-                         for n in moved), moved
+    m = talos.model
+    groups = limb_groups(talos)
+    legs = {groups[m.getJointId(leg.hip)] for leg in talos.legs.values()}
+    moved = [j for j in range(1, m.njoints) if m.joints[j].nq == 1
+             and abs(q[m.joints[j].idx_q] - talos.neutral[m.joints[j].idx_q]) > 1e-12]
+    assert moved and all(groups[j] != TRUNK and groups[j] not in legs for j in moved), moved
     assert np.all(q <= m.upperPositionLimit + 1e-12) and np.all(q >= m.lowerPositionLimit - 1e-12)
-    assert not left_out_sphere_pairs(icub, q=q)
-    framed = {(fa, fb) for fa, _, _, fb, *_ in sphere_pairs(icub, q=q)}
-    assert ("torso_yaw", "l_wrist_prosup") in framed
+    assert not left_out_sphere_pairs(talos, q=q)
+    framed = {(fa, fb) for fa, _, _, fb, *_ in sphere_pairs(talos, q=q)}
+    assert ("leg_left_3_joint", "arm_left_6_joint") in framed
 
 
 def test_posture_range_is_a_box_on_the_held_joints(g1):

@@ -188,8 +188,8 @@ def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tup
     joint, least separation [m]),)`` — the soles' separation along the root's y axis at least
     its neutral value less the legs' closest hull distance there less ``margin``, a smooth row
     in place of the two legs' sphere pairs (:func:`_two_legs`); legs already within ``margin``
-    at the neutral pose (iCub's shanks and feet) keep their neutral separation; empty when the
-    legs' closest pair there is ``active`` or more apart."""
+    at the neutral pose keep their neutral separation; empty when the legs' closest pair there
+    is ``active`` or more apart."""
     from ...selfcollision import limb_groups, self_collision
 
     sc = self_collision(robot)
@@ -251,10 +251,10 @@ def rest_pose(robot, margin: float = MARGIN, clear: float = REST_CLEAR) -> np.nd
     (:class:`.PostureRange`) and takes its sphere pairs at — the neutral pose, with the arms
     (and head) moved the least so that the active pairs closer than ``margin`` there are
     ``clear`` apart (a few least-norm Gauss–Newton steps on coal's hull distances, by finite
-    differences; legs and trunk stay). iCub's neutral pose presses its forearms against its
-    chest (2.1 mm) and its hands against its hips (1.4 mm): those pairs got no rows, and arms
-    held within 0.1 rad of it went 29.6 mm into the chest. The neutral pose where no pair is
-    that close (G1, Romeo). Cached on the robot."""
+    differences; legs and trunk stay). Talos's neutral pose holds its wrists and grippers
+    within 1 cm of its thighs (8.7–9.6 mm): those pairs would get no rows; its rest pose moves
+    each arm joint by ≤ 0.05 rad. The neutral pose where no pair is that close (G1, Romeo,
+    iCub). Cached on the robot."""
     from ...selfcollision import TRUNK, limb_groups, self_collision
 
     cache = robot.__dict__.setdefault("_rest_pose", {})
@@ -306,7 +306,7 @@ def _sphere_pairs(robot, margin: float, active: float, q: np.ndarray | None = No
                   ) -> tuple[tuple, tuple]:
     """``(kept, left out)`` sphere pairs (:func:`sphere_pairs`, :func:`left_out_sphere_pairs`)
     at the pose ``q`` (default neutral), cached on the robot per ``(margin, active, q)``."""
-    from ...selfcollision import self_collision
+    from ...selfcollision import placement, self_collision
 
     q = np.asarray(robot.neutral if q is None else q, float)
     cache = robot.__dict__.setdefault("_sphere_pairs", {})
@@ -331,9 +331,9 @@ def _sphere_pairs(robot, margin: float, active: float, q: np.ndarray | None = No
         ends = []
         for n in (a, b):
             g = robot.collision_model.geometryObjects[robot.collision_model.getGeometryId(n)]
-            j = int(g.parentJoint)
-            ends.append([(model.names[j], g.placement.act(ci), r, data.oMi[j].act(
-                g.placement.act(ci))) for ci, r in _cover(g)])
+            j, M = int(g.parentJoint), placement(g)
+            ends.append([(model.names[j], M.act(ci), r, data.oMi[j].act(M.act(ci)))
+                         for ci, r in _cover(g)])
         for fa, oa, ra, wa in ends[0]:
             for fb, ob, rb, wb in ends[1]:
                 gap = float(np.linalg.norm(wa - wb) - ra - rb)
