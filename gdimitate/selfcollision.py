@@ -6,7 +6,13 @@ from the root joint the trunk descends while exactly one child subtree is not a 
 are :attr:`Robot.legs`); where two or more non-leg subtrees branch off (arms, head), each is a
 limb, and so is each leg. The pairs checked are every pair of geometries on two different
 limbs (limb–limb) or on a limb and the trunk (limb–trunk); geometries of one limb, or of the
-trunk, are never paired (neighbouring links overlap by design). Pairs already closer than the
+trunk, are never paired (neighbouring links overlap by design), nor are neighbouring bodies —
+one hanging from the other by a joint, a chain of joints turning about one point (a ball
+joint the URDF writes as single-axis joints and small links: iCub's, Talos's, Romeo's hips)
+counted as one joint: iCub's thigh hull, 0.5 mm from its root link's at the neutral pose,
+went into it at any hip flexion without hip roll (coal's mesh distance: touching too), and
+its streamed walk, whose QP kept those hulls apart, fell (0 of 60 frames feasible, 60 with
+the rule). Pairs already closer than the
 ``margin`` at the neutral pose (a thigh against the pelvis, an upper arm against the torso)
 are left out and listed (:attr:`SelfCollision.excluded`): no motion could keep them apart.
 
@@ -35,6 +41,9 @@ __all__ = ["SelfCollision", "self_collision", "limb_groups", "placement", "TRUNK
 TRUNK = "trunk"
 #: Default clearance [m] below which a pair at the neutral pose is left out.
 NEUTRAL_MARGIN = 0.0
+#: A joint whose origin is within this distance [m] of its parent joint's turns about the
+#: same point: the two are one (ball) joint for :func:`_adjacent`.
+AT_ONE_POINT = 1e-3
 
 
 def _children(model: pin.Model) -> dict[int, list[int]]:
@@ -168,10 +177,10 @@ def self_collision(robot, margin: float = NEUTRAL_MARGIN) -> SelfCollision | Non
     jg = limb_groups(robot)
     objs = convex.geometryObjects
     groups = {g.name: jg.get(int(g.parentJoint), TRUNK) for g in objs}
-    par = model.parents
+    par, ball = model.parents, _balls(model)
     adjacent = [(i, j) for i in range(len(objs)) for j in range(i + 1, len(objs))
                 if groups[objs[i].name] != groups[objs[j].name]
-                and _adjacent(par, int(objs[i].parentJoint), int(objs[j].parentJoint))]
+                and _adjacent(par, ball, int(objs[i].parentJoint), int(objs[j].parentJoint))]
     cand = [(i, j) for i in range(len(objs)) for j in range(i + 1, len(objs))
             if groups[objs[i].name] != groups[objs[j].name] and (i, j) not in adjacent]
     for i, j in cand:
@@ -193,9 +202,25 @@ def self_collision(robot, margin: float = NEUTRAL_MARGIN) -> SelfCollision | Non
     return out
 
 
-def _adjacent(parents, a: int, b: int) -> bool:
-    """Two joints' bodies are neighbours: one is the other's parent."""
-    return a == b or parents[a] == b or parents[b] == a
+def _balls(model: pin.Model) -> list[int]:
+    """Per joint, the first joint of the chain of joints at one point it ends (:data:`AT_ONE_POINT`
+    from their parents: iCub's, Talos's and Romeo's three-axis hips, iCub's torso pitch at the
+    root's origin) — a chain the URDF writes as single-axis joints and small links for one
+    ball joint; every other joint is its own."""
+    out = list(range(model.njoints))
+    for j in range(1, model.njoints):
+        p = model.parents[j]
+        if p > 0 and np.linalg.norm(model.jointPlacements[j].translation) < AT_ONE_POINT:
+            out[j] = out[p]
+    return out
+
+
+def _adjacent(parents, ball: list[int], a: int, b: int) -> bool:
+    """Two joints' bodies are neighbours: one hangs from the other by a joint, counting a
+    chain of joints at one point (``ball``, :func:`_balls`) as one joint."""
+    if ball[a] == ball[b]:
+        return True
+    return ball[parents[ball[a]]] == ball[b] or ball[parents[ball[b]]] == ball[a]
 
 
 def _label(model: pin.Model, group: str) -> str:
