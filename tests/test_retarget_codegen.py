@@ -101,3 +101,84 @@ def test_source_digest_covers_every_module_the_compiled_expressions_import():
                         missing.add(str(cand.relative_to(root)))
     missing.discard("errors.py")  # exception classes only: nothing of an expression
     assert not missing, f"imported by the compiled expressions but not digested: {missing}"
+
+
+def test_split_rows_pieces_fit_and_give_the_whole():
+    """Rows g_i = x_i·x_{i+1}² + sin(x_i) (closed-form Jacobian and Hessian of λᵀg): cut into
+    pieces of at most 25 SX instructions, the stacked Jacobian pieces and the summed Hessian
+    pieces equal the closed forms; pieces named name0, name1, … in row order."""
+    n = 12
+    x, lam = ca.SX.sym("x", n + 1), ca.SX.sym("lam", n)
+    g = ca.vertcat(*[x[i] * x[i + 1] ** 2 + ca.sin(x[i]) for i in range(n)])
+    jac = codegen.split_rows("j", n, np.ones(n), lambda a, b: [ca.jacobian(g[a:b], x)], [x],
+                             limit=25)
+    hes = codegen.split_rows("h", n, np.ones(n), lambda a, b: [ca.hessian(
+        ca.dot(lam[a:b], g[a:b]), x)[0]], [x, lam], limit=25)
+    assert len(jac) > 2 and len(hes) > 2
+    assert all(f.n_instructions() <= 25 for f in jac)
+    fun = {f.name(): f for f in jac + hes}
+    assert codegen.pieces(fun, "j") == jac and codegen.pieces(fun, "h") == hes
+    xv, lv = RNG.normal(size=n + 1), RNG.normal(size=n)
+    J = np.vstack([np.array(f(xv)) for f in jac])
+    H = sum(np.array(f(xv, lv)) for f in hes)
+    Jref, Href = np.zeros((n, n + 1)), np.zeros((n + 1, n + 1))
+    for i in range(n):
+        a, b = xv[i], xv[i + 1]
+        Jref[i, i], Jref[i, i + 1] = b**2 + np.cos(a), 2 * a * b
+        Href[i, i] += -lv[i] * np.sin(a)
+        Href[i, i + 1] += 2 * lv[i] * b
+        Href[i + 1, i] += 2 * lv[i] * b
+        Href[i + 1, i + 1] += 2 * lv[i] * a
+    np.testing.assert_allclose(J, Jref, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(H, Href, rtol=1e-14, atol=1e-14)
+    # rows that share one long subexpression stay one piece (halves would recompute it)
+    s = x[0]
+    for i in range(200):
+        s = ca.sin(s + x[i % (n + 1)])
+    shared = ca.vertcat(*[s * x[i] for i in range(n)])
+    one = codegen.split_rows("s", n, np.ones(n), lambda a, b: [shared[a:b]], [x], limit=25)
+    assert len(one) == 1 and one[0].n_instructions() > 25
+
+
+RNG = np.random.default_rng(11)
+
+
+def test_knot_derivatives_in_pieces_match_finite_differences(tmp_path, monkeypatch, robot):
+    """HOAP-2's knot (the default parts) with pieces of at most 3,000 instructions, compiled:
+    the stacked ``kjac`` pieces against central differences of ``kg``, the summed ``kh``
+    pieces (upper triangle) against central differences of the Lagrangian's gradient
+    σ·kgrad + Σ kjacᵀλ."""
+    from gdimitate.retarget import parts as P
+    from gdimitate.retarget import problem as pb
+    from gdimitate.retarget.knot import Flags
+
+    if codegen._compiler() is None:
+        pytest.skip("no C compiler on this machine")
+    monkeypatch.setenv(codegen.ENV, str(tmp_path))
+    monkeypatch.setattr(codegen, "PIECE_SIZE", 3000)
+    r = robot("hoap2")
+    pb.clear_cache()
+    try:
+        form = pb.formulation(r, Flags(), P.default_parts((), tuple(range(3, r.model.nq))))
+    finally:
+        pb.clear_cache()
+    f = form.fun
+    jac, hes = codegen.pieces(f, "kjac"), codegen.pieces(f, "kh")
+    assert form.compiled and len(jac) > 1 and len(hes) > 1
+    x = RNG.normal(size=form.nx) * 0.3
+    p = RNG.uniform(0.1, 1.0, size=form.knot.par.size)
+    lam, sigma = RNG.normal(size=form.ngk), 0.7
+
+    def grad(xv):
+        J = np.vstack([np.array(j(xv, p)) for j in jac])
+        return sigma * np.array(f["kgrad"](xv, p)).ravel() + J.T @ lam
+
+    eps = 1e-6
+    E = np.eye(form.nx)
+    Jfd = np.column_stack([(np.array(f["kg"](x + eps * e, p)) - np.array(f["kg"](x - eps * e, p))
+                            ).ravel() / (2 * eps) for e in E])
+    np.testing.assert_allclose(np.vstack([np.array(j(x, p)) for j in jac]), Jfd, atol=2e-5,
+                               rtol=1e-5)
+    Hfd = np.column_stack([(grad(x + eps * e) - grad(x - eps * e)) / (2 * eps) for e in E])
+    H = sum(np.array(h(x, p, sigma, lam)) for h in hes)
+    np.testing.assert_allclose(H, np.triu(Hfd), atol=2e-4, rtol=1e-5)

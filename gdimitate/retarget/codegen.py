@@ -25,14 +25,22 @@ from collections.abc import Callable
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 __all__ = ["cache_dir", "compiled_functions", "SlowDerivativesWarning", "source_digest",
-           "COMPILE_COUNT"]
+           "COMPILE_COUNT", "split_rows", "pieces", "PIECE_SIZE", "OVERLAP"]
 
 ENV = "GDIMITATE_CACHE_DIR"
 CFLAGS = ("-O1", "-fPIC", "-fno-math-errno")
 COMPILE_COUNT = 0
 """How many libraries this process has compiled (a disk-cache hit leaves it unchanged)."""
+PIECE_SIZE = 120_000
+"""SX instructions above which :func:`split_rows` cuts a function into pieces: the C
+compiler's time grows faster than the size of one function body (its register allocation
+over one basic block; docs/design.md §6, "the solver")."""
+OVERLAP = 1.15
+"""A cut is kept when its two pieces together take at most this many times the instructions
+of the whole (what they recompute both)."""
 _WARNED = False
 
 
@@ -99,6 +107,49 @@ def _build(funcs: list[ca.Function], lib: Path, cc: str) -> None:
                        capture_output=True, text=True)
         os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
     COMPILE_COUNT += 1
+
+
+def split_rows(name: str, n: int, weight: np.ndarray,
+               make: Callable[[int, int], list[ca.SX]], inputs: list[ca.SX],
+               cuts: tuple[int, ...] = (), limit: int | None = None) -> list[ca.Function]:
+    """One function's rows ``[0, n)`` as pieces ``name0, name1, …`` (rows ``[a, b)`` each:
+    ``make(a, b)`` its outputs, of ``inputs``), so that the compiler sees smaller function
+    bodies. A piece over ``limit`` (default :data:`PIECE_SIZE`) SX instructions is halved at
+    the ``weight`` ``(n,)`` median — at the nearest of ``cuts`` (e.g. the parts' first rows)
+    inside it, else at any row — unless its halves together take more than
+    :data:`OVERLAP` times its instructions (rows that share a subexpression, as the
+    dynamics rows share the inverse dynamics, stay together). The pieces' outputs, stacked or
+    summed as ``make`` defines them, are the whole function's."""
+    cum = np.r_[0.0, np.cumsum(np.asarray(weight, float))]
+    limit = PIECE_SIZE if limit is None else limit
+
+    def size(out: list[ca.SX]) -> int:
+        return ca.Function(name, inputs, out).n_instructions()
+
+    def split(a: int, b: int, out: list[ca.SX], n_out: int) -> list[list[ca.SX]]:
+        if b - a < 2 or n_out <= limit:
+            return [out]
+        mid = np.searchsorted(cum, (cum[a] + cum[b]) / 2)
+        inside = [c for c in cuts if a < c < b]
+        m = min(inside, key=lambda c: abs(c - mid)) if inside else int(min(max(mid, a + 1),
+                                                                             b - 1))
+        lo, hi = make(a, m), make(m, b)
+        n_lo, n_hi = size(lo), size(hi)
+        if n_lo + n_hi > OVERLAP * n_out:
+            return [out]
+        return split(a, m, lo, n_lo) + split(m, b, hi, n_hi)
+
+    whole = make(0, n)
+    return [ca.Function(f"{name}{i}", inputs, out)
+            for i, out in enumerate(split(0, n, whole, size(whole)))]
+
+
+def pieces(fun: dict[str, ca.Function], name: str) -> list[ca.Function]:
+    """The pieces ``name0, name1, …`` of :func:`split_rows` in ``fun``."""
+    out = []
+    while f"{name}{len(out)}" in fun:
+        out.append(fun[f"{name}{len(out)}"])
+    return out
 
 
 def compiled_functions(key: str, make: Callable[[], list[ca.Function]]

@@ -16,6 +16,7 @@ Two levels, each cached:
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import sys
 from collections import OrderedDict
@@ -101,8 +102,10 @@ class Formulation:
     constraint parts ``cons`` with their row ``slices``; ``pairs`` with ``pair_slices``;
     ``labels`` ``(ngk,)`` and ``scale`` ``(ngk,)`` (each row's divisor into scaled units) of
     the per-knot rows; ``fun``: the functions by name — ``kg (x, p) -> g``,
-    ``kjac (x, p) -> ∂g/∂x``, ``kf (x, p) -> f`` (the knot's cost, not divided by T),
-    ``kgrad``, ``kh (x, p, σ, λ) -> triu ∇²(σf + λᵀg)``, ``pg (x₀, x₁, p₁) -> rows``,
+    ``kjac0, kjac1, … (x, p)`` -> ∂g/∂x in pieces of rows, stacked (:func:`.codegen.pieces`),
+    ``kf (x, p) -> f`` (the knot's cost, not divided by T), ``kgrad``,
+    ``kh0, kh1, … (x, p, σ, λ)`` -> triu ∇²(σf + λᵀg) in pieces, summed,
+    ``pg (x₀, x₁, p₁) -> rows``,
     ``pjac``, ``ph (x₀, x₁, p₁, μ)``, ``kres (x, p) -> weighted residuals`` and
     ``kresjac`` (their Jacobian: the streaming mode's Gauss-Newton model),
     ``tau (x, p) -> τ (nv,)``; ``compiled``: whether they run as compiled C."""
@@ -203,19 +206,34 @@ def _knot_expressions(k: Knot, parts) -> tuple:
     return cons, slices, out, labels, np.array(scale), pairs, pslices, prow, x0, costs
 
 
-def _functions(k: Knot, g_rows, costs, prow, x0) -> list[ca.Function]:
+def _functions(k: Knot, g_rows, slices, costs, prow, x0) -> list[ca.Function]:
+    """The knot's functions (:class:`Formulation`); the constraint Jacobian and the
+    Lagrangian's Hessian in pieces of rows (:func:`.codegen.split_rows`: ``kjac0, …`` stacked,
+    ``kh0, …`` summed; ``kh0`` holds the cost's Hessian)."""
     gk = ca.vertcat(*g_rows)
     res = ca.vertcat(*[(k.weight(c.weight) if c.weight else 1) * c.residual(k) for c in costs])
     fk = ca.sumsqr(res) + k.P("elastic")[0] * (ca.sum1(k.s_plus) + ca.sum1(k.s_minus))
     lam, sigma = ca.SX.sym("lam", gk.shape[0]), ca.SX.sym("sigma")
-    hk = ca.triu(ca.hessian(sigma * fk + ca.dot(lam, gk), k.x)[0])
     gs = ca.vertcat(*prow) if prow else ca.SX(0, 1)
     mu = ca.SX.sym("mu", gs.shape[0])
     xx = ca.vertcat(x0, k.x)
     x, p = k.x, k.p
-    return [ca.Function("kg", [x, p], [gk]), ca.Function("kjac", [x, p], [ca.jacobian(gk, x)]),
+    ng = gk.shape[0]
+    jac = ca.jacobian(gk, x)
+    weight = np.array([jac[i, :].nnz() + 1 for i in range(ng)])
+
+    def hess(a: int, b: int) -> list[ca.SX]:  # items: the cost, then the rows
+        lag = (sigma * fk if a == 0 else 0) + ca.dot(lam[max(a - 1, 0):b - 1],
+                                                     gk[max(a - 1, 0):b - 1])
+        return [ca.triu(ca.hessian(lag, x)[0])]
+
+    cuts = tuple(s.start for s in slices)  # where one part's rows end and the next's begin
+    return [ca.Function("kg", [x, p], [gk]),
+            *codegen.split_rows("kjac", ng, weight, lambda a, b: [ca.jacobian(gk[a:b], x)],
+                                [x, p], cuts),
             ca.Function("kf", [x, p], [fk]), ca.Function("kgrad", [x, p], [ca.gradient(fk, x)]),
-            ca.Function("kh", [x, p, sigma, lam], [hk]),
+            *codegen.split_rows("kh", ng + 1, np.r_[len(costs) + 1, weight], hess,
+                                [x, p, sigma, lam], (1, *(c + 1 for c in cuts))),
             ca.Function("pg", [x0, x, p], [gs]),
             ca.Function("pjac", [x0, x, p], [ca.jacobian(gs, xx)]),
             ca.Function("ph", [x0, x, p, mu], [ca.hessian(ca.dot(mu, gs), xx)[0]]),
@@ -241,7 +259,7 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
             _knot_expressions(k, parts)
         digest = hashlib.sha1(repr((key, _SOURCE)).encode()).hexdigest()
         fun, comp = codegen.compiled_functions(
-            digest, lambda: _functions(k, g_rows, costs, prow, x0))
+            digest, lambda: _functions(k, g_rows, slices, costs, prow, x0))
         seams = [p for p in parts if isinstance(p, SeamConstraint)]
         seam, seam_labels, seam_sizes = seam_functions(k, seams) if seams else (None, [], [])
         return Formulation(k, parts, cons, slices, pairs, pslices, labels, scale, fun, comp,
@@ -346,12 +364,15 @@ def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled
     X = ca.MX.sym("X", nx, T)
     P = ca.MX.sym("P", form.knot.par.size, T)
     z, p = ca.vec(X), ca.vec(P)
-    g_list, j_list = [ca.vec(f["kg"].map(T)(X, P))], [_blockdiag(f["kjac"].map(T)(X, P), nx)]
+    g_list = [ca.vec(f["kg"].map(T)(X, P))]
+    j_list = [_blockdiag(ca.vertcat(*[j.map(T)(X, P) for j in codegen.pieces(f, "kjac")]), nx)]
     ng = ngk * T + ns * (T - 1) + form.nseam
     S = _select(keep, ng)
     lam_f, lam_s = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(keep))
     lam_g = ca.mtimes(S.T, lam_s)
-    H = _blockdiag(f["kh"].map(T)(X, P, lam_f / T, ca.reshape(lam_g[:ngk * T], ngk, T)), nx)
+    lam_k = ca.reshape(lam_g[:ngk * T], ngk, T)
+    hs = [h.map(T)(X, P, lam_f / T, lam_k) for h in codegen.pieces(f, "kh")]
+    H = _blockdiag(functools.reduce(ca.plus, hs), nx)  # (never 0 + H: that fills H)
     if T > 1 and ns:
         E = _pair_spread(nx, T)
         args = (X[:, :-1], X[:, 1:], P[:, 1:])
