@@ -102,9 +102,9 @@ class Formulation:
     constraint parts ``cons`` with their row ``slices``; ``pairs`` with ``pair_slices``;
     ``labels`` ``(ngk,)`` and ``scale`` ``(ngk,)`` (each row's divisor into scaled units) of
     the per-knot rows; ``fun``: the functions by name — ``kg (x, p) -> g``,
-    ``kjac0, kjac1, … (x, p)`` -> ∂g/∂x in pieces of rows, stacked (:func:`.codegen.pieces`),
-    ``kf (x, p) -> f`` (the knot's cost, not divided by T), ``kgrad``,
-    ``kh0, kh1, … (x, p, σ, λ)`` -> triu ∇²(σf + λᵀg) in pieces, summed,
+    ``kjac (x, p) -> ∂g/∂x``, ``kf (x, p) -> f`` (the knot's cost, not divided by T), ``kgrad``,
+    ``kh0, kh1, … (x, p, σ, λ)`` -> triu ∇²(σf + λᵀg) in pieces, summed
+    (:func:`.codegen.pieces`),
     ``pg (x₀, x₁, p₁) -> rows``,
     ``pjac``, ``ph (x₀, x₁, p₁, μ)``, ``kres (x, p) -> weighted residuals`` and
     ``kresjac`` (their Jacobian: the streaming mode's Gauss-Newton model),
@@ -207,9 +207,10 @@ def _knot_expressions(k: Knot, parts) -> tuple:
 
 
 def _functions(k: Knot, g_rows, slices, costs, prow, x0) -> list[ca.Function]:
-    """The knot's functions (:class:`Formulation`); the constraint Jacobian and the
-    Lagrangian's Hessian in pieces of rows (:func:`.codegen.split_rows`: ``kjac0, …`` stacked,
-    ``kh0, …`` summed; ``kh0`` holds the cost's Hessian)."""
+    """The knot's functions (:class:`Formulation`); the Lagrangian's Hessian in pieces of
+    rows (:func:`.codegen.split_rows`: ``kh0, …``, summed; ``kh0`` holds the cost's). Not the
+    Jacobian: its pieces, stacked, ran 1.5–1.9× slower (Talos) and it compiles in a sixth of
+    the Hessian's time (docs/design.md §6)."""
     gk = ca.vertcat(*g_rows)
     res = ca.vertcat(*[(k.weight(c.weight) if c.weight else 1) * c.residual(k) for c in costs])
     fk = ca.sumsqr(res) + k.P("elastic")[0] * (ca.sum1(k.s_plus) + ca.sum1(k.s_minus))
@@ -228,9 +229,7 @@ def _functions(k: Knot, g_rows, slices, costs, prow, x0) -> list[ca.Function]:
         return [ca.triu(ca.hessian(lag, x)[0])]
 
     cuts = tuple(s.start for s in slices)  # where one part's rows end and the next's begin
-    return [ca.Function("kg", [x, p], [gk]),
-            *codegen.split_rows("kjac", ng, weight, lambda a, b: [ca.jacobian(gk[a:b], x)],
-                                [x, p], cuts),
+    return [ca.Function("kg", [x, p], [gk]), ca.Function("kjac", [x, p], [jac]),
             ca.Function("kf", [x, p], [fk]), ca.Function("kgrad", [x, p], [ca.gradient(fk, x)]),
             *codegen.split_rows("kh", ng + 1, np.r_[len(costs) + 1, weight], hess,
                                 [x, p, sigma, lam], (1, *(c + 1 for c in cuts))),
@@ -365,7 +364,7 @@ def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled
     P = ca.MX.sym("P", form.knot.par.size, T)
     z, p = ca.vec(X), ca.vec(P)
     g_list = [ca.vec(f["kg"].map(T)(X, P))]
-    j_list = [_blockdiag(ca.vertcat(*[j.map(T)(X, P) for j in codegen.pieces(f, "kjac")]), nx)]
+    j_list = [_blockdiag(f["kjac"].map(T)(X, P), nx)]
     ng = ngk * T + ns * (T - 1) + form.nseam
     S = _select(keep, ng)
     lam_f, lam_s = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(keep))
