@@ -146,7 +146,7 @@ def split_rows(name: str, n: int, weight: np.ndarray,
 
 def pieces(fun: dict[str, ca.Function], name: str) -> list[ca.Function]:
     """The pieces ``name0, name1, …`` of :func:`split_rows` in ``fun``."""
-    out = []
+    out: list[ca.Function] = []
     while f"{name}{len(out)}" in fun:
         out.append(fun[f"{name}{len(out)}"])
     return out
