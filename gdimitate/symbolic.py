@@ -439,6 +439,31 @@ class SymbolicModel:
         share the forward pass with every other expression of this model)."""
         return self._frame_placement(name)[1]
 
+    def root_placement(self, name: str) -> Placement:
+        """``(R (3, 3), p (3,))`` of frame ``name`` in the root joint's frame (the base's, for
+        a floating or planar base; the world's where several joints hang from the universe):
+        SX expressions in the joint coordinates below the root only, so that a quantity the
+        base's motion leaves unchanged (a distance between two bodies) does not depend,
+        structurally, on the base's ``q``."""
+        fr = self.model.frames[self.frame_id(name)]
+        pl = fr.placement
+        return _compose(self._in_root(int(fr.parentJoint)),
+                        (ca.SX(pl.rotation), ca.SX(pl.translation)))
+
+    def _in_root(self, jid: int) -> Placement:
+        memo = self.__dict__.setdefault("_in_root_memo", {})
+        if jid not in memo:
+            model = self.model
+            root = 1 if [int(p) for p in model.parents[1:]].count(0) == 1 else 0
+            if jid == root:
+                memo[jid] = (ca.SX.eye(3), ca.SX.zeros(3))
+            elif jid == 0:  # the world, seen from the root
+                r, p = self._omi[root]
+                memo[jid] = (r.T, -ca.mtimes(r.T, p))
+            else:
+                memo[jid] = _compose(self._in_root(int(model.parents[jid])), self._limi[jid])
+        return memo[jid]
+
     def rnea_contact_expr(self, frames: Sequence[str], wrenches: Sequence[ca.SX]) -> ca.SX:
         """The expression of :meth:`rnea_contact` in :attr:`q`, :attr:`v`, :attr:`a` and the
         given world-aligned ``(6,)`` wrench expressions (shares the forward pass)."""

@@ -203,39 +203,95 @@ def test_sphere_covers_enclose_the_hulls(g1):
 
 
 def test_self_collision_rows_match_pinocchio():
-    """The part's rows at random configurations: sphere-centre distances over the leg length
-    from Pinocchio's frame placements (to 1e-10), their Jacobian against central differences;
-    bounds (r_a + r_b + gap) / leg length, no gap above the 1 cm margin; labels per pair."""
+    """The part's rows at random configurations, one per pair of frames: the soft minimum
+    (re-derived here in NumPy) of its sphere pairs' clearances (|c_a − c_b| − r_a − r_b − gap)
+    / leg length from Pinocchio's world frame placements (to 1e-10), never above the smallest
+    clearance and at most log(n) / β below it; their Jacobian against central differences,
+    with no column on the base's q (a distance between two bodies does not see the base);
+    bounds 0, no gap above the 1 cm margin; labels per pair of frames."""
     import casadi as ca
     from test_retarget_parts import _fd_check, knot_of, random_point
 
     from gdimitate.retarget.parts import Spec
-    from gdimitate.retarget.parts.self_collision import MARGIN, SelfCollision, sphere_pairs
+    from gdimitate.retarget.parts.self_collision import (
+        MARGIN,
+        SHARPNESS,
+        SelfCollision,
+        sphere_pairs,
+    )
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         robot = gd.Robot.from_library("romeo")  # the fewest pairs: a quick symbolic model
     pairs = sphere_pairs(robot)
     assert pairs and all(gap <= MARGIN for *_, gap in pairs)
-    part = SelfCollision(pairs[:6])
+    frames = list(dict.fromkeys((fa, fb) for fa, _, _, fb, *_ in pairs))[:3]
+    part = SelfCollision(tuple(pp for pp in pairs if (pp[0], pp[3]) in frames))
+    sizes = [len(ix) for *_, ix in part.groups()]
+    assert len(sizes) == 3 and max(sizes) > 1  # one soft minimum over several sphere pairs
     k, f = knot_of(robot, part)
-    x, p, s = random_point(robot, k)
-    d = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, d, s["q"])
     L = robot.legs["left"].length
-    ref = [np.linalg.norm(d.oMf[robot.model.getFrameId(fa)].act(np.array(oa))
-                          - d.oMf[robot.model.getFrameId(fb)].act(np.array(ob))) / L
-           for fa, oa, _, fb, ob, _, _ in part.pairs]
-    np.testing.assert_allclose(np.array(f(x, p)).ravel(), ref, atol=1e-10)
+    for _ in range(3):
+        x, p, s = random_point(robot, k)
+        d = robot.model.createData()
+        pin.framesForwardKinematics(robot.model, d, s["q"])
+        row = np.array(f(x, p)).ravel()
+        for r, (fa, fb, ix) in zip(row, part.groups()):
+            c = np.array([(np.linalg.norm(d.oMf[robot.model.getFrameId(fa)].act(np.array(oa))
+                                          - d.oMf[robot.model.getFrameId(fb)].act(np.array(ob)))
+                           - ra - rb - gap) / L
+                          for _, oa, ra, _, ob, rb, gap in (part.pairs[i] for i in ix)])
+            ref = c.min() - np.log(np.sum(np.exp(-SHARPNESS * (c - c.min())))) / SHARPNESS
+            assert r == pytest.approx(ref, abs=1e-10)
+            assert c.min() - np.log(len(c)) / SHARPNESS - 1e-12 <= r <= c.min() + 1e-12
+    _fd_check(f, x, p)
     xs = ca.SX.sym("x", x.size)
     assert f.sx_in(0).shape == xs.shape
-    _fd_check(f, x, p)
+    base = np.arange(x.size)[k.var["q"]][:7]
+    jac = ca.jacobian(f(xs, f.sx_in(1)), xs).sparsity()
+    assert not set(jac.get_col()) & set(base.tolist())
     spec = Spec(T=3, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
                 cone=False, clearance=0.0, leg_length=L, n_base=6, n_act=0)
     lo, hi = part.bounds(spec)
-    np.testing.assert_allclose(lo[0], [(ra + rb + gap) / L
-                                       for _, _, ra, _, _, rb, gap in part.pairs])
-    assert np.all(np.isinf(hi)) and len(part.labels(k)) == 6
+    np.testing.assert_array_equal(lo, 0.0)
+    assert np.all(np.isinf(hi))
+    assert part.labels(k) == [f"self-collision: {fa}/{fb}" for fa, fb in frames]
+
+
+def test_rest_pose_meets_the_self_collision_rows(g1):
+    """G1's adaptor rest pose (where its sphere pairs are taken) meets its self-collision
+    part's rows: several sphere pairs of one frame pair keep their gap there (clearance 0), so
+    their soft minimum is below 0 at rest — the row's floor is that value, at most log(n) / β
+    below 0, and the part's CasADi rows at the rest pose equal the floors there (to 1e-10)."""
+    from test_retarget_parts import knot_of, random_point
+
+    from gdimitate.retarget.parts import Spec
+    from gdimitate.retarget.parts.self_collision import (
+        SHARPNESS,
+        SelfCollision,
+        rest_floors,
+        rest_pose,
+        sphere_pairs,
+    )
+
+    rest = rest_pose(g1)
+    pairs = sphere_pairs(g1, q=rest)
+    floors = rest_floors(g1, pairs, rest)
+    part = SelfCollision(pairs, (), floors)
+    n = [len(ix) for *_, ix in part.groups()]
+    assert len(floors) == len(n) and min(floors) < -1e-3  # not vacuous: some row needs it
+    assert all(-np.log(m) / SHARPNESS - 1e-12 <= f <= 0.0 for f, m in zip(floors, n))
+    k, f = knot_of(g1, part)
+    x, p, _ = random_point(g1, k)
+    x[k.var["q"]] = rest
+    rows = np.array(f(x, p)).ravel()
+    L = g1.legs["left"].length
+    spec = Spec(T=1, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
+                cone=False, clearance=0.0, leg_length=L, n_base=6, n_act=0)
+    lo = part.bounds(spec)[0][0]
+    assert np.all(rows >= lo - 1e-10)
+    neg = np.array(floors) < 0
+    np.testing.assert_allclose(rows[neg], lo[neg], atol=1e-10)
 
 
 def test_unmapped_joints_are_held_by_the_parts(g1):

@@ -194,6 +194,34 @@ def test_frames_match_pinocchio(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", ALL_ROBOTS)
+def test_root_placements_match_pinocchio(name: str) -> None:
+    """``root_placement``: frames in the root joint's frame, Pinocchio's ``oMi[1]⁻¹ · oMf``
+    (the world's placement where several joints hang from the universe), and free of the
+    root's own coordinates."""
+    model, sm = robot(name)
+    data = model.createData()
+    rng = np.random.default_rng(2)
+    frames = _sample_frames(name, sm)
+    one_root = [int(p) for p in model.parents[1:]].count(0) == 1
+    for _ in range(N_STATES):
+        q, _, _ = random_state(model, rng)
+        pin.framesForwardKinematics(model, data, q)
+        root = data.oMi[1] if one_root else pin.SE3.Identity()
+        for fn in frames:
+            want = root.actInv(data.oMf[model.getFrameId(fn)])
+            R, p = sm.root_placement(fn)
+            got = ca.Function("f", [sm.q], [R, p])(q)
+            np.testing.assert_allclose(_np(got[0]), want.rotation, rtol=0, atol=TOL)
+            np.testing.assert_allclose(_np(got[1]).ravel(), want.translation, rtol=0, atol=TOL)
+    if one_root:
+        jm = model.joints[1]
+        below = [fn for fn in frames if model.frames[model.getFrameId(fn)].parentJoint > 1]
+        R, p = sm.root_placement(below[-1])
+        used = set(ca.jacobian(ca.vertcat(ca.vec(R), p), sm.q).sparsity().get_col())
+        assert not used & set(range(jm.idx_q, jm.idx_q + jm.nq))
+
+
+@pytest.mark.parametrize("name", ALL_ROBOTS)
 def test_com_and_centroidal_match_pinocchio(name: str) -> None:
     model, sm = robot(name)
     data = model.createData()

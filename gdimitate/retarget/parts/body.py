@@ -7,7 +7,7 @@ other) and its limbs kept apart (:class:`.SelfCollision`, robots with collision 
 from __future__ import annotations
 
 from .posture_range import PostureRange
-from .self_collision import SelfCollision, leg_separation, rest_pose, sphere_pairs
+from .self_collision import SelfCollision, leg_separation, rest_floors, rest_pose, sphere_pairs
 
 __all__ = ["body_parts"]
 
@@ -26,5 +26,5 @@ def body_parts(imitator, act_names) -> tuple:
         out.append(PostureRange(idx, tuple(float(rest[i]) for i in idx), HOLD_RANGE))
     pairs, legs = sphere_pairs(imitator, q=rest), leg_separation(imitator)
     if pairs or legs:
-        out.append(SelfCollision(pairs, legs))
+        out.append(SelfCollision(pairs, legs, rest_floors(imitator, pairs, rest)))
     return tuple(out)
