@@ -263,3 +263,36 @@ def test_g1_holds_its_arms_under_an_armless_demonstrator():
           f"{r.audit.self_collision.distance * 1e3:.1f} mm, feasible {r.audit.feasible}")
     assert moved <= HOLD_RANGE + 1e-6
     assert r.audit.check("self_collision").passed and r.audit.feasible, r.audit.binding
+
+
+def _turned(robot, dR: np.ndarray) -> np.ndarray:
+    """``robot``'s neutral pose with its free-flyer base turned by the world rotation ``dR``."""
+    q = robot.neutral.copy()
+    R = pin.Quaternion(q[3:7]).toRotationMatrix()
+    q[3:7] = pin.Quaternion(dR @ R).coeffs()
+    return q
+
+
+@pytest.mark.parametrize("name", ["icub", "g1"])
+@pytest.mark.parametrize("demo", ["opensim", "bvh"])
+def test_segment_targets_turn_the_imitators_own_frames(robot, armed, cmu, name, demo):
+    """The adaptor's segment targets (pelvis, torso; :func:`segment_rotations`) are the
+    demonstrator's rotation since its neutral pose applied to the imitator's frames, whatever
+    axes each file gives them: iCub's ``root_link`` looks back (π about z from the OpenSim
+    pelvis), the CMU skeleton's ``Spine`` has its axes permuted (120° from G1's
+    ``torso_link``). Reference: Pinocchio's placements of the imitator's segment frames at its
+    neutral pose with its base turned by the same world rotation as the demonstrator's.
+    Copying the world rotation itself (the adaptor before) misses by up to 180°."""
+    from gdimitate.kinematics import frame_placements
+    from gdimitate.retarget.targets import segment_rotations
+
+    d, i = (armed if demo == "opensim" else cmu), robot(name)
+    bmap = body_map(d, i)
+    assert len(bmap.segments) == 2
+    dR = pin.rpy.rpyToMatrix(0.1, -0.2, 0.5)
+    qd = _turned(d, dR)
+    rot = {f: p.rotation for f, p in frame_placements(d, qd[None], list(bmap.segments)).items()}
+    got = segment_rotations(d, i, bmap, rot)
+    ref = frame_placements(i, _turned(i, dR)[None], list(bmap.segments.values()))
+    for n, f in enumerate(bmap.segments.values()):
+        np.testing.assert_allclose(got[0, n], ref[f].rotation[0], atol=1e-12)

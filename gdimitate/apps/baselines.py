@@ -48,6 +48,7 @@ from ..contact import SoleContact
 from ..errors import InvalidInputError, LegMatchError, SolverError
 from ..kinematics import anchored_base_offsets, frame_placements
 from ..motion import Motion, differentiate
+from ..retarget.targets import relative_rotations
 from ..robot import SIDES, Robot
 
 __all__ = ["BaselinePlan", "IKOptions", "joint_copy", "diff_ik", "kinematic_plan",
@@ -231,12 +232,6 @@ def _imitator_motion(imitator: Robot, demo: Motion, q: np.ndarray) -> Motion:
                   base_nq=7, joint_nq=tuple(m.joints[j].nq for j in range(1, m.njoints)))
 
 
-def _relative_rotations(R: np.ndarray, R0: np.ndarray, R0_target: np.ndarray) -> np.ndarray:
-    """``R(t) · R0ᵀ · R0_target``: the rotation since the neutral pose, applied to the
-    target's neutral orientation. ``R`` ``(T, 3, 3)``."""
-    return np.einsum("tij,kj,kl->til", R, R0, R0_target)
-
-
 # ---------------------------------------------------------------------------- (a) joint copy
 def joint_copy(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None
                ) -> BaselinePlan:
@@ -255,7 +250,7 @@ def joint_copy(demo: Motion, demonstrator: Robot, imitator: Robot, body_map=None
     Rd = np.array([pin.Quaternion(x).normalized().matrix() for x in demo.q[:, 3:7]])
     Rd0 = pin.Quaternion(demonstrator.neutral[3:7]).normalized().matrix()
     Ri0 = pin.Quaternion(imitator.neutral[3:7]).normalized().matrix()
-    R = _relative_rotations(Rd, Rd0, Ri0)
+    R = relative_rotations(Rd, Rd0, Ri0)
     q[:, 3:7] = np.array([pin.Quaternion(r).coeffs() for r in R])
     q = anchor_base(imitator, q, demo.contact)
     seconds = time.perf_counter() - t0
@@ -307,7 +302,7 @@ def scaled_keypoints(demo: Motion, demonstrator: Robot, imitator: Robot, body_ma
     targets = {}
     for role, (dn, iname) in pairs.items():
         H = np.tile(np.eye(4), (demo.T, 1, 1))
-        H[:, :3, :3] = _relative_rotations(P[dn][:, :3, :3], P0[dn][0, :3, :3],
+        H[:, :3, :3] = relative_rotations(P[dn][:, :3, :3], P0[dn][0, :3, :3],
                                            I0[iname][0, :3, :3])
         H[:, :3, 3] = origin + ratio * (P[dn][:, :3, 3] - origin)
         targets[role] = H

@@ -16,7 +16,8 @@ from ..motion import Motion
 from ..robot import SIDES, Robot
 from .bodymap import BodyMap
 
-__all__ = ["Targets", "resample", "schedule", "demonstration_targets", "direction_frame"]
+__all__ = ["Targets", "resample", "schedule", "demonstration_targets", "direction_frame",
+           "relative_rotations", "segment_rotations"]
 
 
 @dataclass(frozen=True)
@@ -27,8 +28,10 @@ class Targets:
     ``placement`` ``{side: (T, 2)}``, ``shank`` and ``thigh`` ``{side: (T, 3)}`` unit vectors
     (the demonstrator's scaled keypoints), ``foot`` ``{side: (T, 3, 3)}`` its sole frames'
     world rotations;
-    ``segments`` ``(T, n_seg, 3, 3)`` world rotations; ``joints`` ``(T, n_act)`` joint targets
-    [rad] (unmapped joints: the rest pose, :func:`.parts.self_collision.rest_pose`) and
+    ``segments`` ``(T, n_seg, 3, 3)`` the imitator's segment frames' world rotations
+    (:func:`segment_rotations`: the demonstrator's since its neutral pose); ``joints``
+    ``(T, n_act)`` joint targets [rad] (unmapped joints: the rest pose,
+    :func:`.parts.self_collision.rest_pose`) and
     ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
     push on the ground (NaN where there is none; projected onto the x–z plane for planar
     imitators, which can only keep its sagittal direction); ``demo``: the resampled
@@ -123,6 +126,32 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
+def relative_rotations(R: np.ndarray, R0: np.ndarray, R0_target: np.ndarray) -> np.ndarray:
+    """``R(t) · R0ᵀ · R0_target`` ``(T, 3, 3)``: the rotations ``R`` ``(T, 3, 3)`` since
+    ``R0`` ``(3, 3)`` (a frame's world rotation at its robot's neutral pose), applied to
+    another frame's neutral orientation ``R0_target`` ``(3, 3)``."""
+    return np.einsum("tij,kj,kl->til", R, R0, R0_target)
+
+
+def segment_rotations(demonstrator: Robot, imitator: Robot, bmap: BodyMap,
+                      rot: dict[str, np.ndarray]) -> np.ndarray:
+    """``(T, n_seg, 3, 3)``: the world rotation each body-map segment of the imitator
+    (``bmap.segments``, in order) should take — its demonstrator frame's ``rot[frame]``
+    ``(T, 3, 3)`` since the demonstrator's neutral pose, applied to the imitator frame's
+    orientation at its neutral pose (:func:`relative_rotations`; both neutral poses stand
+    facing +x). A body frame's axes are its file's convention, not a direction of the body:
+    iCub's ``root_link`` looks back (π about z from the OpenSim pelvis at the neutral poses),
+    its ``chest`` is 90° off; a BVH skeleton's ``Spine`` has its axes permuted (CMU's: 120°
+    from every robot's torso). Copying the world rotation itself asked iCub's pelvis to turn
+    about and CMU → G1's torso to lie down."""
+    if not bmap.segments:
+        return np.zeros((len(next(iter(rot.values()))), 0, 3, 3))
+    d0 = frame_placements(demonstrator, demonstrator.neutral[None], list(bmap.segments))
+    i0 = frame_placements(imitator, imitator.neutral[None], list(bmap.segments.values()))
+    return np.stack([relative_rotations(rot[d], d0[d].rotation[0], i0[i].rotation[0])
+                     for d, i in bmap.segments.items()], axis=1)
+
+
 def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bmap: BodyMap,
                           act_names: tuple[str, ...], force: str,
                           forces: ContactForces | None, rule: str) -> Targets:
@@ -150,8 +179,7 @@ def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bm
         shank[s] = _unit(ankle - knee)
         thigh[s] = _unit(knee - hip)
     foot = {s: rot[f] for s, f in zip(SIDES, soles)}
-    segments = np.stack([rot[f] for f in seg_frames], axis=1) if seg_frames else \
-        np.zeros((demo.T, 0, 3, 3))
+    segments = segment_rotations(demonstrator, imitator, bmap, rot)
     from .parts.self_collision import rest_pose  # unmapped joints: the limbs clear
 
     joints = np.tile(rest_pose(imitator)[[imitator.idx_q(j) for j in act_names]], (demo.T, 1))
