@@ -277,3 +277,23 @@ def test_layout_slacks_and_labels_follow_the_list(robot):
     assert sizes["full"][0] - sizes["fewer"][0] == 4  # planar swing: 2 corners per foot
     assert "swing clearance: left" in sizes["full"][1]
     assert "swing clearance: left" not in sizes["fewer"][1]
+
+
+@pytest.mark.parametrize("mu", [0.3, 0.7, 1.2])
+def test_cone_pyramid_lies_inside_coulombs_circle(mu):
+    """The trajectory adaptor's 3-D cone rows take the friction coefficient of a square
+    pyramid inside Coulomb's circle ``‖f_t‖ ≤ μ f_z`` (what the audit checks): every
+    tangential direction just outside the circle violates a row, and the pyramid's corner
+    touches the circle (closed form: ratio √2·μ_p = μ). With μ itself the corner reached
+    √2·μ (CMU → G1 planned 0.99 against μ = 0.7). A planar model's one row is the circle."""
+    from gdimitate.retarget.solve import _pyramid_mu
+
+    A = wrench_cone(1.0, 1.0, _pyramid_mu(mu, planar=False))[:4]  # the friction rows
+    th = np.linspace(0, 2 * np.pi, 721)
+    out = np.column_stack([mu * (1 + 1e-9) * np.cos(th), mu * (1 + 1e-9) * np.sin(th),
+                           np.ones_like(th), np.zeros((th.size, 3))])
+    assert np.all(np.max(out @ A.T, axis=1) > 0)
+    corner = np.array([mu / np.sqrt(2), mu / np.sqrt(2), 1.0, 0, 0, 0])
+    assert np.max(A @ corner) == pytest.approx(0.0, abs=1e-12)
+    assert np.hypot(*corner[:2]) == pytest.approx(mu, rel=1e-12)
+    assert _pyramid_mu(mu, planar=True) == mu

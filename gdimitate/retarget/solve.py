@@ -144,9 +144,9 @@ def _parameters(form: pb.Formulation, ctx: Context) -> np.ndarray:
         P[lay[f"d_{s}"]] = np.nan_to_num(d).T
         P[lay[f"e1_{s}"]] = e1.T
         P[lay[f"e2_{s}"]] = e2.T
-        X, Y, mu = cs[s].half_length, cs[s].half_width, cs[s].mu
-        m = copts.cop_margin
-        P[lay[f"sole_{s}"]] = np.array([X, Y, mu, X - m, Y - m])[:, None]
+        X, Y, m = cs[s].half_length, cs[s].half_width, copts.cop_margin
+        P[lay[f"sole_{s}"]] = np.array([X, Y, _pyramid_mu(cs[s].mu, k.planar), X - m,
+                                        Y - m])[:, None]
     if k.flags.segments:
         P[lay["torso"]] = np.concatenate([tg.segments[:, i].transpose(0, 2, 1).reshape(T, 9)
                                           for i in range(k.flags.segments)], axis=1).T
@@ -165,6 +165,15 @@ def _parameters(form: pb.Formulation, ctx: Context) -> np.ndarray:
             for name, val in part.values(ctx).items():
                 P[lay[name]] = np.asarray(val, float).reshape(T, -1).T
     return P
+
+
+def _pyramid_mu(mu: float, planar: bool) -> float:
+    """The friction coefficient of the cone's square pyramid (:mod:`.parts.cone`) that keeps
+    it inside Coulomb's circle ``‖f_t‖ ≤ μ f_z``, which the audit checks: μ/√2 in 3-D (with μ
+    itself the pyramid's corners admit √2·μ — CMU → G1 planned ratios of 0.99 against μ =
+    0.7 where a foot was barely loaded, and the audit failed it); μ for a planar model (its
+    one row, along x, is the circle)."""
+    return mu if planar else mu / math.sqrt(2)
 
 
 def _spec(form: pb.Formulation, tg: Targets, imitator: Robot, copts: Contact) -> pb.Spec:
