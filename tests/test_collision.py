@@ -297,7 +297,8 @@ def test_rest_pose_meets_the_self_collision_rows(g1):
 def test_unmapped_joints_are_held_by_the_parts(g1):
     """``body_parts``: a posture range over every actuated joint whose ``hold`` parameter is
     1 exactly for the joints the body map leaves out — for subject01 (no arms) on G1 the arms
-    and wrists, not the legs — rows ``hold·(q − neutral)`` within ±HOLD_RANGE; and a
+    and wrists, not the legs — rows ``hold·(q − rest pose)`` within ±HOLD_RANGE (the rest
+    pose: the neutral one with G1's shoulders rolled out of its torso's margin); and a
     self-collision part."""
     from types import SimpleNamespace
 
@@ -305,7 +306,7 @@ def test_unmapped_joints_are_held_by_the_parts(g1):
     from gdimitate.retarget.parts import Spec
     from gdimitate.retarget.parts.body import body_parts
     from gdimitate.retarget.parts.posture_range import PostureRange
-    from gdimitate.retarget.parts.self_collision import SelfCollision
+    from gdimitate.retarget.parts.self_collision import SelfCollision, rest_pose
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -327,7 +328,7 @@ def test_unmapped_joints_are_held_by_the_parts(g1):
     lo, hi = hold.bounds(spec)
     np.testing.assert_allclose(hi, HOLD_RANGE)
     np.testing.assert_allclose(lo, -HOLD_RANGE)
-    np.testing.assert_allclose(hold.held, g1.neutral[list(hold.q_index)])
+    np.testing.assert_allclose(hold.held, rest_pose(g1)[list(hold.q_index)])
 
 
 def test_sphere_rows_leave_out_pairs_within_the_margin_at_neutral():
@@ -377,7 +378,9 @@ def test_rest_pose_clears_the_limbs_the_neutral_pose_presses_together(g1):
     such active pair is at least REST_CLEAR apart, no pair the audit checks is closer than
     min(its neutral distance, the margin) (coal's hull distances, recomputed here), only arm
     and head joints moved, inside their limits; those pairs now get sphere rows and none is
-    left out. G1 has no such pair: its rest pose is its neutral pose. (Until its Y-up Collada
+    left out. G1's upper arms hang 9.2 mm from its torso at its neutral pose (pairs that get
+    rows since :data:`PROXIMAL_ARM`): its rest pose rolls its shoulders out, by less than
+    0.1 rad, until they are REST_CLEAR apart, and moves nothing else. (Until its Y-up Collada
     meshes were turned as its URDF means, iCub was this test's robot: its forearms then sat
     2.1 mm from a chest mesh lying in front of its torso.)"""
     from gdimitate.retarget.parts.self_collision import (
@@ -388,7 +391,17 @@ def test_rest_pose_clears_the_limbs_the_neutral_pose_presses_together(g1):
         sphere_pairs,
     )
 
-    np.testing.assert_array_equal(rest_pose(g1), g1.neutral)
+    qg = rest_pose(g1)
+    moved = np.flatnonzero(qg != g1.neutral)
+    assert {g1.model.names[j] for j in range(1, g1.model.njoints)
+            if g1.model.joints[j].idx_q in moved} <= {
+        f"{s}_shoulder_{r}_joint" for s in ("left", "right") for r in ("pitch", "roll", "yaw")}
+    assert 0 < np.max(np.abs(qg - g1.neutral)) < 0.1
+    scg = self_collision(g1)
+    for a, b in (("torso_link_0", "left_shoulder_yaw_link_0"),
+                 ("torso_link_0", "right_shoulder_yaw_link_0")):
+        i = scg.pairs.index((a, b)) if (a, b) in scg.pairs else scg.pairs.index((b, a))
+        assert scg.distances(g1.neutral)[i] < MARGIN <= REST_CLEAR - 1e-9 <= scg.distances(qg)[i]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         talos = gd.Robot.from_library("talos")
@@ -440,3 +453,61 @@ def test_posture_range_is_a_box_on_the_held_joints(g1):
     assert np.all(np.isinf(lo[:, [0, 2]])) and np.all(np.isinf(hi[:, [0, 2]]))
     np.testing.assert_allclose(lo[:, 1], -0.2 - HOLD_RANGE)
     np.testing.assert_allclose(hi[:, 1], -0.2 + HOLD_RANGE)
+
+
+def test_upper_arm_rows_keep_it_off_the_trunk(g1):
+    """The upper arm (an arm's third link: :data:`PROXIMAL_ARM` = 2 shoulder links are left to
+    the audit) against the trunk gets a self-collision row, and the row stops the arm before
+    its hull touches the torso's: G1's right shoulder roll turned from the rest pose towards
+    the torso until coal's hull distance of ``torso_link``/``right_shoulder_yaw_link`` is 0
+    (bisection, 1e-5 m) puts that pair's row below its floor, while the rest pose meets it
+    (CMU → G1 put this arm 2.7 mm into the torso while the pair had no row)."""
+    from test_retarget_parts import knot_of, random_point
+
+    from gdimitate.retarget.parts import Spec
+    from gdimitate.retarget.parts.self_collision import (
+        SelfCollision,
+        rest_floors,
+        rest_pose,
+        sphere_pairs,
+    )
+
+    rest = rest_pose(g1)
+    pairs = sphere_pairs(g1, q=rest)
+    part = SelfCollision(pairs, (), rest_floors(g1, pairs, rest))
+    cm, m = g1.collision_model, g1.model
+    joint = {n: m.names[int(cm.geometryObjects[cm.getGeometryId(n)].parentJoint)]
+             for n in ("torso_link_0", "right_shoulder_yaw_link_0")}
+    row = [i for i, (fa, fb, _) in enumerate(part.groups())
+           if {fa, fb} == set(joint.values())]
+    assert len(row) == 1, "the upper arm and the torso have no row"
+    sc = self_collision(g1)
+    pair = sc.pairs.index(("torso_link_0", "right_shoulder_yaw_link_0")) \
+        if ("torso_link_0", "right_shoulder_yaw_link_0") in sc.pairs \
+        else sc.pairs.index(("right_shoulder_yaw_link_0", "torso_link_0"))
+    i = g1.idx_q("right_shoulder_roll_joint")
+
+    def dist(a: float) -> float:
+        q = rest.copy()
+        q[i] += a
+        return float(sc.distances(q)[pair])
+
+    step = min((0.05, -0.05), key=dist)  # towards the torso
+    lo, hi = 0.0, step
+    while dist(hi) > 0:
+        lo, hi = hi, hi + step
+        assert abs(hi) < 1.0
+    while dist(lo) - dist(hi) > 1e-5:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if dist(mid) > 0 else (lo, mid)
+    k, f = knot_of(g1, part)
+    x, p, _ = random_point(g1, k)
+    L = g1.legs["left"].length
+    spec = Spec(T=1, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
+                cone=False, clearance=0.0, leg_length=L, n_base=6, n_act=0)
+    floor = part.bounds(spec)[0][0][row[0]]
+    for a, met in ((0.0, True), (hi, False)):
+        q = rest.copy()
+        q[i] += a
+        x[k.var["q"]] = q
+        assert (float(np.array(f(x, p)).ravel()[row[0]]) >= floor - 1e-10) == met

@@ -192,7 +192,7 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
     with arms swinging against the legs, ±0.23 rad), one stride adapted to G1 at 10 knots/s.
     Each G1 shoulder pitch correlates with the demonstrator's arm flexion (|r| ≥ 0.8) over at
     least half its range (mapped and clipped to G1's limits); no unmapped joint (wrists)
-    leaves its neutral pose by more than HOLD_RANGE; the audit's self-collision check
+    leaves its rest pose by more than HOLD_RANGE; the audit's self-collision check
     passes. Measured: r = −0.882 / −0.980 (left/right; the map's scale is −1), range ratio
     0.90 / 0.83, wrists within 0.100 rad, 13.2 mm clear (20 knots/s: 0.89 / 0.85, 13.5 mm)."""
     import sys
@@ -202,6 +202,7 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
     import gdimitate as gd
     from gdimitate.opensim import read_coordinates, read_grf
     from gdimitate.retarget.bodymap import HOLD_RANGE, following
+    from gdimitate.retarget.parts.self_collision import rest_pose
 
     sys.path.insert(0, str(Path(__file__).parent / "opensim_ref"))
     from with_arms import arm_swing
@@ -226,8 +227,8 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
     mapped = {v[0] for v in bm.joints.values()}
     held = [j for j in g1.joint_names if j not in mapped and g1.model.joints[
         g1.model.getJointId(j)].nq == 1]
-    moved = max(np.max(np.abs(r.motion.q[:, g1.idx_q(j)] - g1.neutral[g1.idx_q(j)]))
-                for j in held)
+    rest = rest_pose(g1)
+    moved = max(np.max(np.abs(r.motion.q[:, g1.idx_q(j)] - rest[g1.idx_q(j)])) for j in held)
     print(f"unmapped joints ({len(held)}): largest excursion {moved:.3f} rad")
     assert moved <= HOLD_RANGE + 1e-6
     sc = r.audit.check("self_collision")
@@ -239,12 +240,14 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
 def test_g1_holds_its_arms_under_an_armless_demonstrator():
     """Issue 20, done when, on the shipped subject01 walk (gait2354: no arms): one stride on
     G1 at 10 knots/s — G1's 14 arm and wrist joints (unmapped) stay within HOLD_RANGE of their
-    neutral pose (a weak posture cost let them sweep 1.9–2.5 rad), and the audit, its
-    self-collision check included, finds the plan feasible."""
+    rest pose (the neutral one with the shoulders rolled out of the torso's margin; a weak
+    posture cost let them sweep 1.9–2.5 rad), and the audit, its self-collision check
+    included, finds the plan feasible."""
     import warnings
 
     import gdimitate as gd
     from gdimitate.retarget.bodymap import HOLD_RANGE
+    from gdimitate.retarget.parts.self_collision import rest_pose
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -257,8 +260,8 @@ def test_g1_holds_its_arms_under_an_armless_demonstrator():
     held = [j for j in g1.joint_names if j not in mapped
             and g1.model.joints[g1.model.getJointId(j)].nq == 1]
     assert len(held) == 14
-    moved = max(np.max(np.abs(r.motion.q[:, g1.idx_q(j)] - g1.neutral[g1.idx_q(j)]))
-                for j in held)
+    rest = rest_pose(g1)
+    moved = max(np.max(np.abs(r.motion.q[:, g1.idx_q(j)] - rest[g1.idx_q(j)])) for j in held)
     print(f"\nsubject01 → G1: unmapped excursion {moved:.3f} rad, self-collision "
           f"{r.audit.self_collision.distance * 1e3:.1f} mm, feasible {r.audit.feasible}")
     assert moved <= HOLD_RANGE + 1e-6

@@ -2,21 +2,21 @@
 collision geometries (limb–limb and limb–trunk pairs of :mod:`gdimitate.selfcollision`) kept
 at least ``margin`` apart at every knot.
 
-Each collision geometry is covered by up to :data:`MAX_SPHERES` spheres, one per cluster of
-its vertices (a sphere primitive is itself): every vertex of its convex hull (a box's
-corners, a cylinder's rims) lies inside one of them. Only geometry pairs that come within
-:data:`ACTIVE` of each other at the neutral pose (arms against the trunk and the thighs) get
-rows, unless they meet where the limbs meet the trunk (:data:`PROXIMAL`), and of their spheres
-those within :data:`ACTIVE_SPHERES`. The audit's rule applies (:mod:`gdimitate.selfcollision`):
-geometry pairs already closer than the margin at the neutral pose are left out and listed
-(:func:`left_out_sphere_pairs`); sphere pairs closer than the margin at the neutral pose (the
-spheres' slack over the hulls) keep at least their neutral gap. The two legs get no
-sphere pairs: their covers overlap by centimetres where the hulls pass each other with
-millimetres to spare (Talos's warm start: rows 62 mm short, hulls 8.6 mm apart); one smooth
-row keeps the soles apart along the root's y axis instead (:func:`leg_separation`). Rows: one
-per pair of frames, the soft minimum of its sphere pairs' clearances (centre distance − r_a −
-r_b − gap) over the leg length, ≥ 0 (:class:`SelfCollision`). Relaxable (the least-infeasible
-solve reports an unmet pair of frames)."""
+Each collision geometry is covered by up to :data:`MAX_SPHERES` spheres, one per cluster of its
+vertices (a sphere primitive is itself): every vertex of its convex hull (a box's corners, a
+cylinder's rims) lies inside one of them. Only geometry pairs that come within :data:`ACTIVE`
+of each other at the neutral pose (arms against the trunk and the thighs) get rows, unless they
+meet where the limbs meet the trunk (:data:`PROXIMAL`, :data:`PROXIMAL_ARM`), and of their
+spheres those within :data:`ACTIVE_SPHERES`. The audit's rule applies
+(:mod:`gdimitate.selfcollision`): geometry pairs already closer than the margin at the neutral
+pose are left out and listed (:func:`left_out_sphere_pairs`); sphere pairs closer than the
+margin at the neutral pose (the spheres' slack over the hulls) keep at least their neutral gap.
+The two legs get no sphere pairs: their covers overlap by centimetres where the hulls pass each
+other with millimetres to spare (Talos's warm start: rows 62 mm short, hulls 8.6 mm apart); one
+smooth row keeps the soles apart along the root's y axis instead (:func:`leg_separation`).
+Rows: one per pair of frames, the soft minimum of its sphere pairs' clearances (centre distance
+− r_a − r_b − gap) over the leg length, ≥ 0 (:class:`SelfCollision`). Relaxable (the
+least-infeasible solve reports an unmet pair of frames)."""
 
 from __future__ import annotations
 
@@ -30,6 +30,7 @@ from .base import Constraint
 
 __all__ = ["SelfCollision", "soft_min", "rest_floors", "SHARPNESS", "sphere_pairs",
            "left_out_sphere_pairs", "leg_separation", "MARGIN", "ACTIVE", "MAX_SPHERES",
+           "PROXIMAL", "PROXIMAL_ARM",
            "rest_pose", "REST_CLEAR"]
 
 #: The adaptor's clearance between sphere covers [m] (the audit's bound is 0 between hulls).
@@ -45,12 +46,15 @@ MAX_SPHERES = 4
 #: lengths (3 mm on Talos) stricter than either alone; a pair 0.02 leg lengths farther than
 #: the closest moves it by 0.1 mm.
 SHARPNESS = 200.0
-#: Geometries on a limb's first this-many joints (hip, shoulder) are "proximal": a proximal
-#: geometry and the trunk link its limb hangs from (a thigh and the pelvis), or two proximal
-#: geometries of legs hanging from one trunk link (the two hips), get no rows — spheres are too
-#: coarse where limbs meet the trunk, and the audit checks those pairs on the hulls
-#: themselves.
+#: Geometries on a leg's first this-many joints (the hip) are "proximal": a proximal geometry
+#: and the trunk link its limb hangs from (a thigh and the pelvis), or two proximal geometries
+#: of legs hanging from one trunk link (the two hips), get no rows — spheres are too coarse
+#: where limbs meet the trunk, and the audit checks those pairs on the hulls themselves.
 PROXIMAL = 3
+#: ... on an arm's (or head's) first this-many: the shoulder's two links, which sit on the
+#: chest. The third carries the upper arm, which hangs beside the trunk and gets rows: without
+#: them G1's right upper arm went 2.7 mm into its torso on the CMU walk.
+PROXIMAL_ARM = 2
 #: :func:`rest_pose` moves the limbs until the pairs within the margin at the neutral pose
 #: are this far apart [m].
 REST_CLEAR = 1.5 * MARGIN
@@ -204,12 +208,14 @@ def _cover(g) -> list[tuple[np.ndarray, float]]:
 
 
 def _proximal(robot) -> dict[int, str | None]:
-    """``{joint id: where it meets the trunk}``: for a joint on one of a limb's first
-    :data:`PROXIMAL` joints, ``"limb:<top>@<trunk joint it hangs from>"``; for a trunk joint,
-    ``"trunk@<joint>"``; else ``None``."""
+    """``{joint id: where it meets the trunk}``: for a joint on one of a leg's first
+    :data:`PROXIMAL` joints or another limb's first :data:`PROXIMAL_ARM`,
+    ``"limb:<top>@<trunk joint it hangs from>"``; for a trunk joint, ``"trunk@<joint>"``;
+    else ``None``."""
     from ...selfcollision import TRUNK, limb_groups
 
     groups = limb_groups(robot)
+    legs = _leg_limbs(robot)
     parents = robot.model.parents
     out: dict[int, str | None] = {}
     for j, g in groups.items():
@@ -219,7 +225,7 @@ def _proximal(robot) -> dict[int, str | None]:
         n, k = 0, j
         while groups.get(parents[k]) == g:
             k, n = parents[k], n + 1
-        out[j] = f"{g}@{parents[k]}" if n < PROXIMAL else None
+        out[j] = f"{g}@{parents[k]}" if n < (PROXIMAL if g in legs else PROXIMAL_ARM) else None
     return out
 
 
