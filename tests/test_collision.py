@@ -258,37 +258,53 @@ def test_self_collision_rows_match_pinocchio():
     assert part.labels(k) == [f"self-collision: {fa}/{fb}" for fa, fb in frames]
 
 
-def test_rest_pose_meets_the_self_collision_rows(g1):
-    """G1's adaptor rest pose (where its sphere pairs are taken) meets its self-collision
-    part's rows: several sphere pairs of one frame pair keep their gap there (clearance 0), so
-    their soft minimum is below 0 at rest — the row's floor is that value, at most log(n) / β
-    below 0, and the part's CasADi rows at the rest pose equal the floors there (to 1e-10)."""
+def _rest_rows(robot):
+    """``(rest pose, self-collision part with its rest floors, rows(q) -> the part's CasADi
+    rows at the pose q, their lower bounds)`` of ``robot``'s adaptor."""
     from test_retarget_parts import knot_of, random_point
 
     from gdimitate.retarget.parts import Spec
     from gdimitate.retarget.parts.self_collision import (
-        SHARPNESS,
         SelfCollision,
         rest_floors,
         rest_pose,
         sphere_pairs,
     )
 
-    rest = rest_pose(g1)
-    pairs = sphere_pairs(g1, q=rest)
-    floors = rest_floors(g1, pairs, rest)
-    part = SelfCollision(pairs, (), floors)
+    rest = rest_pose(robot)
+    pairs = sphere_pairs(robot, q=rest)
+    part = SelfCollision(pairs, (), rest_floors(robot, pairs, rest))
+    k, f = knot_of(robot, part)
+    x, p, _ = random_point(robot, k)
+
+    def rows(q: np.ndarray) -> np.ndarray:
+        x[k.var["q"]] = q
+        return np.array(f(x, p)).ravel()
+
+    spec = Spec(T=1, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
+                cone=False, clearance=0.0, leg_length=robot.legs["left"].length, n_base=6,
+                n_act=0)
+    return rest, part, rows, part.bounds(spec)[0][0]
+
+
+def _pair_index(sc, a: str, b: str) -> int:
+    """Index of the geometry pair ``{a, b}`` in ``sc.pairs``, in either order."""
+    return sc.pairs.index((a, b)) if (a, b) in sc.pairs else sc.pairs.index((b, a))
+
+
+def test_rest_pose_meets_the_self_collision_rows(g1):
+    """G1's adaptor rest pose (where its sphere pairs are taken) meets its self-collision
+    part's rows: several sphere pairs of one frame pair keep their gap there (clearance 0), so
+    their soft minimum is below 0 at rest — the row's floor is that value, at most log(n) / β
+    below 0, and the part's CasADi rows at the rest pose equal the floors there (to 1e-10)."""
+    from gdimitate.retarget.parts.self_collision import SHARPNESS
+
+    rest, part, rows_at, lo = _rest_rows(g1)
+    floors = part.floors
     n = [len(ix) for *_, ix in part.groups()]
     assert len(floors) == len(n) and min(floors) < -1e-3  # not vacuous: some row needs it
     assert all(-np.log(m) / SHARPNESS - 1e-12 <= f <= 0.0 for f, m in zip(floors, n))
-    k, f = knot_of(g1, part)
-    x, p, _ = random_point(g1, k)
-    x[k.var["q"]] = rest
-    rows = np.array(f(x, p)).ravel()
-    L = g1.legs["left"].length
-    spec = Spec(T=1, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
-                cone=False, clearance=0.0, leg_length=L, n_base=6, n_act=0)
-    lo = part.bounds(spec)[0][0]
+    rows = rows_at(rest)
     assert np.all(rows >= lo - 1e-10)
     neg = np.array(floors) < 0
     np.testing.assert_allclose(rows[neg], lo[neg], atol=1e-10)
@@ -400,7 +416,7 @@ def test_rest_pose_clears_the_limbs_the_neutral_pose_presses_together(g1):
     scg = self_collision(g1)
     for a, b in (("torso_link_0", "left_shoulder_yaw_link_0"),
                  ("torso_link_0", "right_shoulder_yaw_link_0")):
-        i = scg.pairs.index((a, b)) if (a, b) in scg.pairs else scg.pairs.index((b, a))
+        i = _pair_index(scg, a, b)
         assert scg.distances(g1.neutral)[i] < MARGIN <= REST_CLEAR - 1e-9 <= scg.distances(qg)[i]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -462,19 +478,7 @@ def test_upper_arm_rows_keep_it_off_the_trunk(g1):
     the torso until coal's hull distance of ``torso_link``/``right_shoulder_yaw_link`` is 0
     (bisection, 1e-5 m) puts that pair's row below its floor, while the rest pose meets it
     (CMU → G1 put this arm 2.7 mm into the torso while the pair had no row)."""
-    from test_retarget_parts import knot_of, random_point
-
-    from gdimitate.retarget.parts import Spec
-    from gdimitate.retarget.parts.self_collision import (
-        SelfCollision,
-        rest_floors,
-        rest_pose,
-        sphere_pairs,
-    )
-
-    rest = rest_pose(g1)
-    pairs = sphere_pairs(g1, q=rest)
-    part = SelfCollision(pairs, (), rest_floors(g1, pairs, rest))
+    rest, part, rows_at, lo_rows = _rest_rows(g1)
     cm, m = g1.collision_model, g1.model
     joint = {n: m.names[int(cm.geometryObjects[cm.getGeometryId(n)].parentJoint)]
              for n in ("torso_link_0", "right_shoulder_yaw_link_0")}
@@ -482,9 +486,7 @@ def test_upper_arm_rows_keep_it_off_the_trunk(g1):
            if {fa, fb} == set(joint.values())]
     assert len(row) == 1, "the upper arm and the torso have no row"
     sc = self_collision(g1)
-    pair = sc.pairs.index(("torso_link_0", "right_shoulder_yaw_link_0")) \
-        if ("torso_link_0", "right_shoulder_yaw_link_0") in sc.pairs \
-        else sc.pairs.index(("right_shoulder_yaw_link_0", "torso_link_0"))
+    pair = _pair_index(sc, "torso_link_0", "right_shoulder_yaw_link_0")
     i = g1.idx_q("right_shoulder_roll_joint")
 
     def dist(a: float) -> float:
@@ -500,14 +502,8 @@ def test_upper_arm_rows_keep_it_off_the_trunk(g1):
     while dist(lo) - dist(hi) > 1e-5:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if dist(mid) > 0 else (lo, mid)
-    k, f = knot_of(g1, part)
-    x, p, _ = random_point(g1, k)
-    L = g1.legs["left"].length
-    spec = Spec(T=1, stance={}, swing={}, liftoff={}, goal_active={}, planar=False, free=True,
-                cone=False, clearance=0.0, leg_length=L, n_base=6, n_act=0)
-    floor = part.bounds(spec)[0][0][row[0]]
+    floor = lo_rows[row[0]]
     for a, met in ((0.0, True), (hi, False)):
         q = rest.copy()
         q[i] += a
-        x[k.var["q"]] = q
-        assert (float(np.array(f(x, p)).ravel()[row[0]]) >= floor - 1e-10) == met
+        assert (float(rows_at(q)[row[0]]) >= floor - 1e-10) == met
