@@ -79,3 +79,48 @@ def test_real_walk_to_humanoid(walk, name):
     else:  # the robot cannot: the result says which constraint binds
         assert r.audit.binding and not r.solver.success
         assert r.solver.unmet
+
+
+def test_screening_keeps_the_legs_apart_row(walk):
+    """The screen (``solve.near_bounds``, in ``solve.setup``) leaves a self-collision frame
+    pair's row out of the solve exactly at the knots where the warm start keeps it at least
+    ``SCREEN`` from its bound at every knot within ``SCREEN_KNOTS``; the legs-apart row stays
+    in at every knot although iCub's start (feet side by side) keeps it 0.06 leg lengths
+    from its bound: it binds where the swing foot passes the stance foot, and left out it came
+    back violated on the result (0.075 leg lengths) and cost a second solve."""
+    from gdimitate.kinematics import actuated_v_indices
+    from gdimitate.retarget import Contact, Limits, Weights, limits
+    from gdimitate.retarget import problem as pb
+    from gdimitate.retarget import solve as S
+    from gdimitate.retarget.bodymap import body_map
+    from gdimitate.retarget.info import resolve_contacts
+    from gdimitate.retarget.targets import demonstration_targets
+
+    h, demo, fs = walk
+    robot = gd.Robot.from_library("icub")
+    copts = Contact()
+    act = limits.resolve(robot, actuated_v_indices(robot), Limits()).names
+    bmap = body_map(h, robot, None)
+    tg = demonstration_targets(h, resample(h, demo, 20), robot, bmap, act, "measured", fs,
+                               copts.rule)
+    form = S.problem_for(robot, "measured", copts, bmap, act)
+    num = S.setup(form, tg, robot, h, Weights(), Limits(), copts,
+                  resolve_contacts(robot, copts, None))
+    c, _ = pb.compiled(form, tg.T, num.keep, None)
+    T, n = tg.T, form.ngk
+    g = np.asarray(c.g_fun(num.x0.T.ravel(), num.P.T.ravel())).ravel()[:n * T]
+    slack = ((g - num.lbg[:n * T]) / num.row_scale[:n * T]).reshape(T, n)  # rows ≥ bound
+    labels = np.array(form.labels)
+    legs = np.flatnonzero(np.char.find(labels, "legs apart") >= 0)
+    pairs = np.setdiff1d(np.flatnonzero(np.char.startswith(labels, "self-collision")), legs)
+    assert legs.size == 1 and pairs.size > 10
+    kept = np.zeros(n * T, bool)
+    kept[num.keep[num.keep < n * T]] = True
+    kept = kept.reshape(T, n)
+    assert np.all(kept[:, legs]) and slack[:, legs].min() > S.SCREEN  # kept, though far
+    far = slack[:, pairs] >= S.SCREEN
+    w = S.SCREEN_KNOTS
+    padded = np.pad(far, ((w, w), (0, 0)), constant_values=True)
+    far_around = np.all([padded[d:d + T] for d in range(2 * w + 1)], axis=0)
+    np.testing.assert_array_equal(kept[:, pairs], ~far_around)
+    assert 0 < far_around.sum() < far_around.size  # some rows left out, some kept

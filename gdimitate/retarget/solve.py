@@ -233,13 +233,14 @@ SCREEN_KNOTS = 3
 
 def near_bounds(form: pb.Formulation, spec: pb.Spec, X: np.ndarray, P: np.ndarray,
                 lbg: np.ndarray, ubg: np.ndarray) -> np.ndarray:
-    """``(ng,)`` bool: False for the rows of a screenable part
-    (:attr:`~.parts.Constraint.screenable`) at knots where ``X`` ``(n_x, T)`` keeps them
-    farther than :data:`SCREEN` from their bounds at every knot within :data:`SCREEN_KNOTS`;
-    True for every other row."""
+    """``(ng,)`` bool: False for the rows a screenable part may leave out
+    (:attr:`~.parts.Constraint.screenable`, :meth:`~.parts.Constraint.screenable_rows`) at
+    knots where ``X`` ``(n_x, T)`` keeps them farther than :data:`SCREEN` from their bounds at
+    every knot within :data:`SCREEN_KNOTS`; True for every other row."""
     T, n = spec.T, form.ngk
     out = np.ones(lbg.size, bool)
-    parts = [sl for c, sl in zip(form.cons, form.slices) if c.screenable]
+    parts = [np.arange(sl.start, sl.stop)[c.screenable_rows(form.knot)]
+             for c, sl in zip(form.cons, form.slices) if c.screenable]
     if not parts:
         return out
     G = np.asarray(form.fun["kg"].map(T)(X, P))  # (ngk, T)
@@ -247,11 +248,11 @@ def near_bounds(form: pb.Formulation, spec: pb.Spec, X: np.ndarray, P: np.ndarra
     with np.errstate(invalid="ignore"):
         slack = np.minimum(G - lo, hi - G)
     near = np.zeros((n, T), bool)
-    for sl in parts:
-        close = slack[sl] / form.scale[sl, None] < SCREEN
+    for rows in parts:  # a part's rows (indices at a knot) that may be left out
+        close = slack[rows] / form.scale[rows, None] < SCREEN
         for d in range(-SCREEN_KNOTS, SCREEN_KNOTS + 1):  # within SCREEN_KNOTS knots
-            near[sl, max(d, 0):T + min(d, 0)] |= close[:, max(-d, 0):T - max(d, 0)]
-        out[:n * T].reshape(T, n)[:, sl] = near[sl].T
+            near[rows, max(d, 0):T + min(d, 0)] |= close[:, max(-d, 0):T - max(d, 0)]
+        out[:n * T].reshape(T, n)[:, rows] = near[rows].T
     return out
 
 

@@ -89,7 +89,8 @@ class Constraint(Part):
     - ``screenable``: rows that are far from their bounds almost everywhere (self-collision):
       a solve leaves such a row out at the knots where the start keeps it farther than
       :data:`gdimitate.retarget.solve.SCREEN` (scaled units) from its bounds, re-checks every
-      left-out row on the result and solves again with those it does not meet."""
+      left-out row on the result and solves again with those it does not meet.
+      :meth:`screenable_rows` says which of its rows may be left out (all by default)."""
 
     relaxable: bool = False
     screenable: bool = False
@@ -108,6 +109,11 @@ class Constraint(Part):
 
     def scale(self, k) -> float:
         return 1.0
+
+    def screenable_rows(self, k) -> np.ndarray:
+        """``(n,)`` bool: the rows a solve may leave out where the start keeps them far from
+        their bounds — every row of a :attr:`screenable` part, none of another's."""
+        return np.full(self.size(k), self.screenable)
 
 
 class PairConstraint(Part):
