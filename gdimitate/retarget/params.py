@@ -23,11 +23,18 @@ IPOPT_DEFAULTS = {
     "max_iter": 150, "mu_strategy": "adaptive", "linear_solver": "mumps",
     "mumps_pivot_order": 0, "mumps_permuting_scaling": 0, "mumps_scaling": 0,
     "fixed_variable_treatment": "make_parameter", "bound_relax_factor": 0.0,
+    "alpha_for_y": "min-dual-infeas", "obj_scaling_factor": 10.0,
 }
 """IPOPT options (MUMPS, the solver of the PyPI CasADi wheel, with AMD ordering: steadier
 than METIS here; no MUMPS scaling: its permuting scaling and row/column scaling are computed
 at every factorisation and cost more than they save — G1 100 knots 23.1 → 9.9 s CPU, Talos
-28.4 → 24.7 s, the same optimum; docs/design.md §6); ``ipopt=`` adds to them. Kept here,
+28.4 → 24.7 s, the same optimum; docs/design.md §6). The multipliers' step is the one that
+least violates dual feasibility (``alpha_for_y``) and the cost is scaled by 10 (the barrier
+parameter μ then weighs a tenth as much against it; the stop's μ test,
+:data:`~.stopping.MU_TOL`, follows the scale): one cycle of the shipped walk, 100 knots,
+Talos 57 → 39 iterations, G1 65 → 34, iCub 76 → 40, Romeo 54 → 47, the whole clip → G1
+49 → 44, the CMU walk → G1 89 → 76, HOAP-2 44 → 29 (with the stop's feasibility at the
+adaptor's ``tol``; docs/design.md §6). ``ipopt=`` adds to them. Kept here,
 not in :mod:`.problem`, so that tuning them does not change the compiled functions' key."""
 
 #: Default knot rate [knots/s] of the trajectory mode: the demonstration is resampled onto a

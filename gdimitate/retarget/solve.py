@@ -25,11 +25,11 @@ from .info import SolverInfo, Unmet, limited_robot, resolve_contacts
 from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
 from .knot import Flags
-from .params import DEFAULT_RATE, Contact, Limits, Weights
+from .params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
 from .parts import Bound, ForceDirection, default_parts, liftoff_knots
 from .parts.body import body_parts
 from .polish import make_consistent
-from .stopping import PLATEAU, Plateau
+from .stopping import MU_TOL, PLATEAU, Plateau
 from .targets import Targets, demonstration_targets, direction_frame, resample
 from .threads import single_thread
 
@@ -350,7 +350,8 @@ def kept_heap():
 
 def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verbose: bool,
                label: str, stop: str = "settled", budget: int = MAX_ITERATIONS,
-               lam: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:
+               lam: tuple[np.ndarray, np.ndarray] | None = None, tol: float = 1e-6,
+               ipopt: dict | None = None) -> tuple[np.ndarray, dict]:
     """One IPOPT solve from ``x0`` ``(n_x, T)`` of at most ``budget`` iterations; returns
     ``(z, stats)``; ``stats["lam"]`` = ``(λ_x (n_x·T,), λ_g (ng,))``, the final multipliers,
     λ_g over every row (0 on the rows the solve left out). ``lam``: multipliers of the same
@@ -359,7 +360,11 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
     free) also ends when its constraint violation stalls (:class:`~.stopping.Plateau`),
     returning the least-violating iterate with status :data:`STALLED`; the least-infeasible
     solve (``elastic``: every relaxable row's slacks free where its bound applies) never
-    stalls. The free slacks start at the violations of ``x0``'s rows (:func:`_slack_start`)."""
+    stalls. The free slacks start at the violations of ``x0``'s rows (:func:`_slack_start`).
+    An iterate counts as feasible for the stop when every row is within ``tol`` (scaled
+    units) and IPOPT's barrier parameter is at most :data:`~.stopping.MU_TOL` against the
+    cost (``ipopt``: the caller's IPOPT options, whose ``obj_scaling_factor`` sets IPOPT's
+    scale of the cost)."""
     lbx, ubx = num.lbx.copy(), num.ubx.copy()
     free = _free_slacks(c, num, goal_only=not elastic)
     for name, fr in zip(("s_plus", "s_minus"), free):
@@ -370,8 +375,9 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
         P[c.knot.par["elastic"]] = GOAL_WEIGHT
     c.progress.reset()
     lbg, ubg = num.lbg[num.keep], num.ubg[num.keep]
+    scale = float({**IPOPT_DEFAULTS, **(ipopt or {})}["obj_scaling_factor"])
     stopper = Plateau(lbg, ubg, num.row_scale[num.keep], settle=stop == "settled",
-                      budget=max(int(budget), 1))
+                      budget=max(int(budget), 1), viol_tol=tol, mu_tol=MU_TOL * scale)
     if elastic:
         stopper.stall_after = 10**9
     args = {"x0": x0.T.ravel(), "p": P.T.ravel(), "lbx": lbx.T.ravel(),
@@ -522,7 +528,7 @@ def solve_budgeted(c: pb.Compiled, num: Numbers, tol: float, verbose: bool, labe
     x, lam = num.x0, None
     while True:
         z, st = run_solver(c, num, x, False, verbose, label, stop, budget=hard - iters,
-                           lam=lam)
+                           lam=lam, tol=tol, ipopt=ipopt)
         iters += int(st.get("iter_count", 0))
         back = rescreen(c, num, z, tol)
         if back.size:  # rows the result violates join the problem, warm-started
@@ -540,7 +546,7 @@ def solve_budgeted(c: pb.Compiled, num: Numbers, tol: float, verbose: bool, labe
     # the least-infeasible solve, in the same budget (IPOPT's own start: no warm start)
     c, _ = pb.compiled(c.form, T, num.keep, ipopt)
     z2, st2 = run_solver(c, num, z.reshape(T, -1).T, True, verbose, "least-infeasible", stop,
-                         budget=max(MAX_ITERATIONS - iters, MIN_ELASTIC))
+                         budget=max(MAX_ITERATIONS - iters, MIN_ELASTIC), tol=tol, ipopt=ipopt)
     iters += int(st2.get("iter_count", 0))
     z2 = _zero_slacks(c, z2, T)
     bad2 = unmet(c, num, z2, tol)

@@ -6,14 +6,17 @@ feasibility while the cost falls by ~1e-5 per iteration (Talos, 100 knots: cost 
 iteration 48, 0.8904 at iteration 99, its own convergence test still unmet after 200; dual
 infeasibility stays near 1.5e-4 so no "acceptable" test passes either). :class:`Plateau`
 watches every iterate from the iteration callback, keeps the best *feasible* one (every row
-within ``viol_tol`` in its scaled units — the base rows of the dynamics, in N and N·m, are
-divided by m·g for this test and made exact afterwards by :mod:`.polish`) and asks IPOPT to
+within ``viol_tol`` in its scaled units — the adaptor's ``tol``, 1e-6 by default; the base
+rows of the dynamics, in N and N·m, are divided by m·g for this test and made exact
+afterwards by :mod:`.polish`) and asks IPOPT to
 stop once the best feasible cost has improved by less than ``rel_tol`` over ``window``
 iterations. The solve then returns that iterate, marked :data:`PLATEAU`.
 
-An iterate counts only once IPOPT's barrier parameter μ is at most ``mu_tol`` (1e-8, in IPOPT's
-scaled objective units): a feasible iterate of a barrier subproblem with a large μ is still
-pushed away from its active bounds by the barrier. Without this test, monotone μ from 1e-3
+An iterate counts only once IPOPT's barrier parameter μ is at most ``mu_tol`` (:data:`MU_TOL`
+= 1e-8 against the cost as the adaptor states it; the solve passes ``MU_TOL`` times IPOPT's
+``obj_scaling_factor``, since IPOPT's μ weighs the barrier against the *scaled* cost): a
+feasible iterate of a barrier subproblem with a large μ is still pushed away from its active
+bounds by the barrier. Without this test, monotone μ from 1e-3
 stopped the paper's Case I at an iterate with μ = 1.8e-7 that missed Eq. (1) by 1.96e-6 rad;
 with it, 4.3e-8 rad (36 iterations instead of 28). Under adaptive μ Case I settles at
 iteration 10 instead of 7 with the same 6.4e-7 rad.
@@ -25,7 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Plateau", "PLATEAU"]
+__all__ = ["Plateau", "PLATEAU", "MU_TOL"]
+
+MU_TOL = 1e-8
+"""The stop's barrier-parameter test against the unscaled cost (module docstring)."""
 
 PLATEAU = "Feasible_Cost_Settled"
 """``SolverInfo.status`` of a solve that :class:`Plateau` stopped."""
