@@ -14,6 +14,7 @@ import numpy as np
 
 from ..contact import SoleContact
 from ..errors import InvalidInputError, SolverError, UnknownNameError
+from ..heading import turn_forces, turn_motion, walk_heading
 from ..kinematics import actuated_v_indices, robot_motion
 from ..metrics import FORCE_MODELS
 from ..motion import Motion
@@ -434,6 +435,13 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
       heel strike to heel strike of the right foot, whose last knot is its first shifted by
       one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
 
+    Nothing assumes a heading: the demonstration is turned about the vertical through its
+    first base position into its heading frame (:func:`gdimitate.heading.walk_heading`: x
+    along its walk), adapted there, and the motion turned back by the same yaw about the
+    vertical through the origin (near which it starts). So a walk along any direction gives
+    the same motion up to that turn, and the report's sagittal angles are in the heading
+    frame (forward = along the walk).
+
     Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
     ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
     ``contacts``, ``audit`` (:func:`gdimitate.audit.audit` recomputed from the output) and
@@ -456,6 +464,11 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
 
         demo, forces = periodic_stride(demo, forces)
         rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
+    # the problem is written in the demonstration's heading frame: the walk turned about its
+    # first base position to go along +x, the result turned back (docs/design.md §15)
+    psi, about = walk_heading(demonstrator, demo), demo.q[0, :2]
+    demo = turn_motion(demo, -psi, about)
+    forces = None if forces is None else turn_forces(forces, -psi, about)
     demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
     act_names = limits.resolve(imitator, actuated_v_indices(imitator), o["limits"]).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
@@ -475,8 +488,9 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                       cached=cached, elastic=elastic, knots=tg.T,
                       variables=int(np.sum(num.lbx != num.ubx)),
                       constraints=int(num.keep.size), unmet=bad)
-    return package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
-                   periodic)
+    out = package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
+                  periodic)
+    return dataclasses.replace(out, motion=turn_motion(out.motion, psi))
 
 
 def _options(force: str, options: dict) -> dict:
