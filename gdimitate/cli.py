@@ -224,12 +224,13 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
             result.save(tmp, "npz")
         report = {**result.report.to_dict(), "verdict": v.to_dict(),
                   "audit": result.audit.to_dict() if result.audit is not None else None,
-                  "solver": solver_record(result.solver)}
+                  "solver": solver_record(result.solver),
+                  "gait": result.gait.to_dict() if result.gait is not None else None}
         with atomic_write(out / "report.json") as tmp:
             tmp.write_text(json.dumps(report, indent=2, default=str))
     r = result.report
     print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json")
-    for line in v.lines():
+    for line in v.lines() + (result.gait.lines() if result.gait is not None else []):
         print(f"  {line}")
     print(f"  force-direction error max {r.force_direction_error_max:.3g} rad, joint-limit "
           f"violation max {r.joint_limit_violation_max:.3g} rad")

@@ -13,6 +13,8 @@ vertical by the heading yaw ψ (:func:`walk_heading`), x along the walk, y to it
   a walk along another direction, and what the adaptor uses to write its warm start in the
   heading frame. Pinocchio's free-flyer velocities are in the base's local frame, the sole
   wrenches in the sole's: a turn leaves them as they are.
+- :func:`on_clock`, :func:`forces_on_clock`: a demonstration on a clock running ``scale``
+  times as long (Froude's time scaling of a gait, :mod:`gdimitate.footsteps`).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from .errors import InvalidInputError
 from .motion import Motion
 
 __all__ = ["MIN_TRAVEL", "walk_heading", "facing_yaw", "yaw_matrix", "turn_motion",
-           "turn_forces", "turn_points"]
+           "turn_forces", "turn_points", "on_clock", "forces_on_clock"]
 
 MIN_TRAVEL = 0.1
 """[m] Base travel over a clip below which its heading is the base's facing, not its path."""
@@ -101,3 +103,23 @@ def turn_forces(forces: ContactForces, yaw: float, about: np.ndarray | None = No
     note = f"turned {np.degrees(yaw):.1f} deg about the vertical"
     return ContactForces(forces.t, feet, forces.source,
                          f"{forces.frame_note}; {note}" if forces.frame_note else note)
+
+
+def on_clock(motion: Motion, scale: float) -> Motion:
+    """``motion`` with its durations × ``scale`` (times ``t₀ + scale·(t − t₀)``; velocities
+    ÷ ``scale``, accelerations ÷ ``scale²``): the clock of a Froude-scaled gait."""
+    if scale == 1.0:
+        return motion
+    t = motion.t[0] + scale * (motion.t - motion.t[0])
+    return motion.replace(t=t, v=None if motion.v is None else motion.v / scale,
+                          a=None if motion.a is None else motion.a / scale ** 2)
+
+
+def forces_on_clock(forces: ContactForces, scale: float) -> ContactForces:
+    """Measured ``forces`` on the clock of :func:`on_clock` (their directions, centres of
+    pressure and contacts as they are)."""
+    if scale == 1.0:
+        return forces
+    t = forces.t[0] + scale * (forces.t - forces.t[0])
+    return ContactForces(t, forces.feet, forces.source,
+                         f"{forces.frame_note}; clock × {scale:.4g}".lstrip("; "))

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .contact import SoleContact
+from .footsteps import GaitComparison
 from .metrics import (
     angle_down,
     foot_heights,
@@ -92,7 +93,9 @@ class AdaptedMotion:
       ``motion`` and ``wrenches`` with Pinocchio (``audit.feasible``, ``audit.binding``);
     - ``solver`` (optimal only): :class:`gdimitate.retarget.SolverInfo`;
     - ``force_model``: the force-direction model of the goal;
-    - ``frame_feasible`` (streaming mode only): ``(T,)`` per-frame audit flags.
+    - ``frame_feasible`` (streaming mode only): ``(T,)`` per-frame audit flags;
+    - ``gait`` (optimal only): :class:`gdimitate.footsteps.GaitComparison`, the imitator's
+      steps, stride, travel and speed against the demonstrator's scaled to its legs.
     """
 
     motion: Motion
@@ -104,6 +107,7 @@ class AdaptedMotion:
     solver: SolverInfo | None = None
     force_model: str = "segment"
     frame_feasible: np.ndarray | None = None
+    gait: GaitComparison | None = None
 
     def save(self, path, format: str = "npz", *, fps: float = 30.0,
              body_order: str | None = None):

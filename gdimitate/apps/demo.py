@@ -124,6 +124,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
         "feasible": bool(adapted.feasible),
         "verdict": verdict(adapted).to_dict(),
         "solver": solver_record(adapted.solver),
+        "gait": adapted.gait.to_dict() if adapted.gait is not None else None,
         "simulation": plan_sim.metrics.to_dict(),
         "joint_copy_simulation": copy_sim.metrics.to_dict() if copy_sim else None,
         "cpg": {"learned_frequency_hz": float(cpg.result.frequency),
@@ -205,6 +206,9 @@ def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str
         rows += [("  worst |torque|/limit", f"{worst_tau:.2f}"),
                  ("  min normal force [N]", ", ".join(
                      f"{s} {f.normal.value:.0f}" for s, f in aud.feet.items()))]
+    if adapted.gait is not None:
+        g = adapted.gait.lines()
+        rows += [("gait", g[0])] + [("", line) for line in g[1:]]
     rows.append(("simulation, plan", simline(plan_sim)))
     if copy_sim is not None:
         rows.append(("simulation, joint copy", simline(copy_sim)))

@@ -65,6 +65,9 @@ class Weights:
     - ``shank`` [1]: unit shank direction (knee → ankle) − the demonstrator's (3 rows);
     - ``thigh`` [0]: unit thigh direction (hip → knee) − the demonstrator's;
     - ``placement`` [0.1]: horizontal ankle − hip offset / leg length − the demonstrator's;
+    - ``steps`` [100]: in double support, the left sole's horizontal place relative to the
+      right's / leg length − the demonstrator's footprints' (:mod:`.parts.steps`): its steps,
+      and so its distance, scaled to the imitator's legs;
     - ``foot`` [1]: each foot's world orientation (its sole frame's rotation matrix entries)
       − the demonstrator's;
     - ``torso`` [1]: orientation of the mapped torso/pelvis segments (rotation matrix
@@ -85,6 +88,7 @@ class Weights:
     shank: float = 1.0
     thigh: float = 0.0
     placement: float = 0.1
+    steps: float = 100.0
     foot: float = 1.0
     torso: float = 1.0
     joints: float = 0.1

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..contact import SoleContact
 from ..errors import InvalidInputError, SolverError, UnknownNameError
-from ..heading import turn_forces, turn_motion, walk_heading
+from ..footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
+from ..heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
 from ..kinematics import actuated_v_indices, robot_motion
 from ..metrics import FORCE_MODELS
 from ..motion import Motion
@@ -45,6 +46,11 @@ STOPS = ("settled", "converged")
 (:mod:`.stopping`); ``"converged"`` — IPOPT's own convergence test (``tol`` 1e-8; often
 several times slower, the same motion to within the audit's tolerances)."""
 
+GAIT_SCALING = "geometric"
+"""``gait_scaling=``'s default (:data:`gdimitate.footsteps.SCALINGS`): lengths × the legs'
+ratio r at the demonstrator's cadence (the paper's); ``"froude"`` also runs the
+demonstration's clock × √r (docs/design.md §15 says how the default was chosen)."""
+
 MAX_ITERATIONS = 150
 """Iterations of one adaptation, the hard solve and the least-infeasible one together (the
 latter gets at least :data:`MIN_ELASTIC`)."""
@@ -56,7 +62,7 @@ APPROXIMATED = ("self_collision",)
 """Audit checks whose optimiser rows are approximations (sphere covers vs collision hulls)."""
 
 OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
-           "tol", "ipopt", "verbose", "contacts", "stop", "periodic")
+           "tol", "ipopt", "verbose", "contacts", "stop", "periodic", "gait_scaling")
 """Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
 
 
@@ -431,6 +437,11 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
       1e-6); ``stop``: when a solve ends (:data:`STOPS`); ``ipopt``: extra IPOPT options;
       ``verbose`` (default True): progress lines
       (iteration, cost, constraint violation) on stderr;
+    - ``gait_scaling`` (:data:`GAIT_SCALING`): ``"geometric"`` — the imitator's steps are
+      the demonstrator's × r, the legs' ratio, at its cadence — or ``"froude"`` — also the
+      demonstration's durations × √r (the motion's times then run on that clock); the
+      result's ``gait`` (:class:`~gdimitate.footsteps.GaitComparison`) measures the steps
+      against the demonstrator's so scaled;
     - ``periodic`` (default False): a periodic gait cycle (:mod:`.periodic`) — one stride,
       heel strike to heel strike of the right foot, whose last knot is its first shifted by
       one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
@@ -454,21 +465,26 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     if o["mode"] == "per_frame":
         from .streaming import adapt_per_frame
 
-        return adapt_per_frame(demo, demonstrator, imitator, force=force, forces=o["forces"],
-                               weights=o["weights"], limits=o["limits"], contact=o["contact"],
-                               contacts=cs, body_map=bmap, tol=o["tol"],
-                               ipopt=options.get("ipopt"))
+        out = adapt_per_frame(demo, demonstrator, imitator, force=force, forces=o["forces"],
+                              weights=o["weights"], limits=o["limits"], contact=o["contact"],
+                              contacts=cs, body_map=bmap, tol=o["tol"],
+                              ipopt=options.get("ipopt"))
+        return dataclasses.replace(out, gait=compare_gait(demonstrator, demo, imitator,
+                                                          out.motion))
     rate, forces, periodic = options.get("rate", DEFAULT_RATE), o["forces"], o["periodic"]
     if periodic:
         from .periodic import periodic_rate, periodic_stride
 
         demo, forces = periodic_stride(demo, forces)
         rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
+    own = demo
     # the problem is written in the demonstration's heading frame: the walk turned about its
     # first base position to go along +x, the result turned back (docs/design.md §15)
     psi, about = walk_heading(demonstrator, demo), demo.q[0, :2]
     demo = turn_motion(demo, -psi, about)
     forces = None if forces is None else turn_forces(forces, -psi, about)
+    ts = time_scale(o["gait_scaling"], leg_ratio(demonstrator, imitator))
+    demo, forces = on_clock(demo, ts), None if forces is None else forces_on_clock(forces, ts)
     demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
     act_names = limits.resolve(imitator, actuated_v_indices(imitator), o["limits"]).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
@@ -490,7 +506,9 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                       constraints=int(num.keep.size), unmet=bad)
     out = package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
                   periodic)
-    return dataclasses.replace(out, motion=turn_motion(out.motion, psi))
+    motion = turn_motion(out.motion, psi)
+    gait = compare_gait(demonstrator, own, imitator, motion, o["gait_scaling"])
+    return dataclasses.replace(out, motion=motion, gait=gait)
 
 
 def _options(force: str, options: dict) -> dict:
@@ -505,7 +523,10 @@ def _options(force: str, options: dict) -> dict:
          "limits": options.get("limits") or Limits(),
          "contact": options.get("contact") or Contact(),
          "forces": options.get("forces"), "verbose": bool(options.get("verbose", True)),
-         "periodic": bool(options.get("periodic", False))}
+         "periodic": bool(options.get("periodic", False)),
+         "gait_scaling": options.get("gait_scaling", GAIT_SCALING)}
+    if o["gait_scaling"] not in SCALINGS:
+        raise UnknownNameError("gait scaling", o["gait_scaling"], SCALINGS)
     if o["mode"] not in MODES:
         raise UnknownNameError("mode", o["mode"], MODES)
     for name, typ in (("weights", Weights), ("limits", Limits), ("contact", Contact)):
@@ -520,6 +541,9 @@ def _options(force: str, options: dict) -> dict:
                                 "ContactForces)")
     if o["stop"] not in STOPS:
         raise UnknownNameError("stop rule", o["stop"], STOPS)
+    if o["mode"] == "per_frame" and o["gait_scaling"] != "geometric":
+        raise InvalidInputError("gait_scaling='froude' needs mode='trajectory' (a stream runs "
+                                "on the demonstrator's clock)")
     if o["mode"] == "per_frame" and o["periodic"]:
         raise InvalidInputError("periodic=True needs mode='trajectory' (the seam links the "
                                 "cycle's last knot to its first)")
@@ -609,13 +633,17 @@ demonstration crawled with IPOPT's Hessian regularisation at 1e9–1e17 until it
 fired (CMU → G1: iterations 50–80 cost 430 s CPU) and the least-infeasible solve followed."""
 
 
-GOAL_WEIGHT = 30.0
+GOAL_WEIGHT = 300.0
 """L1 price of the :data:`GOAL` rows' violation in the hard solve (per unit of a row — rad of
 force direction — and knot, in the knot's cost; the least-infeasible solve keeps
-:attr:`~.params.Weights.elastic`, 1e3). High enough that a goal the imitator can meet is met
-(its multipliers stay below it: G1, Talos, Case I unchanged), low enough that IPOPT converges
-where it cannot: on the CMU walk → G1, 1e3 left the hard solve wandering (82 iterations,
-violation 0.01–0.4, stalled), 30 converged in 56 iterations (violation 1e-10)."""
+:attr:`~.params.Weights.elastic`, 1e3). High enough that a goal the imitator can meet is met,
+also against the steps cost (:mod:`.parts.steps`, whose pull at a step a quarter of a leg
+short, 2·100·0.25 = 50 per unit, exceeded the former price of 30: Romeo gave up 0.30–0.65 rad
+of push direction to lengthen its steps; at 300 it keeps the push, audit-feasible, and walks
+0.73 of the scaled distance), low enough that IPOPT converges where it cannot: on the CMU
+walk → G1, 1e3 left the hard solve wandering (82 iterations, violation 0.01–0.4, stalled);
+300 spends the budget (149 iterations, 58 s CPU) and misses the push by 0.017 rad where 30
+missed it by 0.064 rad in 104 iterations, both audit-feasible."""
 
 
 def _free_slacks(c: pb.Compiled, num: Numbers, goal_only: bool

@@ -20,6 +20,7 @@ from .quaternion import QuaternionNorm
 from .segments import Segments
 from .shank import Shank
 from .smoothness import Smoothness
+from .steps import Steps
 from .swing import SwingClearance
 from .thigh import Thigh
 from .torque_limits import TorqueLimits
@@ -29,7 +30,7 @@ __all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Bound", "Spec", "per
            "default_parts", "BaseDynamics", "TorqueLimits", "FlatContact", "ContactHold",
            "WrenchCone", "SwingClearance", "ForceDirection", "Integration", "QuaternionNorm",
            "Height", "Placement", "Shank", "Thigh", "Foot", "Segments", "Joints",
-           "Smoothness", "WrenchRegularisation", "liftoff_knots", "velocity_knots"]
+           "Smoothness", "Steps", "WrenchRegularisation", "liftoff_knots", "velocity_knots"]
 
 
 def default_parts(segment_frames: tuple[str, ...], q_index: tuple[int, ...]) -> tuple[Part, ...]:
@@ -42,6 +43,6 @@ def default_parts(segment_frames: tuple[str, ...], q_index: tuple[int, ...]) -> 
         # constraints between neighbouring knots
         Integration(), ContactHold(),
         # costs
-        Height(), Placement(), Shank(), Thigh(), Foot(), Segments(tuple(segment_frames)),
+        Height(), Placement(), Steps(), Shank(), Thigh(), Foot(), Segments(tuple(segment_frames)),
         Joints(tuple(int(i) for i in q_index)), Smoothness(), WrenchRegularisation(),
     )
