@@ -6,7 +6,15 @@ length (parameters ``steps`` ``(2,)`` and ``steps_on`` ``(1,)``, 1 in double sup
 0; weight ``steps``). A flat stance sole keeps its place, so the cost asks every step's length
 and width, and with them the distance walked, of the imitator scaled by the legs' ratio;
 nothing else in the problem asks for the distance (the shipped walk → G1 travelled 0.37 of
-the scaled distance without it). Written in world axes, so it turns with the walk."""
+the scaled distance without it). Written in world axes, so it turns with the walk.
+
+The push direction comes first: each residual component ``e`` enters as
+``e / (1 + (e/δ)²)^¼`` (:data:`DELTA`), quadratic near 0 and growing like ``√(δ|e|)`` beyond
+δ, so that the cost's pull on a step, ``w·d(ρ²)/de``, stays below ``1.1·w·δ`` (11 at the
+default weight 100) however short the step — below the force direction's L1 price
+(:data:`~gdimitate.retarget.solve.GOAL_WEIGHT`, 30 per rad and knot). With a plain square,
+Romeo (whose steps the velocity and torque limits keep 0.4 of a leg short) gave up 0.3–0.65
+rad of its push to lengthen them."""
 
 from __future__ import annotations
 
@@ -17,6 +25,10 @@ import numpy as np
 from ...footsteps import footprints
 from ...robot import SIDES
 from .base import Cost
+
+
+DELTA = 0.1
+"""[leg lengths] Where the steps residual turns from quadratic to square-root growth."""
 
 
 @dataclass(frozen=True)
@@ -39,5 +51,6 @@ class Steps(Cost):
 
     def residual(self, k):
         L = float(np.mean([k.leg[s].length for s in SIDES]))
-        rel = (k.sole_p["left"][:2] - k.sole_p["right"][:2]) / L
-        return k.P("steps_on")[0] * (rel - k.P("steps"))
+        e = (k.sole_p["left"][:2] - k.sole_p["right"][:2]) / L - k.P("steps")
+        # e / (1 + (e/δ)²)^¼: e for |e| ≪ δ, its square grows like δ·|e| beyond δ
+        return k.P("steps_on")[0] * e / (1 + (e / DELTA) ** 2) ** 0.25

@@ -1,0 +1,176 @@
+"""The gait kept on a corpus (issue 32, docs/design.md §15): every shipped walk and synthetic
+variants of it, onto several robots, judged by the audit and the gait's travel ratio.
+
+Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu]
+[--variants asis,turn90,turn180,turn-137,rate30,rate60,rate240,trim,noise]
+[--baseline-rev REV] [--baseline-robots g1]``.
+
+Clips: ``stride`` — one right stride of the shipped 3-D OpenSim walk (measured forces, the
+push goal ``measured``); ``whole`` — the whole 3.5-s clip; ``cmu`` — the shipped CMU BVH walk
+(kinematic contacts, ``force="segment"``, the command line's default). Variants, made from the
+clip's motion (and forces) before the adaptor sees it: ``asis``; ``turnD`` — turned by D
+degrees about the vertical through its first base position; ``rateR`` — resampled to R Hz
+(linear interpolation, quaternions renormalised, contacts of the nearest frame); ``trim`` —
+0.3 s cut from each end (it starts and ends mid-stride); ``noise`` — 5 mm on the base
+position and 0.01 rad on every joint angle, white, seed 0 (mocap noise; the contacts as
+recorded). Each case runs in its own Python process with its own timer (CPU seconds of the
+adaptation, derivatives already compiled). The travel ratio is computed here from the
+output alone, by docs/design.md §15's definition (the imitator's base travel over the clip
+over the demonstrator's × the legs' ratio), so the baseline revision — extracted with ``git
+archive`` and run the same way — is measured by the same rule.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+from revision import checkout
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_CHILD = textwrap.dedent("""
+    import json, sys, time, warnings
+    import numpy as np
+    import pinocchio as pin
+    warnings.simplefilter("ignore")
+    import gdimitate as gd
+    from gdimitate.contact import ContactForces, FootForces
+    clip, variant, name = sys.argv[1:4]
+    if clip == "cmu":
+        from gdimitate.demonstration import load_demonstration
+        d = load_demonstration("gdimitate/data/gait/cmu_02_01/cmu_02_01.bvh")
+        h, demo, fs, force = d.robot, d.motion, d.forces, "segment"
+    else:
+        h, demo, fs = gd.gait.human_walk_3d()
+        if clip == "stride":
+            demo, fs = gd.gait.one_stride(demo, fs)
+        force = "measured"
+
+    def turn(m, f, yaw):
+        c, s = np.cos(yaw), np.sin(yaw)
+        R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+        p0 = np.r_[m.q[0, :2], 0.0]
+        q = m.q.copy()
+        q[:, :3] = (q[:, :3] - p0) @ R.T + p0
+        Q = pin.Quaternion(R)
+        for i in range(len(q)):
+            q[i, 3:7] = (Q * pin.Quaternion(q[i, 3:7])).coeffs()
+        if f is not None:
+            f = ContactForces(f.t, {k: FootForces(v.force @ R.T, (v.cop - p0) @ R.T + p0,
+                                                  v.torque @ R.T, v.contact)
+                                    for k, v in f.feet.items()}, f.source, f.frame_note)
+        return m.replace(q=q, v=None, a=None), f
+
+    def resample(m, f, rate):
+        t = np.arange(m.t[0], m.t[-1] + 1e-9, 1.0 / rate)
+        q = np.column_stack([np.interp(t, m.t, m.q[:, j]) for j in range(m.q.shape[1])])
+        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+        near = np.abs(m.t[None, :] - t[:, None]).argmin(axis=1)
+        m2 = m.replace(t=t, q=q, v=None, a=None,
+                       contact={k: np.asarray(v)[near] for k, v in m.contact.items()})
+        if f is not None:
+            lerp = lambda a: np.column_stack([np.interp(t, f.t, a[:, j]) for j in range(3)])
+            f = ContactForces(t, {k: FootForces(lerp(v.force), v.cop[near], lerp(v.torque),
+                                                v.contact[near]) for k, v in f.feet.items()},
+                              f.source, f.frame_note)
+        return m2, f
+
+    def cut(m, f, k0, k1):
+        sl = slice(k0, k1)
+        m2 = m.replace(t=m.t[sl], q=m.q[sl], v=None, a=None,
+                       contact={k: np.asarray(v)[sl] for k, v in m.contact.items()})
+        if f is not None:
+            f = ContactForces(f.t[sl], {k: FootForces(v.force[sl], v.cop[sl], v.torque[sl],
+                                                      v.contact[sl])
+                                        for k, v in f.feet.items()}, f.source, f.frame_note)
+        return m2, f
+
+    if variant.startswith("turn"):
+        demo, fs = turn(demo, fs, np.radians(float(variant[4:])))
+    elif variant.startswith("rate"):
+        demo, fs = resample(demo, fs, float(variant[4:]))
+    elif variant == "trim":
+        n = int(round(0.3 / np.median(np.diff(demo.t))))
+        demo, fs = cut(demo, fs, n, demo.T - n)
+    elif variant == "noise":
+        rng = np.random.default_rng(0)
+        q = demo.q.copy()
+        q[:, :3] += rng.normal(0, 0.005, (demo.T, 3))
+        q[:, 7:] += rng.normal(0, 0.01, (demo.T, q.shape[1] - 7))
+        demo = demo.replace(q=q, v=None, a=None)
+    robot = gd.Robot.from_library(name)
+    kw = dict(force=force, verbose=False, **({"forces": fs} if fs is not None else {}))
+    t0 = time.process_time()
+    r = gd.adapt(demo, h, robot, method="optimal", **kw)
+    cpu = time.process_time() - t0
+    L = lambda rb: np.mean([rb.legs[s].length for s in ("left", "right")])
+    ratio = L(robot) / L(h)
+    trav = lambda q: float(np.hypot(*(q[-1, :2] - q[0, :2])))
+    travel = trav(r.motion.q) / (trav(demo.q) * ratio)
+    dur = (r.motion.t[-1] - r.motion.t[0]) / (demo.t[-1] - demo.t[0])
+    print("RESULT " + json.dumps({
+        "feasible": bool(r.audit.feasible), "binding": list(r.audit.binding[:3]),
+        "iterations": int(r.solver.iterations), "cpu_s": cpu, "travel": travel,
+        "speed": travel / dur,
+        "unmet": [[u.name, round(float(u.violation), 4)] for u in r.solver.unmet[:2]]}))
+""")
+
+
+def run(tree: Path, clip: str, variant: str, robot: str) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1"}
+    p = subprocess.run([sys.executable, "-c", _CHILD, clip, variant, robot], cwd=tree,
+                       env=env, capture_output=True, text=True, timeout=1800)
+    for line in p.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    return {"error": (p.stderr.strip().splitlines() or ["no output"])[-1][:80]}
+
+
+def row(tag: str, clip: str, variant: str, robot: str, r: dict) -> str:
+    if "error" in r:
+        return f"| {tag} | {clip} | {variant} | {robot} | error: {r['error']} |||||"
+    feas = "yes" if r["feasible"] else "NO " + ",".join(r["binding"])
+    kept = 0.8 <= r["travel"] <= 1.25
+    return (f"| {tag} | {clip} | {variant} | {robot} | {feas} | {r['travel']:.2f}"
+            f"{'' if kept else ' (not kept)'} | {r['speed']:.2f} | {r['iterations']} | "
+            f"{r['cpu_s']:.1f} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--robots", default="g1,talos,icub,romeo")
+    ap.add_argument("--clips", default="stride,whole,cmu")
+    ap.add_argument("--variants", default="asis,turn90,turn180,turn-137,rate30,rate60,"
+                                          "rate240,trim,noise")
+    ap.add_argument("--baseline-rev", default=None,
+                    help="a git revision run the same way on --baseline-robots")
+    ap.add_argument("--baseline-robots", default="g1")
+    a = ap.parse_args()
+    print("| tree | clip | variant | robot | audit feasible | travel ratio | speed ratio | "
+          "iterations | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    trees = [("now", ROOT, a.robots.split(","))]
+    tmp = None
+    if a.baseline_rev:
+        tmp = tempfile.TemporaryDirectory()
+        trees.append((a.baseline_rev, checkout(a.baseline_rev, tmp.name),
+                      a.baseline_robots.split(",")))
+    for clip in a.clips.split(","):
+        for variant in a.variants.split(","):
+            for tag, tree, robots in trees:
+                for robot in robots:
+                    print(row(tag, clip, variant, robot, run(tree, clip, variant, robot)),
+                          flush=True)
+    if tmp is not None:
+        tmp.cleanup()
+
+
+if __name__ == "__main__":
+    main()
