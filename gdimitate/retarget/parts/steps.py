@@ -26,7 +26,6 @@ from ...footsteps import footprints
 from ...robot import SIDES
 from .base import Cost
 
-
 DELTA = 0.1
 """[leg lengths] Where the steps residual turns from quadratic to square-root growth."""
 
