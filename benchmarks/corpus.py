@@ -3,7 +3,7 @@ variants of it, onto several robots, judged by the audit and the gait's travel r
 
 Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu]
 [--variants asis,turn90,turn180,turn-137,rate30,rate60,rate240,trim,noise]
-[--baseline-rev REV] [--baseline-robots g1]``.
+[--scaling geometric|froude] [--simulate] [--baseline-rev REV] [--baseline-robots g1]``.
 
 Clips: ``stride`` — one right stride of the shipped 3-D OpenSim walk (measured forces, the
 push goal ``measured``); ``whole`` — the whole 3.5-s clip; ``cmu`` — the shipped CMU BVH walk
@@ -42,7 +42,7 @@ _CHILD = textwrap.dedent("""
     warnings.simplefilter("ignore")
     import gdimitate as gd
     from gdimitate.contact import ContactForces, FootForces
-    clip, variant, name = sys.argv[1:4]
+    clip, variant, name, scaling, simulate = sys.argv[1:6]
     if clip == "cmu":
         from gdimitate.demonstration import load_demonstration
         d = load_demonstration("gdimitate/data/gait/cmu_02_01/cmu_02_01.bvh")
@@ -107,15 +107,26 @@ _CHILD = textwrap.dedent("""
         demo = demo.replace(q=q, v=None, a=None)
     robot = gd.Robot.from_library(name)
     kw = dict(force=force, verbose=False, **({"forces": fs} if fs is not None else {}))
+    if scaling != "geometric":
+        kw["gait_scaling"] = scaling
     t0 = time.process_time()
     r = gd.adapt(demo, h, robot, method="optimal", **kw)
     cpu = time.process_time() - t0
     L = lambda rb: np.mean([rb.legs[s].length for s in ("left", "right")])
     ratio = L(robot) / L(h)
     trav = lambda q: float(np.hypot(*(q[-1, :2] - q[0, :2])))
-    travel = trav(r.motion.q) / (trav(demo.q) * ratio)
+    if robot.base == "planar":  # x, z, pitch: the travel is along x
+        ix = robot.idx_q("base_x")
+        own = abs(float(r.motion.q[-1, ix] - r.motion.q[0, ix]))
+    else:
+        own = trav(r.motion.q)
+    travel = own / (trav(demo.q) * ratio)
     dur = (r.motion.t[-1] - r.motion.t[0]) / (demo.t[-1] - demo.t[0])
-    print("RESULT " + json.dumps({
+    sim = {}
+    if simulate == "1":
+        m = gd.sim.simulate(robot, r).metrics
+        sim = {"fell": bool(m.fell), "slip_cm": 100 * float(m.slip_max)}
+    print("RESULT " + json.dumps({**sim,
         "feasible": bool(r.audit.feasible), "binding": list(r.audit.binding[:3]),
         "iterations": int(r.solver.iterations), "cpu_s": cpu, "travel": travel,
         "speed": travel / dur,
@@ -123,9 +134,11 @@ _CHILD = textwrap.dedent("""
 """)
 
 
-def run(tree: Path, clip: str, variant: str, robot: str) -> dict:
+def run(tree: Path, clip: str, variant: str, robot: str, scaling: str, simulate: bool
+        ) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1"}
-    p = subprocess.run([sys.executable, "-c", _CHILD, clip, variant, robot], cwd=tree,
+    p = subprocess.run([sys.executable, "-c", _CHILD, clip, variant, robot, scaling,
+                        "1" if simulate else "0"], cwd=tree,
                        env=env, capture_output=True, text=True, timeout=1800)
     for line in p.stdout.splitlines():
         if line.startswith("RESULT "):
@@ -138,9 +151,11 @@ def row(tag: str, clip: str, variant: str, robot: str, r: dict) -> str:
         return f"| {tag} | {clip} | {variant} | {robot} | error: {r['error']} |||||"
     feas = "yes" if r["feasible"] else "NO " + ",".join(r["binding"])
     kept = 0.8 <= r["travel"] <= 1.25
+    sim = ("" if "fell" not in r else
+           f" {'FELL' if r['fell'] else 'walked'}, slip {r['slip_cm']:.2f} cm |")
     return (f"| {tag} | {clip} | {variant} | {robot} | {feas} | {r['travel']:.2f}"
             f"{'' if kept else ' (not kept)'} | {r['speed']:.2f} | {r['iterations']} | "
-            f"{r['cpu_s']:.1f} |")
+            f"{r['cpu_s']:.1f} |{sim}")
 
 
 def main() -> None:
@@ -152,10 +167,16 @@ def main() -> None:
     ap.add_argument("--baseline-rev", default=None,
                     help="a git revision run the same way on --baseline-robots")
     ap.add_argument("--baseline-robots", default="g1")
+    ap.add_argument("--scaling", default="geometric", choices=["geometric", "froude"],
+                    help="gait_scaling= of every case (a baseline before it had none: "
+                         "geometric only)")
+    ap.add_argument("--simulate", action="store_true",
+                    help="also run each result in MuJoCo under the tracking controller")
     a = ap.parse_args()
+    print(f"gait scaling: {a.scaling}")
     print("| tree | clip | variant | robot | audit feasible | travel ratio | speed ratio | "
-          "iterations | CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "iterations | CPU s |" + (" MuJoCo |" if a.simulate else ""))
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if a.simulate else ""))
     trees = [("now", ROOT, a.robots.split(","))]
     tmp = None
     if a.baseline_rev:
@@ -166,8 +187,8 @@ def main() -> None:
         for variant in a.variants.split(","):
             for tag, tree, robots in trees:
                 for robot in robots:
-                    print(row(tag, clip, variant, robot, run(tree, clip, variant, robot)),
-                          flush=True)
+                    r = run(tree, clip, variant, robot, a.scaling, a.simulate)
+                    print(row(tag, clip, variant, robot, r), flush=True)
     if tmp is not None:
         tmp.cleanup()
 
