@@ -25,6 +25,7 @@ scale).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -78,15 +79,15 @@ def sole_frames(robot: Robot) -> dict[str, str]:
     return {s: c[s].frame if s in c else robot.legs[s].sole for s in SIDES}
 
 
-def footprints(robot: Robot, motion: Motion, contact: dict | None = None
+def footprints(robot: Robot, motion: Motion, contact: Mapping[str, np.ndarray] | None = None
                ) -> list[Footprint]:
     """Every footprint of ``motion`` (``contact``: ``{side: (T,) bool}``, default
     ``motion.contact``), in order of landing (ties: left first)."""
-    contact = motion.contact if contact is None else contact
+    flags: Mapping[str, np.ndarray] = motion.contact if contact is None else contact
     frames = sole_frames(robot)
     paths = frame_paths(robot, motion.q, list(frames.values()))
     out = [Footprint(s, a, b, paths[frames[s]][a:b, :2].mean(axis=0))
-           for s in SIDES for a, b in stance_phases(contact[s])]
+           for s in SIDES for a, b in stance_phases(flags[s])]
     return sorted(out, key=lambda f: (f.start, SIDES.index(f.side)))
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import SoleContact
+from ..contact import ContactForces, SoleContact
 from ..errors import InvalidInputError, SolverError, UnknownNameError
 from ..footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
 from ..heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
@@ -28,7 +28,7 @@ from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
 from .knot import Flags
 from .params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
-from .parts import Bound, ForceDirection, default_parts, liftoff_knots
+from .parts import Bound, ForceDirection, Steps, default_parts, liftoff_knots
 from .parts.body import body_parts
 from .polish import make_consistent
 from .stopping import MU_TOL, PLATEAU, Plateau
@@ -478,13 +478,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
         demo, forces = periodic_stride(demo, forces)
         rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
     own = demo
-    # the problem is written in the demonstration's heading frame: the walk turned about its
-    # first base position to go along +x, the result turned back (docs/design.md §15)
-    psi, about = walk_heading(demonstrator, demo), demo.q[0, :2]
-    demo = turn_motion(demo, -psi, about)
-    forces = None if forces is None else turn_forces(forces, -psi, about)
-    ts = time_scale(o["gait_scaling"], leg_ratio(demonstrator, imitator))
-    demo, forces = on_clock(demo, ts), None if forces is None else forces_on_clock(forces, ts)
+    psi, demo, forces = heading_frame(demonstrator, imitator, demo, forces, o["gait_scaling"])
     demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
     act_names = limits.resolve(imitator, actuated_v_indices(imitator), o["limits"]).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
@@ -510,6 +504,20 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     motion = turn_motion(out.motion, psi) if imitator.base == "free" else out.motion
     gait = compare_gait(demonstrator, own, imitator, motion, o["gait_scaling"])
     return dataclasses.replace(out, motion=motion, gait=gait)
+
+
+def heading_frame(demonstrator: Robot, imitator: Robot, demo: Motion,
+                  forces: ContactForces | None, scaling: str
+                  ) -> tuple[float, Motion, ContactForces | None]:
+    """``(ψ, demo, forces)``: the demonstration (and its measured forces, or None) turned by
+    −ψ, its heading yaw (:func:`~gdimitate.heading.walk_heading`), about the vertical through
+    its first base position — the frame the problem is written in (docs/design.md §13) —
+    and on the clock of the gait ``scaling`` (Froude: durations × √r)."""
+    psi, about = walk_heading(demonstrator, demo), demo.q[0, :2]
+    demo = turn_motion(demo, -psi, about)
+    forces = None if forces is None else turn_forces(forces, -psi, about)
+    ts = time_scale(scaling, leg_ratio(demonstrator, imitator))
+    return psi, on_clock(demo, ts), None if forces is None else forces_on_clock(forces, ts)
 
 
 def _options(force: str, options: dict) -> dict:
@@ -609,14 +617,17 @@ def _goal_labels(c: pb.Compiled) -> set[str]:
 def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, parts=None,
                 periodic: bool = False) -> pb.Formulation:
     """The :class:`~.problem.Formulation` of an imitator under a force model, contact options
-    and body map (``parts``: a list of parts instead of :func:`~.parts.default_parts`;
-    ``periodic``: with the :class:`~.parts.periodic.PeriodicSeam`)."""
+    and body map (``parts``: a list of parts instead of :func:`~.parts.default_parts`, the
+    robot's :func:`~.parts.body.body_parts` and, for a free-flying imitator, the gait's
+    :class:`~.parts.Steps`; ``periodic``: with the :class:`~.parts.periodic.PeriodicSeam`)."""
     flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
                   cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
     q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
     if parts is None:
         parts = (default_parts(tuple(bmap.segments.values()), q_index)
                  + body_parts(imitator, act_names))
+        if imitator.base == "free":  # the gait in 3-D; the planar corner is the paper's
+            parts = parts + (Steps(),)
     if periodic:
         from .parts.periodic import PeriodicSeam
 

@@ -43,6 +43,6 @@ def default_parts(segment_frames: tuple[str, ...], q_index: tuple[int, ...]) -> 
         # constraints between neighbouring knots
         Integration(), ContactHold(),
         # costs
-        Height(), Placement(), Steps(), Shank(), Thigh(), Foot(), Segments(tuple(segment_frames)),
+        Height(), Placement(), Shank(), Thigh(), Foot(), Segments(tuple(segment_frames)),
         Joints(tuple(int(i) for i in q_index)), Smoothness(), WrenchRegularisation(),
     )
