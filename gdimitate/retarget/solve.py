@@ -446,12 +446,10 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
       heel strike to heel strike of the right foot, whose last knot is its first shifted by
       one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
 
-    Nothing assumes a heading: the demonstration is turned about the vertical through its
-    first base position into its heading frame (:func:`gdimitate.heading.walk_heading`: x
-    along its walk), adapted there, and the motion turned back by the same yaw about the
-    vertical through the origin (near which it starts). So a walk along any direction gives
-    the same motion up to that turn, and the report's sagittal angles are in the heading
-    frame (forward = along the walk).
+    Nothing assumes a heading (:func:`heading_frame`): the demonstration is adapted in its
+    heading frame and the motion turned back about the vertical through the origin, so a
+    walk along any direction gives the same motion up to that turn, and the report's
+    sagittal angles are in the heading frame (forward = along the walk).
 
     Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
     ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
@@ -463,14 +461,8 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     cs = resolve_contacts(imitator, o["contact"], options.get("contacts"))
     bmap = body_map(demonstrator, imitator, options.get("body_map"))
     if o["mode"] == "per_frame":
-        from .streaming import adapt_per_frame
-
-        out = adapt_per_frame(demo, demonstrator, imitator, force=force, forces=o["forces"],
-                              weights=o["weights"], limits=o["limits"], contact=o["contact"],
-                              contacts=cs, body_map=bmap, tol=o["tol"],
-                              ipopt=options.get("ipopt"))
-        return dataclasses.replace(out, gait=compare_gait(demonstrator, demo, imitator,
-                                                          out.motion))
+        return _per_frame(demo, demonstrator, imitator, force, o, cs, bmap,
+                          options.get("ipopt"))
     rate, forces, periodic = options.get("rate", DEFAULT_RATE), o["forces"], o["periodic"]
     if periodic:
         from .periodic import periodic_rate, periodic_stride
@@ -504,6 +496,18 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     motion = turn_motion(out.motion, psi) if imitator.base == "free" else out.motion
     gait = compare_gait(demonstrator, own, imitator, motion, o["gait_scaling"])
     return dataclasses.replace(out, motion=motion, gait=gait)
+
+
+def _per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: str, o: dict,
+               cs: dict, bmap, ipopt: dict | None):
+    """The streaming mode over a whole demonstration, with its gait measured."""
+    from .streaming import adapt_per_frame
+
+    out = adapt_per_frame(demo, demonstrator, imitator, force=force, forces=o["forces"],
+                          weights=o["weights"], limits=o["limits"], contact=o["contact"],
+                          contacts=cs, body_map=bmap, tol=o["tol"], ipopt=ipopt)
+    return dataclasses.replace(out, gait=compare_gait(demonstrator, demo, imitator,
+                                                      out.motion))
 
 
 def heading_frame(demonstrator: Robot, imitator: Robot, demo: Motion,
