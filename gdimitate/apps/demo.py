@@ -208,7 +208,7 @@ def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str
                      f"{s} {f.normal.value:.0f}" for s, f in aud.feet.items()))]
     if adapted.gait is not None:
         g = adapted.gait.lines()
-        rows += [("gait", g[0])] + [("", line) for line in g[1:]]
+        rows += [("gait", g[0].removeprefix("gait "))] + [("", line) for line in g[1:]]
     rows.append(("simulation, plan", simline(plan_sim)))
     if copy_sim is not None:
         rows.append(("simulation, joint copy", simline(copy_sim)))
