@@ -117,3 +117,16 @@ def test_the_adapted_stride_covers_the_scaled_distance(walk, robot):
     assert 0.8 <= g.travel_ratio <= 1.25
     assert 0.8 <= g.step_ratio <= 1.25
     assert all(s in SIDES for s in (x.side for x in g.imitator))
+
+
+def test_unknown_gait_scaling_is_refused(walk, robot):
+    """A scaling that is not one of SCALINGS is named with the valid ones, before any work;
+    Froude scaling needs the trajectory mode."""
+    from gdimitate.errors import InvalidInputError, UnknownNameError
+
+    h, m, f = walk
+    with pytest.raises(UnknownNameError, match="froude"):
+        gd.adapt(m, h, robot("g1"), force="measured", forces=f, gait_scaling="inches")
+    with pytest.raises(InvalidInputError, match="trajectory"):
+        gd.adapt(m, h, robot("g1"), force="measured", forces=f, gait_scaling="froude",
+                 mode="per_frame")

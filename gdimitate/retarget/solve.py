@@ -49,7 +49,7 @@ several times slower, the same motion to within the audit's tolerances)."""
 GAIT_SCALING = "geometric"
 """``gait_scaling=``'s default (:data:`gdimitate.footsteps.SCALINGS`): lengths × the legs'
 ratio r at the demonstrator's cadence (the paper's); ``"froude"`` also runs the
-demonstration's clock × √r (docs/design.md §15 says how the default was chosen)."""
+demonstration's clock × √r (docs/design.md §13 says how the default was chosen)."""
 
 MAX_ITERATIONS = 150
 """Iterations of one adaptation, the hard solve and the least-infeasible one together (the
