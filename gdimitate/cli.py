@@ -212,7 +212,7 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
 
 
 def _cmd_adapt(a: argparse.Namespace) -> int:
-    from .verdict import solver_record, verdict
+    from .verdict import gait_lines, solver_record, verdict
 
     with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
@@ -230,7 +230,7 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
             tmp.write_text(json.dumps(report, indent=2, default=str))
     r = result.report
     print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json")
-    for line in v.lines() + (result.gait.lines() if result.gait is not None else []):
+    for line in v.lines() + gait_lines(result):
         print(f"  {line}")
     print(f"  force-direction error max {r.force_direction_error_max:.3g} rad, joint-limit "
           f"violation max {r.joint_limit_violation_max:.3g} rad")

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EXIT_NOT_FEASIBLE", "Verdict", "solver_record", "verdict"]
+__all__ = ["EXIT_NOT_FEASIBLE", "Verdict", "solver_record", "verdict", "gait_lines",
+           "limits_at_bound"]
 
 #: Exit status of a command whose result was written but is not feasible, or whose goal (an
 #: optimiser row, a replay check, a simulation that fell) is unmet.
@@ -113,3 +114,37 @@ def verdict(result: Any) -> Verdict:
                sorted(r.joint_limit_violation.items(), key=lambda kv: -kv[1])]
     return Verdict(bool(r.all_feasible), f"{r.method} method (reachability and position "
                    "limits; no dynamics checked)", tuple(failed), unmet, solver)
+
+
+#: a joint whose worst torque or velocity is at least this share of its limit is at its bound
+AT_BOUND = 0.99
+
+
+def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
+    """The actuated joints' limits the audited motion reaches (torque or velocity at ≥
+    ``share`` of its limit, position within 1e-3 of it), most used first, as
+    ``"velocity:J 1.00"`` — where a gait is not kept, the limits that may hold it back (at
+    their bound somewhere in the motion, not proven to be the cause)."""
+    out: list[tuple[float, str]] = []
+    for j in getattr(aud, "joints", ()):
+        for kind, r in (("torque", j.torque_ratio), ("velocity", j.velocity_ratio)):
+            if np.isfinite(r) and r >= share:
+                out.append((float(r), f"{kind}:{j.name} {r:.2f}"))
+        if np.isfinite(j.position_margin) and j.position_margin <= 1e-3:
+            out.append((1.0, f"position:{j.name}"))
+    return [x for _, x in sorted(out, key=lambda p: -p[0])]
+
+
+def gait_lines(result: Any) -> list[str]:
+    """The gait comparison's console lines (:attr:`~gdimitate.adapt.AdaptedMotion.gait`),
+    with the limits at their bound where the gait is not kept; empty without a gait."""
+    g = getattr(result, "gait", None)
+    if g is None:
+        return []
+    out = g.lines()
+    aud = getattr(result, "audit", None)
+    if not g.kept and aud is not None:
+        lim = limits_at_bound(aud)
+        out.append("limits at their bound: " + (", ".join(lim[:6]) + (
+            f" (and {len(lim) - 6} more)" if len(lim) > 6 else "") if lim else "none"))
+    return out

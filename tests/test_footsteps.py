@@ -130,3 +130,42 @@ def test_unknown_gait_scaling_is_refused(walk, robot):
     with pytest.raises(InvalidInputError, match="trajectory"):
         gd.adapt(m, h, robot("g1"), force="measured", forces=f, gait_scaling="froude",
                  mode="per_frame")
+
+
+def test_limits_at_bound_from_the_joint_audit():
+    """Closed form on audit rows: a torque at 0.995 of its limit and a velocity at 1.0 are at
+    their bound, 0.98 is not, a position 0.5 mm from its limit is; no limit (NaN) is never."""
+    from gdimitate.audit.report import JointAudit
+    from gdimitate.verdict import limits_at_bound
+
+    def row(name, tr, vr, pm):
+        return JointAudit(name, tr, 0, 1.0, tr, vr, 0, 1.0, vr, pm, 0)
+
+    class Aud:
+        joints = (row("a", 0.995, 0.2, 1.0), row("b", 0.98, 1.0, 1.0),
+                  row("c", float("nan"), float("nan"), 5e-4), row("d", 0.5, 0.5, 0.2))
+
+    assert limits_at_bound(Aud()) == ["velocity:b 1.00", "position:c", f"torque:a {0.995:.2f}"]
+
+
+@pytest.mark.slow
+def test_a_gait_not_kept_says_so_and_names_the_limits(walk, robot):
+    """Romeo cannot take the scaled steps at the demonstrator's cadence: its result keeps the
+    push (audit-feasible), prints "gait NOT kept" with the travel ratio, and lists limits at
+    their bound that the Pinocchio audit recomputed (each ratio ≥ 0.99 in audit.joints)."""
+    from gdimitate.verdict import gait_lines
+
+    h, m, f = walk
+    stride, fs = gd.gait.one_stride(m, f)
+    r = gd.adapt(stride, h, robot("romeo"), force="measured", forces=fs, verbose=False)
+    assert r.audit.feasible and not r.gait.kept
+    lines = gait_lines(r)
+    assert any(f"gait NOT kept: travel ratio {r.gait.travel_ratio:.2f}" in x for x in lines)
+    named = lines[-1].removeprefix("limits at their bound: ").split(", ")
+    ratios = {j.name: np.nanmax([j.torque_ratio, j.velocity_ratio, 0.0])
+              for j in r.audit.joints}
+    assert named and named[0] != "none"
+    for item in named[:6]:
+        kind, rest = item.split(":", 1)
+        name = rest.split(" ")[0]
+        assert kind == "position" or ratios[name] >= 0.99

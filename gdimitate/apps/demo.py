@@ -195,7 +195,7 @@ def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str
     rows = [("demonstration", f"{summary['frames']} frames, {summary['duration_s']:.2f} s "
                               "(one stride of the 3-D walk)"),
             ("imitator", f"{summary['imitator']} ({adapted.motion.T} knots, {summary['method']})")]
-    from ..verdict import verdict
+    from ..verdict import gait_lines, verdict
 
     lines = verdict(adapted).lines()
     rows.append(("verdict", lines[0]))
@@ -206,8 +206,8 @@ def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str
         rows += [("  worst |torque|/limit", f"{worst_tau:.2f}"),
                  ("  min normal force [N]", ", ".join(
                      f"{s} {f.normal.value:.0f}" for s, f in aud.feet.items()))]
-    if adapted.gait is not None:
-        g = adapted.gait.lines()
+    g = gait_lines(adapted)
+    if g:
         rows += [("gait", g[0].removeprefix("gait "))] + [("", line) for line in g[1:]]
     rows.append(("simulation, plan", simline(plan_sim)))
     if copy_sim is not None:
