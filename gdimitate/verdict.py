@@ -122,7 +122,7 @@ AT_BOUND = 0.99
 
 def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
     """The actuated joints' limits the audited motion reaches (torque or velocity at ≥
-    ``share`` of its limit, position within 1e-3 of it), most used first, as
+    ``share`` of its limit, most used first; then positions within 1e-3 of a limit), as
     ``"velocity:J 1.00"`` — where a gait is not kept, the limits that may hold it back (at
     their bound somewhere in the motion, not proven to be the cause)."""
     out: list[tuple[float, str]] = []
@@ -131,7 +131,7 @@ def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
             if np.isfinite(r) and r >= share:
                 out.append((float(r), f"{kind}:{j.name} {r:.2f}"))
         if np.isfinite(j.position_margin) and j.position_margin <= 1e-3:
-            out.append((1.0, f"position:{j.name}"))
+            out.append((0.0, f"position:{j.name}"))  # after the torques and velocities
     return [x for _, x in sorted(out, key=lambda p: -p[0])]
 
 
