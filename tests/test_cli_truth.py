@@ -264,3 +264,29 @@ def test_entrain_without_a_file_learns_demos_stride(tmp_path, capsys):
     assert rep["replay_check"]["target_frequency_hz"] == pytest.approx(
         1 / (stride.t[-1] - stride.t[0]), rel=1e-9)
     assert "one stride of the shipped real 3-D walk" in capsys.readouterr().out
+
+
+def test_adapt_prints_the_gait_the_report_holds(tmp_path, capsys):
+    """One number, one definition: the gait `gdimitate adapt` prints (travel, speed, stride and
+    step ratios, the travel itself) is report.json's `gait`, and the travel ratio is the one
+    recomputed here from the written motion and the demonstration (docs/design.md §13: the
+    imitator's base travel over the demonstrator's × the legs' ratio)."""
+    from gdimitate.footsteps import leg_ratio
+    from gdimitate.gait import human_walk
+
+    out = tmp_path / "g"
+    main(["adapt", str(SAG), "--grf", str(SAG_GRF), "--imitator", "hoap2", "--out", str(out)])
+    printed = capsys.readouterr().out
+    g = json.loads((out / "report.json").read_text())["gait"]
+    assert (f"travel {g['travel_m']:.3f} m for {g['travel_demo_scaled_m']:.3f} m scaled, "
+            f"ratio {g['travel_ratio']:.2f}") in printed
+    assert f"ratio {g['speed_ratio']:.2f}" in printed
+    assert (f"stride ratio {g['stride_ratio']:.2f}, step ratio {g['step_ratio']:.2f}"
+            in printed)
+    human, walk = human_walk()
+    hoap2 = gd.Robot.from_library("hoap2")
+    q = gd.Motion.from_npz(out / "imitator_motion.npz").q
+    ix, dx = hoap2.idx_q("base_x"), human.idx_q("base_x")
+    own = abs(q[-1, ix] - q[0, ix])
+    demo = abs(walk.q[-1, dx] - walk.q[0, dx]) * leg_ratio(human, hoap2)
+    assert g["travel_ratio"] == pytest.approx(own / demo, rel=1e-9)
