@@ -1,4 +1,4 @@
-"""The gait kept on a corpus (issue 32, docs/design.md §15): every shipped walk and synthetic
+"""The gait kept on a corpus (issue 32, docs/design.md §13): every shipped walk and synthetic
 variants of it, onto several robots, judged by the audit and the gait's travel ratio.
 
 Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu]
@@ -15,7 +15,7 @@ degrees about the vertical through its first base position; ``rateR`` — resamp
 position and 0.01 rad on every joint angle, white, seed 0 (mocap noise; the contacts as
 recorded). Each case runs in its own Python process with its own timer (CPU seconds of the
 adaptation, derivatives already compiled). The travel ratio is computed here from the
-output alone, by docs/design.md §15's definition (the imitator's base travel over the clip
+output alone, by docs/design.md §13's definition (the imitator's base travel over the clip
 over the demonstrator's × the legs' ratio), so the baseline revision — extracted with ``git
 archive`` and run the same way — is measured by the same rule.
 """

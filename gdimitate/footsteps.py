@@ -1,4 +1,4 @@
-"""A walk's footsteps (docs/design.md §15): where each stance phase puts its foot, the steps
+"""A walk's footsteps (docs/design.md §13): where each stance phase puts its foot, the steps
 between them, and the gait of an imitator against its demonstrator scaled to its legs.
 
 - A **footprint** is one stance phase of one foot (a run of its contact flags): its knots and
@@ -40,7 +40,7 @@ __all__ = ["SCALINGS", "KEPT", "Footprint", "Step", "GaitComparison", "leg_ratio
 
 SCALINGS = ("geometric", "froude")
 KEPT = (0.8, 1.25)
-"""The travel ratios at which a gait counts as kept (docs/design.md §15)."""
+"""The travel ratios at which a gait counts as kept (docs/design.md §13)."""
 
 
 def leg_ratio(demonstrator: Robot, imitator: Robot) -> float:
@@ -197,7 +197,7 @@ class GaitComparison:
 
     @property
     def kept(self) -> bool:
-        """Whether the travel ratio is within :data:`KEPT` (docs/design.md §15's target)."""
+        """Whether the travel ratio is within :data:`KEPT` (docs/design.md §13's target)."""
         return bool(KEPT[0] <= self.travel_ratio <= KEPT[1])
 
     def lines(self) -> list[str]:

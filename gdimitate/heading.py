@@ -1,4 +1,4 @@
-"""The demonstrator's heading, and walks turned about the vertical (docs/design.md §15).
+"""The demonstrator's heading, and walks turned about the vertical (docs/design.md §13).
 
 A lab's x axis is arbitrary: a subject may walk along any direction of it. Whatever depends
 on "forward" is written in the demonstration's *heading frame*: the world turned about the

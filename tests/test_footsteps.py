@@ -1,4 +1,4 @@
-"""Footsteps and the gait kept (docs/design.md §15): footprints against the force plates'
+"""Footsteps and the gait kept (docs/design.md §13): footprints against the force plates'
 measured centres of pressure, steps on a synthetic walk of known steps, the gait comparison's
 ratios from its own definition, and the adapted G1 stride covering the scaled distance."""
 

@@ -1,4 +1,4 @@
-"""Nothing assumes a heading (docs/design.md §15): turning a walk about the vertical turns the
+"""Nothing assumes a heading (docs/design.md §13): turning a walk about the vertical turns the
 frames Pinocchio computes from it, and the whole-body adaptor gives the same motion up to that
 turn, with the same audit verdict, whichever way the subject walked in the lab."""
 

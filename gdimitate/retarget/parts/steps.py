@@ -1,5 +1,5 @@
 """Gait cost: the steps of the demonstrator scaled to the imitator's legs (docs/design.md
-§15). At every knot where both feet are in stance, the horizontal place of the left sole
+§13). At every knot where both feet are in stance, the horizontal place of the left sole
 relative to the right, over the imitator's leg length, minus the demonstrator's footprints'
 (:func:`gdimitate.footsteps.footprints`: the mean place of each stance phase) over its leg
 length (parameters ``steps`` ``(2,)`` and ``steps_on`` ``(1,)``, 1 in double support, else
