@@ -35,8 +35,9 @@ from .kinematics import frame_paths
 from .motion import Motion
 from .robot import SIDES, Robot
 
-__all__ = ["SCALINGS", "KEPT", "Footprint", "Step", "GaitComparison", "leg_ratio", "time_scale",
-           "stance_phases", "footprints", "steps", "travel", "compare_gait"]
+__all__ = ["SCALINGS", "KEPT", "sole_frames", "Footprint", "Step", "GaitComparison",
+           "leg_ratio", "time_scale", "stance_phases", "footprints", "steps", "travel",
+           "compare_gait"]
 
 SCALINGS = ("geometric", "froude")
 KEPT = (0.8, 1.25)

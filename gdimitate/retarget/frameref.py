@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ..footsteps import sole_frames
 from ..robot import SIDES
 from .receding import Tasks, q_of_v
 
@@ -67,9 +68,7 @@ class FrameReference:
         self.s = float(np.mean([imitator.legs[x].length for x in SIDES])
                        / np.mean([demonstrator.legs[x].length for x in SIDES]))
         dm = demonstrator.model
-        dc = demonstrator.contacts or {}
-        self.sole = {x: dm.getFrameId(dc[x].frame if x in dc else demonstrator.legs[x].sole)
-                     for x in SIDES}
+        self.sole = {x: dm.getFrameId(f) for x, f in sole_frames(demonstrator).items()}
         self.knee = {x: dm.getJointId(demonstrator.legs[x].knee) for x in SIDES}
         self.ankle = {x: dm.getFrameId(demonstrator.legs[x].ankle or demonstrator.legs[x].sole)
                       for x in SIDES}

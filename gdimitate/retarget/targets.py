@@ -10,6 +10,7 @@ import numpy as np
 
 from ..contact import ContactForces
 from ..errors import InvalidInputError
+from ..footsteps import sole_frames
 from ..kinematics import anchor_schedule, frame_placements
 from ..metrics import force_direction
 from ..motion import Motion
@@ -162,8 +163,7 @@ def demonstration_targets(demonstrator: Robot, demo: Motion, imitator: Robot, bm
     legs = demonstrator.legs
     frames = [f for s in SIDES for f in (legs[s].hip, legs[s].knee, legs[s].ankle or legs[s].sole)]
     seg_frames = list(bmap.segments)
-    dc = demonstrator.contacts
-    soles = [dc[s].frame if s in dc else legs[s].sole for s in SIDES]
+    soles = list(sole_frames(demonstrator).values())
     placements = frame_placements(demonstrator, demo.q, frames + seg_frames + soles)
     pos = {f: p.translation for f, p in placements.items()}
     rot = {f: p.rotation for f, p in placements.items()}
