@@ -6,10 +6,13 @@ Without a demonstration file, ``adapt``, ``entrain`` and ``view`` use the defaul
 ``demo``: one stride of the shipped real 3-D walk (with its measured forces) and the G1
 imitator (:func:`gdimitate.apps.demo.default_demonstration`).
 
-Ctrl-C (SIGINT) and SIGTERM stop a command cleanly: every meshcat server it started is
-stopped, temporary files are removed, output files are written under a temporary name and
-renamed when complete (a failed or interrupted command removes what it wrote, and the output
-folder if it made it).
+Ctrl-C (SIGINT) and SIGTERM stop a command cleanly, during a solve too: every meshcat server it
+started is stopped, temporary files are removed, output files are written under a temporary
+name and renamed when complete. A command holds its output folder for the run
+(:func:`gdimitate.safety.output_job`): a second run on the same folder is refused, and a failed
+or interrupted command undoes exactly what it wrote there (the files it created removed, the
+ones it replaced put back, the folders it made removed when empty) — never a file that was
+there before or that another program wrote meanwhile.
 
 Exit status (:data:`EXIT_STATUS`): 0 done; 1 ``batch`` finished with failed files; 2 an
 error (message on stderr); 3 the result was written but is not feasible (the audit's verdict;
@@ -28,7 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
 from .errors import GdimitateError, LegDetectionError, OscillatorError
-from .safety import atomic_write, prepare_output_dir, removed_on_failure
+from .safety import atomic_write, output_job, prepare_output_dir
 from .verdict import EXIT_NOT_FEASIBLE
 
 if TYPE_CHECKING:
@@ -162,7 +165,7 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     from .apps.demo import run_demo
 
     imitator = _robot(a.imitator, a)
-    with removed_on_failure(a.out):  # interrupted or failed: no half-written folder
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         s = run_demo(prepare_output_dir(a.out), imitator=imitator, method=a.method)
     fell = s["simulation"]["fell"]
     if s["verdict"]["ok"] and not fell:
@@ -214,7 +217,7 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
 def _cmd_adapt(a: argparse.Namespace) -> int:
     from .verdict import gait_lines, solver_record, verdict
 
-    with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
         _, _, _, result = _adapted(a, a.demonstration)
         v = verdict(result)
@@ -240,7 +243,7 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
 def _cmd_walk(a: argparse.Namespace) -> int:
     from .walk.command import walk_command
 
-    with removed_on_failure(a.out):
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)
         return walk_command(out, _demonstration(a.demonstration, a), _robot(a.imitator, a),
                             a.steps, a.gain, html=not a.no_html, rate=a.rate)
@@ -305,7 +308,7 @@ def _cmd_view(a: argparse.Namespace) -> int:
 def _cmd_entrain(a: argparse.Namespace) -> int:
     from .cpg import entrain
 
-    with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
         options = {}
         if a.motion is not None:
@@ -392,14 +395,18 @@ def _cmd_export(a: argparse.Namespace) -> None:
 def _cmd_simulate(a: argparse.Namespace) -> int:
     from .export import read_wrenches
 
-    demo = _demonstration(a.motion, a)
+    # the plan is a gdimitate .npz that records its robot: --grf, --coordinates and --osim
+    # belong to the --reference (they were applied to the plan, which then always failed)
+    plan_args = argparse.Namespace(**{**vars(a), "grf": None, "coordinates": None,
+                                      "osim": None, "markers": None})
+    demo = _demonstration(a.motion, plan_args)
     wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
     if wrenches is None or demo.motion.v is None:
         raise GdimitateError(f"{a.motion} holds no contact wrenches or velocities: simulate a "
                              "plan written by `gdimitate adapt` (the optimal method) or "
                              "AdaptedMotion.save(..., format='npz')")
     forces = _demonstration(a.reference, a).forces if a.reference else None
-    with removed_on_failure(a.out):  # a failed run leaves no (empty) output folder
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         return _simulate(a, demo, wrenches, forces)
 
 

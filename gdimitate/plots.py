@@ -18,6 +18,7 @@ from .metrics import ForceDirection
 from .motion import Motion
 from .planar.sagittal import leg_angles
 from .robot import Robot
+from .safety import atomic_write
 
 __all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
            "plot_force_directions", "plot_sole_cop"]
@@ -33,7 +34,8 @@ def _L(robot: Robot) -> float:
 def _save(fig, path: Path | None):
     fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=110)
+        with atomic_write(path) as tmp:
+            fig.savefig(tmp, dpi=110)
         plt.close(fig)
     return fig
 

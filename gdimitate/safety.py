@@ -5,7 +5,8 @@ Bounds (module constants, documented in ``docs/security.md``):
 - URDF: at most :data:`MAX_URDF_BYTES` bytes, :data:`MAX_URDF_LINKS` links/joints and a
   kinematic chain at most :data:`MAX_URDF_DEPTH` joints deep (Pinocchio's parser crashes on a
   5000-deep chain and runs for minutes on 191 000 links; a 2000-link chain parses in 0.4 s);
-  no ``<!DOCTYPE>``/``<!ENTITY>`` (entity expansion).
+  no ``<!DOCTYPE>``/``<!ENTITY>`` (entity expansion) in any encoding, no element nested deeper
+  than :data:`MAX_XML_DEPTH` (:func:`parse_xml`).
 - Motions: a median sample interval of at most :data:`MAX_SAMPLE_INTERVAL_S` and at least
   :data:`MIN_SAMPLE_INTERVAL_S`, a duration of at most :data:`MAX_MOTION_DURATION_S` (a time
   axis in milliseconds read as seconds is refused, not integrated for 2500 "seconds").
@@ -18,16 +19,19 @@ Bounds (module constants, documented in ``docs/security.md``):
   output frames, all checked before any array is allocated.
 
 Files: :func:`atomic_write` writes through a temporary name in the target's folder and renames
-it into place, so an interrupted run never leaves a half-written file; :func:`removed_on_failure`
-undoes every file a failed or interrupted multi-file job wrote into its output folder.
+it into place, so an interrupted run never leaves a half-written file; :func:`output_job` holds a
+command's output folder (one run at a time) and undoes exactly the files a failed or interrupted
+run wrote there — never a file that was there before or that another program wrote.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
+import fcntl
 import os
-import re
 import secrets
+import shutil
 import xml.etree.ElementTree as ET
 import zipfile
 from collections.abc import Iterator, Sequence
@@ -35,6 +39,8 @@ from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
+from defusedxml import DefusedXmlException
+from defusedxml import ElementTree as defused_et
 
 from .errors import (
     FileFormatError,
@@ -60,6 +66,7 @@ __all__ = [
     "MAX_URDF_BYTES",
     "MAX_URDF_DEPTH",
     "MAX_URDF_LINKS",
+    "MAX_XML_DEPTH",
     "MIN_SAMPLE_INTERVAL_S",
     "atomic_write",
     "check_array_size",
@@ -72,7 +79,8 @@ __all__ = [
     "parse_xml",
     "prepare_output_dir",
     "read_text_bounded",
-    "removed_on_failure",
+    "output_job",
+    "output_lock",
 ]
 
 #: Largest URDF file read [bytes] (example-robot-data's largest, TIAGo dual, is 0.2 MB).
@@ -103,6 +111,9 @@ MAX_ARRAY_BYTES = 2**30
 #: Highest knot rate of the optimal adaptor [knots/s] (its default is 50; motion capture
 #: rarely exceeds 1 kHz, and each knot is a whole-body state in one nonlinear program).
 MAX_KNOT_RATE = 1000.0
+#: Deepest element nesting of an XML file read (URDF, ``.osim``, ExternalLoads ``.xml``):
+#: OpenSim models nest about 12 deep, URDFs 4.
+MAX_XML_DEPTH = 256
 #: Largest text table (``.mot``/``.sto``) read [bytes].
 MAX_TABLE_BYTES = 512 * 2**20
 #: Largest unpacked content of an ``.npz`` file read [bytes] (a compressed archive can
@@ -230,20 +241,33 @@ def read_text_bounded(path: Path, max_bytes: int, what: str,
                     "file?") from None
 
 
-_DTD = re.compile(r"<!\s*(DOCTYPE|ENTITY)", re.IGNORECASE)
-
-
-def parse_xml(text: str, source: object, error: type[GdimitateError] = URDFError
+def parse_xml(text: str | bytes, source: object, error: type[GdimitateError] = URDFError
               ) -> ET.Element:
-    """Parse XML ``text`` (from ``source``, for messages) with the standard library, refusing
-    document type declarations and entities (no entity expansion, no external references)."""
-    if _DTD.search(text):
-        raise error(f"cannot read {source}: <!DOCTYPE>/<!ENTITY> declarations are not "
-                    "accepted")
+    """Parse XML ``text`` (from ``source``, for messages; bytes in any encoding the document
+    declares, UTF-16 included) with ``defusedxml``, the hardened front of the standard
+    library's parser: document type declarations, entities and external references are
+    refused as the parser meets them, whatever the encoding (a scan of the raw bytes for
+    ``<!DOCTYPE`` misses them in UTF-16), and elements nested deeper than
+    :data:`MAX_XML_DEPTH` are refused (code that walks the tree recursively would hit Python's
+    recursion limit)."""
     try:
-        return ET.fromstring(text)
+        root = defused_et.fromstring(text, forbid_dtd=True, forbid_entities=True,
+                                     forbid_external=True)
+    except DefusedXmlException as e:
+        raise error(f"cannot read {source}: <!DOCTYPE>/<!ENTITY> declarations and external "
+                    f"references are not accepted ({type(e).__name__}); remove them (URDF "
+                    "and OpenSim files need none)") from None
     except ET.ParseError as e:
         raise error(f"cannot read {source}: malformed XML ({e})") from None
+    stack = [(root, 1)]
+    while stack:
+        el, depth = stack.pop()
+        if depth > MAX_XML_DEPTH:
+            raise error(f"cannot read {source}: <{el.tag}> is nested {depth} elements deep; "
+                        f"the limit is {MAX_XML_DEPTH} (URDF and OpenSim files nest fewer "
+                        "than 20)")
+        stack.extend((c, depth + 1) for c in el)
+    return root
 
 
 def check_urdf_bounds(root: ET.Element, source: object) -> None:
@@ -303,7 +327,9 @@ def atomic_write(path: str | os.PathLike) -> Iterator[Path]:
     """Write a file all at once: yields a temporary path in the same folder (same suffix, so
     ``np.savez``/``savefig`` keep their format), renamed to ``path`` when the block ends
     normally and deleted when it raises (Ctrl-C included). ``path`` keeps its old content until
-    the rename.
+    the rename. Inside an :func:`output_job` on ``path``'s folder the write is recorded, so
+    that a failure of the job removes this file (or puts back the one it replaced) and only
+    this one.
 
     Example::
 
@@ -325,7 +351,11 @@ def atomic_write(path: str | os.PathLike) -> Iterator[Path]:
         raise OutputError(f"cannot write {p}: {e.strerror or e}") from None
     try:
         yield tmp
-        os.replace(tmp, p)
+        job = _JOB.get()
+        if job is not None and job.covers(p):
+            job.replace(tmp, p)
+        else:
+            os.replace(tmp, p)
     except OSError as e:
         tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write {p}: {e.strerror or e}") from e
@@ -334,42 +364,140 @@ def atomic_write(path: str | os.PathLike) -> Iterator[Path]:
         raise
 
 
-def _snapshot(folder: Path) -> dict[Path, tuple[int, int]]:
-    out = {}
-    for f in folder.rglob("*") if folder.is_dir() else ():
-        with contextlib.suppress(OSError):
-            if f.is_file():
-                st = f.stat()
-                out[f] = (st.st_mtime_ns, st.st_size)
-    return out
+Stamp = tuple[int, int, int]
+LOCK_NAME = ".gdimitate.lock"
+"""The lock file an :func:`output_job` holds in its folder (``flock``; it names the run's
+process id)."""
+
+
+def _stamp(p: Path) -> Stamp | None:
+    try:
+        st = p.stat()
+    except OSError:
+        return None
+    return (st.st_ino, st.st_mtime_ns, st.st_size)
+
+
+class _Job:
+    """The files one :func:`output_job` wrote (through :func:`atomic_write`): those it
+    created, and those it replaced with the hard link that keeps their old content."""
+
+    def __init__(self, root: Path):
+        self.root = root.resolve()
+        self.created: dict[Path, Stamp] = {}
+        self.replaced: dict[Path, tuple[Path, Stamp]] = {}
+
+    def covers(self, p: Path) -> bool:
+        return p.parent.resolve().is_relative_to(self.root)
+
+    def replace(self, tmp: Path, p: Path) -> None:
+        """Rename ``tmp`` to ``p``, keeping what ``p`` held before the job first wrote it."""
+        if p not in self.created and p not in self.replaced and p.exists():
+            backup = p.with_name(f".{p.name}.{secrets.token_hex(4)}.before")
+            try:
+                os.link(p, backup)  # the old content stays reachable through the new name
+            except OSError:
+                shutil.copy2(p, backup)  # a file system without hard links
+            os.replace(tmp, p)
+            self.replaced[p] = (backup, cast(Stamp, _stamp(p)))
+            return
+        os.replace(tmp, p)
+        stamp = cast(Stamp, _stamp(p))
+        if p in self.replaced:
+            self.replaced[p] = (self.replaced[p][0], stamp)
+        else:
+            self.created[p] = stamp
+
+    def undo(self) -> None:
+        """Remove what the job created and put back what it replaced, where nobody changed
+        the file since the job wrote it (a file changed by another program stays)."""
+        for p, stamp in self.created.items():
+            if _stamp(p) == stamp:
+                p.unlink(missing_ok=True)
+        for p, (backup, stamp) in self.replaced.items():
+            if _stamp(p) == stamp:
+                os.replace(backup, p)
+            else:
+                backup.unlink(missing_ok=True)
+
+    def commit(self) -> None:
+        for backup, _ in self.replaced.values():
+            backup.unlink(missing_ok=True)
+
+
+_JOB: contextvars.ContextVar[_Job | None] = contextvars.ContextVar("gdimitate_job",
+                                                                    default=None)
 
 
 @contextlib.contextmanager
-def removed_on_failure(folder: str | os.PathLike) -> Iterator[Path]:
-    """Undo a multi-file job's output if it fails or is interrupted: on any exception
-    (``KeyboardInterrupt`` included) every file under ``folder`` that the block created or
-    changed is deleted (and ``folder`` too if the block created it and it is left empty, and
-    the parent folders created on the way when left empty), then the exception propagates.
-    Files that were there before and are unchanged stay."""
+def output_lock(folder: str | os.PathLike) -> Iterator[Path]:
+    """Hold ``folder``'s lock (:data:`LOCK_NAME`, an advisory ``flock`` that the system
+    releases when the process ends, even by SIGKILL) for the block: a second gdimitate run on
+    the same output folder is refused with :class:`OutputError` instead of mixing its files
+    with this one's. ``folder`` must exist."""
     p = Path(folder).expanduser()
-    existed = p.is_dir()
-    made = [p]  # p and the parents the block may create (mkdir(parents=True))
+    lock = p / LOCK_NAME
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError as e:
+            raise OutputError(f"cannot write to output folder {p}: {e.strerror or e}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise OutputError(f"output folder {p} is in use by another gdimitate run "
+                              f"(process {owner}); wait for it to end or give another "
+                              "output folder") from None
+        if _stamp(lock) is not None and os.fstat(fd).st_ino == cast(Stamp, _stamp(lock))[0]:
+            break  # not a lock file its last holder removed while we opened it
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        yield p
+    finally:
+        lock.unlink(missing_ok=True)
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def output_job(folder: str | os.PathLike) -> Iterator[Path]:
+    """A command's writes into its output folder as one job: creates ``folder`` (and its
+    parents) if needed, holds its :func:`output_lock`, and records every file the block
+    writes there through :func:`atomic_write`. When the block raises (Ctrl-C and SIGTERM
+    included), exactly those files are undone — the ones it created removed, the ones it
+    replaced put back — unless another program changed them since; the folders it created are
+    removed if left empty; nothing else is touched (files that were there, files others write
+    meanwhile). Yields the folder."""
+    p = Path(folder).expanduser()
+    made = [p]  # p and the parents mkdir(parents=True) creates
     while not made[-1].parent.exists() and made[-1].parent != made[-1]:
         made.append(made[-1].parent)
-    before = _snapshot(p)
+    made = [d for d in made if not d.exists()]
+    prepare_output_dir(p)
+    job = _Job(p)
     try:
-        yield p
+        with output_lock(p):
+            before = {d for d in p.rglob("*") if d.is_dir()}
+            token = _JOB.set(job)
+            try:
+                yield p
+            except BaseException:
+                job.undo()
+                for d in sorted((d for d in p.rglob("*") if d.is_dir() and d not in before),
+                                reverse=True):
+                    with contextlib.suppress(OSError):
+                        d.rmdir()
+                raise
+            finally:
+                _JOB.reset(token)
+            job.commit()
     except BaseException:
-        for f, stamp in _snapshot(p).items():
-            if before.get(f) != stamp:
-                f.unlink(missing_ok=True)
-        if not existed:
-            for d in sorted((d for d in p.rglob("*") if d.is_dir()), reverse=True):
-                with contextlib.suppress(OSError):
-                    d.rmdir()
-            for d in made:  # deepest first; a folder that is not empty stays
-                with contextlib.suppress(OSError):
-                    d.rmdir()
+        for d in made:  # deepest first; a folder that is not empty stays
+            with contextlib.suppress(OSError):
+                d.rmdir()
         raise
 
 
@@ -383,6 +511,30 @@ def _looks_like(head: bytes) -> str:
     except UnicodeDecodeError:
         return "binary data"
     return "text (a CSV or other table?)" if text.isprintable() or "\n" in text else "binary data"
+
+
+def _check_member(p: Path, zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> None:
+    """Refuse an archive member whose ``.npy`` header promises more data than the member
+    holds (NumPy would allocate what the header says: a shape of (10¹¹,) asks for 745 GiB)."""
+    if not info.filename.endswith(".npy"):
+        return
+    with zf.open(info) as f:
+        try:
+            version = np.lib.format.read_magic(f)
+            read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                    else np.lib.format.read_array_header_2_0)
+            shape, _, dtype = read(f)
+        except (ValueError, SyntaxError, TypeError, OverflowError) as e:
+            raise FileFormatError(f"{p}: member {info.filename} has no valid .npy header "
+                                  f"({e})") from None
+        header = f.tell()
+    if dtype.hasobject:
+        return  # refused when read (no pickled objects)
+    need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    if need > info.file_size - header:
+        raise FileFormatError(f"{p}: member {info.filename} claims shape {shape} of {dtype} "
+                              f"({need:,} bytes) but holds {info.file_size - header:,}; the "
+                              "archive is truncated or forged")
 
 
 @contextlib.contextmanager
@@ -410,9 +562,11 @@ def open_npz(path: str | os.PathLike, required: Sequence[str] = ()
                                   f"by Motion.to_npz); it looks like {_looks_like(head)}")
         with zipfile.ZipFile(p) as zf:
             unpacked = sum(i.file_size for i in zf.infolist())
-        if unpacked > MAX_NPZ_BYTES:
-            raise FileFormatError(f"{p} unpacks to {unpacked:,} bytes; the limit is "
-                                  f"{MAX_NPZ_BYTES:,}")
+            if unpacked > MAX_NPZ_BYTES:
+                raise FileFormatError(f"{p} unpacks to {unpacked:,} bytes; the limit is "
+                                      f"{MAX_NPZ_BYTES:,}")
+            for info in zf.infolist():
+                _check_member(p, zf, info)
         z = np.load(p, allow_pickle=False)
     except (zipfile.BadZipFile, OSError, EOFError, ValueError) as e:
         if isinstance(e, GdimitateError):

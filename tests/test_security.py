@@ -37,7 +37,6 @@ from gdimitate.safety import (
     MAX_URDF_DEPTH,
     MAX_URDF_LINKS,
     atomic_write,
-    removed_on_failure,
 )
 from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
 from gdimitate.viz.server import MeshcatServer
@@ -327,24 +326,6 @@ def test_atomic_write_replaces_whole_or_not_at_all(tmp_path):
     umask = os.umask(0o022)
     os.umask(umask)
     assert (tmp_path / "m.npz").stat().st_mode & 0o777 == 0o666 & ~umask
-
-
-def test_removed_on_failure_undoes_only_what_the_job_wrote(tmp_path):
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "keep.txt").write_text("before")
-    with pytest.raises(KeyboardInterrupt), removed_on_failure(out):
-        (out / "new.csv").write_text("1,2")
-        (out / "sub").mkdir()
-        (out / "sub" / "x.png").write_bytes(b"png")
-        raise KeyboardInterrupt
-    assert sorted(p.name for p in out.rglob("*") if p.is_file()) == ["keep.txt"]
-    fresh = tmp_path / "fresh"
-    with pytest.raises(RuntimeError), removed_on_failure(fresh):
-        fresh.mkdir()
-        (fresh / "a").write_text("x")
-        raise RuntimeError
-    assert not fresh.exists()
 
 
 # ------------------------------------------------------------------------- 4. bounds

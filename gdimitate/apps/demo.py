@@ -81,7 +81,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     from ..adapt import adapt
     from ..cpg import entrain
     from ..robot import Robot
-    from ..safety import prepare_output_dir
+    from ..safety import atomic_write, prepare_output_dir
     from ..verdict import solver_record, verdict
     from .baselines import joint_copy, kinematic_plan
 
@@ -134,7 +134,8 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
         "html": html,
     }
     summary["elapsed_s"] = time.perf_counter() - t0
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json))
+    with atomic_write(out / "summary.json") as tmp:
+        tmp.write_text(json.dumps(summary, indent=2, default=_json))
     log("[7/7] done.\n")
     log(_table(_rows(summary, adapted, plan_sim, copy_sim, cpg, out)))
     return summary
@@ -146,12 +147,17 @@ def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot
     directions (demonstrator measured vs plan) and the simulation's summary plot."""
     from ..metrics import force_direction
     from ..plots import plot_force_directions
+    from ..safety import atomic_write
     from ..sim import plots as sim_plots
 
-    adapted.save(out / "imitator_motion.npz")
-    adapted.save(out / "imitator_motion.csv", format="csv")
-    (out / "oscillator_params.json").write_text(cpg.result.to_json())
-    cpg.replay.to_csv(out / "cpg_replay_joints.csv")
+    with atomic_write(out / "imitator_motion.npz") as tmp:
+        adapted.save(tmp)
+    with atomic_write(out / "imitator_motion.csv") as tmp:
+        adapted.save(tmp, format="csv")
+    with atomic_write(out / "oscillator_params.json") as tmp:
+        tmp.write_text(cpg.result.to_json())
+    with atomic_write(out / "cpg_replay_joints.csv") as tmp:
+        cpg.replay.to_csv(tmp)
     dirs = {"demonstrator (measured)": force_direction(demo_robot, demo, "measured",
                                                       forces=forces)}
     if adapted.wrenches is not None:

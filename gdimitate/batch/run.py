@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import fnmatch
 import multiprocessing as mp
 import os
 import secrets
+import shutil
 import signal
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -81,11 +84,20 @@ def find_inputs(input_dir: str | os.PathLike, pattern: str = "*") -> tuple[Path,
     force files (``<stem>_grf.mot``/``.sto``, read with the demonstration ``<stem>.mot``)
     excluded.
 
-    Raises :class:`BatchError` when the folder does not exist or holds no such file."""
+    ``pattern`` is matched against the names of the folder's own entries (``fnmatch``), so
+    it can never reach another folder.
+
+    Raises :class:`BatchError` when the folder does not exist or holds no such file, or the
+    pattern names a folder (``/``, ``..``)."""
     d = Path(input_dir).expanduser()
     if not d.is_dir():
         raise BatchError(f"input folder {d} does not exist or is not a folder")
-    files = sorted(p for p in d.glob(pattern) if p.is_file() and not p.name.startswith(".")
+    if not isinstance(pattern, str) or "/" in pattern or os.sep in pattern \
+            or pattern in (".", ".."):
+        raise BatchError(f"pattern {pattern!r} is not a file-name glob: give one without "
+                         f"folder parts (e.g. '*.bvh'); the files are taken from {d} only")
+    files = sorted(p for p in d.iterdir() if fnmatch.fnmatchcase(p.name, pattern)
+                   and p.is_file() and not p.name.startswith(".")
                    and p.suffix.lower() in INPUT_SUFFIXES and not p.stem.endswith(GRF_SUFFIX))
     if not files:
         raise BatchError(f"no demonstration files matching {pattern!r} in {d} (extensions "
@@ -176,10 +188,14 @@ def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
               on_row: Callable[[BatchRow], None]) -> int:
     distributed = _dask()
     cluster = None
+    scratch = None
     if address is None:  # a cluster of `workers` processes on this machine, for this batch
+        # its workers' scratch space in a folder of this run's own, removed with the cluster
+        # (Dask's default, dask-scratch-space/ in the temporary folder, outlives the batch)
+        scratch = tempfile.mkdtemp(prefix="gdimitate-dask-")
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
                                            processes=True, host="127.0.0.1",
-                                           dashboard_address=None)
+                                           dashboard_address=None, local_directory=scratch)
         address = cluster.scheduler_address
     try:
         try:
@@ -211,6 +227,8 @@ def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
     finally:
         if cluster is not None:
             cluster.close()
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
     return n
 
 
@@ -250,9 +268,10 @@ def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
     ``summary.csv``/``summary.json``. Raises :class:`BatchError` (no inputs, an output folder
     that is the input folder, a scheduler out of reach), :class:`UnknownNameError` (executor;
     :class:`~gdimitate.errors.UnknownRobotError` for the imitator, before any work),
-    :class:`~gdimitate.errors.OutputError` (an output folder that cannot be written).
+    :class:`~gdimitate.errors.OutputError` (an output folder that cannot be written, or that
+    another gdimitate run holds: :func:`~gdimitate.safety.output_lock`).
     """
-    from ..safety import check_count, prepare_output_dir
+    from ..safety import check_count, output_lock, prepare_output_dir
 
     if executor not in EXECUTORS:
         raise UnknownNameError("executor", executor, EXECUTORS)
@@ -271,36 +290,38 @@ def run_batch(input_dir: str | os.PathLike, out_dir: str | os.PathLike,
     if out.resolve() == Path(input_dir).expanduser().resolve():
         raise BatchError(f"the output folder {out} is the input folder: give another --out "
                          "(the results would be read as inputs next time)")
-    start = time.perf_counter()
-    rows: dict[str, BatchRow] = {}
-    bar = Progress(len(files), enabled=progress)
-    tasks: list[Task] = []
-    for f in files:
-        row = read_finished(f, out, options)
-        if row is None:
-            tasks.append((str(f), str(out), options, f.name))
-        else:
-            rows[f.name] = row
+    with output_lock(out):  # one batch (or command) at a time in this folder
+        start = time.perf_counter()
+        rows: dict[str, BatchRow] = {}
+        bar = Progress(len(files), enabled=progress)
+        tasks: list[Task] = []
+        for f in files:
+            row = read_finished(f, out, options)
+            if row is None:
+                tasks.append((str(f), str(out), options, f.name))
+            else:
+                rows[f.name] = row
+                bar.update(row)
+
+        def on_row(row: BatchRow) -> None:
+            rows[row.file] = row
             bar.update(row)
 
-    def on_row(row: BatchRow) -> None:
-        rows[row.file] = row
-        bar.update(row)
-
-    used = workers
-    meta: dict[str, Any] = {"executor": executor, "address": address, "workers": workers,
-            "options": options.key(), "inputs": len(files)}
-    complete = False
-    try:
-        if tasks and executor == "process":
-            used = _run_process(tasks, min(workers, len(tasks)), on_row)
-        elif tasks:
-            used = _run_dask(tasks, workers, address, on_row)
-        complete = True
-    finally:
-        wall = time.perf_counter() - start
-        ordered = tuple(rows[f.name] for f in files if f.name in rows)
-        meta.update(workers=used, wall_s=wall, complete=complete)
-        csv_path, json_path = write_summary(ordered, out, meta)
+        used = workers
+        meta: dict[str, Any] = {"executor": executor, "address": address,
+                                "workers": workers, "options": options.key(),
+                                "inputs": len(files)}
+        complete = False
+        try:
+            if tasks and executor == "process":
+                used = _run_process(tasks, min(workers, len(tasks)), on_row)
+            elif tasks:
+                used = _run_dask(tasks, workers, address, on_row)
+            complete = True
+        finally:
+            wall = time.perf_counter() - start
+            ordered = tuple(rows[f.name] for f in files if f.name in rows)
+            meta.update(workers=used, wall_s=wall, complete=complete)
+            csv_path, json_path = write_summary(ordered, out, meta)
     return BatchResult(rows=ordered, summary_csv=csv_path, summary_json=json_path,
                        wall_s=wall, executor=executor, workers=used)

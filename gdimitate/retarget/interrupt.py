@@ -1,10 +1,13 @@
 """Ctrl-C during a solve, and progress lines.
 
-CasADi's IPOPT swallows SIGINT (the solve runs to its end and the process exits 0). Around each
-solve :func:`guard` installs a Python SIGINT handler that only sets a flag; the solver's
+CasADi's IPOPT swallows SIGINT (the solve runs to its end and the process exits 0), and an
+exception raised by a Python signal handler inside its callback is lost ("SystemError …
+returned a result with an exception set"). Around each solve :func:`guard` installs SIGINT and
+SIGTERM handlers that only set a flag; the solver's
 iteration callback (:class:`Progress`, IPOPT's intermediate callback through CasADi's
-``iteration_callback``) sees the flag and asks IPOPT to stop; :func:`guard` then raises
-``KeyboardInterrupt`` after the solver has returned, so nothing is half-written. The callback
+``iteration_callback``) sees the flag and asks IPOPT to stop; :func:`guard` then passes
+the signal on to the handler that was there before (``KeyboardInterrupt`` for Ctrl-C) after the
+solver has returned, so nothing is half-written. The callback
 also prints the iteration number, the objective and the largest constraint violation every
 ``every`` iterations when progress is on, and feeds each iterate to the stopping rule
 (:class:`~.stopping.Plateau`) when one is given.
@@ -26,7 +29,7 @@ __all__ = ["Progress", "guard"]
 
 
 class _State:
-    interrupted = False
+    interrupted = 0  # the signal number that asked the solve to stop
     verbose = False
     lbg: np.ndarray | None = None
     ubg: np.ndarray | None = None
@@ -101,27 +104,41 @@ def _barrier() -> float:
 @contextmanager
 def guard(verbose: bool, lbg: np.ndarray, ubg: np.ndarray, label: str = "", stopper=None,
           solver: ca.Function | None = None):
-    """Run a solve with the SIGINT flag handler installed (main thread only), progress
-    settings and an optional stopping rule, which is given IPOPT's barrier parameter of each
-    iterate from ``solver`` (the nlpsol that runs); raises ``KeyboardInterrupt`` after the
-    solve when Ctrl-C arrived."""
-    STATE.interrupted = False
+    """Run a solve with the flag handler of SIGINT and SIGTERM installed (main thread only),
+    progress settings and an optional stopping rule, which is given IPOPT's barrier parameter
+    of each iterate from ``solver`` (the nlpsol that runs). A signal that arrived during the
+    solve is delivered after it (:func:`_deliver`): ``KeyboardInterrupt`` for Ctrl-C."""
+    STATE.interrupted = 0
     STATE.stopper, STATE.solver = stopper, solver
     STATE.verbose, STATE.lbg, STATE.ubg, STATE.label = verbose, lbg, ubg, label
     STATE.t0 = time.perf_counter()
     main = threading.current_thread() is threading.main_thread()
-    old = None
+    old: dict[int, object] = {}
     if main:
-        def handler(signum, frame):
-            STATE.interrupted = True
+        def handler(signum: int, frame: object) -> None:
+            STATE.interrupted = int(signum)
 
-        old = signal.signal(signal.SIGINT, handler)
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                old[sig] = signal.signal(sig, handler)
     try:
         yield STATE
     finally:
         STATE.solver = None
-        if main:
-            signal.signal(signal.SIGINT, old)
+        for signum, previous in old.items():
+            signal.signal(signum, previous)  # type: ignore[arg-type]
     if STATE.interrupted:
-        STATE.interrupted = False
+        _deliver(int(STATE.interrupted), old.get(int(STATE.interrupted)))
+
+
+def _deliver(sig: int, previous: object) -> None:
+    """Hand a signal that arrived during a solve to the handler that was there before (the
+    command line's: Ctrl-C → exit 130, SIGTERM → exit 143), once the solver has returned;
+    Python's own Ctrl-C handler → ``KeyboardInterrupt``; SIGTERM's default → the process ends
+    by it."""
+    STATE.interrupted = 0
+    if callable(previous) and previous is not signal.default_int_handler:
+        previous(sig, None)
+    if sig == signal.SIGINT:
         raise KeyboardInterrupt("optimal adaptor: solve interrupted (Ctrl-C)")
+    signal.raise_signal(sig)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..metrics import angle_down
 from ..robot import SIDES
+from ..safety import atomic_write
 from .metrics import frontal_angle, stance_intervals
 from .simulate import SimResult
 
@@ -22,7 +23,8 @@ __all__ = ["plot_forces", "plot_force_directions", "plot_cop", "plot_tracking", 
 def _save(fig, path: str | Path | None):
     fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=110)
+        with atomic_write(path) as tmp:
+            fig.savefig(tmp, dpi=110)
         plt.close(fig)
     return fig
 

@@ -156,7 +156,10 @@ def connect(zmq_url: str, web_url: str | None = None, timeout_s: float = 30.0
     return meshcat.Visualizer(window=_Window(zmq_url, web_url, timeout_s))
 
 
-def _stop(proc: subprocess.Popen) -> None:
+def _stop(proc: subprocess.Popen, log: Path | None = None) -> None:
+    """Stop the server process (terminate, then kill after 5 s) and delete ``log``, the
+    automatic log it owns (also when the server is garbage-collected or the interpreter
+    exits without :meth:`MeshcatServer.close`)."""
     if proc.poll() is None:
         proc.terminate()
         try:
@@ -164,6 +167,8 @@ def _stop(proc: subprocess.Popen) -> None:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(timeout=5)
+    if log is not None:
+        log.unlink(missing_ok=True)
 
 
 class MeshcatServer:
@@ -187,7 +192,7 @@ class MeshcatServer:
         self.zmq_url = zmq_url
         self.port = port
         self.log_path = log_path
-        self._finalizer = weakref.finalize(self, _stop, proc)
+        self._finalizer = weakref.finalize(self, _stop, proc, log_path if owns_log else None)
         self._owns_log = owns_log
 
     @classmethod
@@ -312,8 +317,6 @@ class MeshcatServer:
     def close(self) -> None:
         """Stop the process (terminate, then kill after 5 s) and delete an automatic log."""
         self._finalizer()
-        if self._owns_log and self.log_path is not None:
-            self.log_path.unlink(missing_ok=True)
 
     def __enter__(self) -> MeshcatServer:
         return self

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..robot import SIDES  # noqa: E402
+from ..safety import atomic_write  # noqa: E402
 
 __all__ = ["plot_walk"]
 
@@ -40,7 +41,8 @@ def _portraits(res, out: Path) -> str:
         ax.set_ylabel("dy/dt [1/s]")
     fig.suptitle(f"oscillator phase portraits (feedback gain {res.feedback_gain:g})")
     fig.tight_layout()
-    fig.savefig(out / "walk_phase_portraits.png", dpi=110)
+    with atomic_write(out / "walk_phase_portraits.png") as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return "walk_phase_portraits.png"
 
@@ -64,7 +66,8 @@ def _frequency(res, out: Path) -> str:
     ax.set_ylabel("stride frequency [Hz]")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "walk_frequency.png", dpi=110)
+    with atomic_write(out / "walk_frequency.png") as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return "walk_frequency.png"
 
@@ -95,6 +98,7 @@ def _forces(res, out: Path) -> str:
     ax[1].set_ylabel("RMS angle vs measured [deg]")
     ax[1].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "walk_force_directions.png", dpi=110)
+    with atomic_write(out / "walk_force_directions.png") as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return "walk_force_directions.png"

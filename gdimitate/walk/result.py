@@ -25,6 +25,7 @@ from ..jsonable import jsonable
 from ..motion import Motion
 from ..result import AdaptedMotion
 from ..robot import SIDES, Robot
+from ..safety import atomic_write
 from ..sim.periodic import PeriodicReference
 from .loop import Trace, step_bounds
 from .network import WalkNetwork
@@ -161,14 +162,16 @@ class WalkResult:
 
         out = Path(out)
         d = self.to_dict()
-        (out / "walk.json").write_text(json.dumps(jsonable(d), indent=2, default=str))
+        with atomic_write(out / "walk.json") as tmp:
+            tmp.write_text(json.dumps(jsonable(d), indent=2, default=str))
         tr = self.trace
-        np.savez_compressed(out / "walk_trajectory.npz", t=tr.t, q=tr.q, v=tr.v, tau=tr.tau,
-                            cycles=tr.cycles, ground_phase=tr.ground, y=tr.y,
-                            network_joints=tr.joints,
-                            **{f"force_{s}": tr.force[s] for s in SIDES},
-                            **{f"plan_stance_{s}": tr.stance[s] for s in SIDES},
-                            joint_names=np.array(self.cycle.motion.joint_names))
+        with atomic_write(out / "walk_trajectory.npz") as tmp:
+            np.savez_compressed(tmp, t=tr.t, q=tr.q, v=tr.v, tau=tr.tau,
+                                cycles=tr.cycles, ground_phase=tr.ground, y=tr.y,
+                                network_joints=tr.joints,
+                                **{f"force_{s}": tr.force[s] for s in SIDES},
+                                **{f"plan_stance_{s}": tr.stance[s] for s in SIDES},
+                                joint_names=np.array(self.cycle.motion.joint_names))
         files = ["walk.json", "walk_trajectory.npz"] + plot_walk(self, out)
         if html:
             files.append(self._html(out / "walk.html"))
