@@ -20,6 +20,7 @@ import pytest
 import gdimitate as gd
 from gdimitate import errors
 from gdimitate.batch import BatchOptions, BatchRow, output_paths, process_file, run_batch
+from gdimitate.batch.run import find_inputs
 from gdimitate.errors import (
     BatchError,
     InvalidInputError,
@@ -234,18 +235,25 @@ def _session_processes(sid: int) -> list[psutil.Process]:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("executor", ["process", "dask"])
-def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor):
+@pytest.mark.parametrize(("executor", "sig"), [("process", signal.SIGINT),
+                                               ("process", signal.SIGTERM),
+                                               ("dask", signal.SIGTERM)])
+def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor, sig):
+    """Ctrl-C (130) and SIGTERM (143) stop the workers, the pool's fork server and resource
+    tracker, and leave nothing in the temporary folder (a local Dask cluster's scratch space
+    was left there)."""
     demos = tmp_path / "demos"
     demos.mkdir()
     _mot_slices(demos, [0, 10, 20, 30, 40, 50, 60, 70], 40)
     out = tmp_path / "out"
     err = tmp_path / "stderr.txt"
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
     with open(err, "w") as fe:
         proc = subprocess.Popen(
             [sys.executable, "-m", "gdimitate.cli", "batch", str(demos), "--imitator", "hoap2",
              "--out", str(out), "--workers", "2", "--executor", executor],
-            stdout=subprocess.DEVNULL, stderr=fe,
+            stdout=subprocess.DEVNULL, stderr=fe, env={**os.environ, "TMPDIR": str(tmp)},
             start_new_session=True)
     try:
         deadline = time.monotonic() + 90
@@ -259,13 +267,13 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor):
         workers = [c.pid for c in kids if "resource_tracker" not in " ".join(c.cmdline())
                    and not (c.ppid() == proc.pid and "forkserver" in " ".join(c.cmdline()))]
         assert len(workers) >= 2, [c.cmdline() for c in kids]
-        os.kill(proc.pid, signal.SIGINT)
+        os.kill(proc.pid, sig)
         rc = proc.wait(30)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-    assert rc == 130, err.read_text()
-    assert "interrupted" in err.read_text()
+    assert rc == {signal.SIGINT: 130, signal.SIGTERM: 143}[sig], err.read_text()
+    assert ("interrupted" if sig == signal.SIGINT else "terminated") in err.read_text()
     assert not [w for w in workers if psutil.pid_exists(w)
                 and psutil.Process(w).status() != psutil.STATUS_ZOMBIE]  # stopped, not left
     # no orphan: the workers were ended; the fork server (pool) exits once it sees its parent
@@ -282,6 +290,8 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor):
         t = gd.Motion.from_npz(out / r["output"]).t  # the optimal method's 50 Hz knots
         assert abs(t[-1] - t[0] - r["duration_s"]) <= 1 / 50 + 1e-9
     assert not list(out.glob(".*.tmp*"))
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []  # no lock
+    assert list(tmp.iterdir()) == []
 
 
 def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
@@ -381,3 +391,16 @@ def test_imitator_model_file_named_relative_runs_by_absolute_path(inputs, tmp_pa
         assert r.output == f"{r.file}.hoap2.analytic.npz"
         np.testing.assert_allclose(gd.Motion.from_npz(tmp_path / "urdf" / r.output).q,
                                    _direct(inputs / r.file).motion.q, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("pattern", ["/etc/*", "../*", "sub/*.mot", "..", "*/../*"])
+def test_the_pattern_never_leaves_the_input_folder(tmp_path, pattern):
+    """`--pattern '/etc/*'` raised NotImplementedError and `'../*'` picked up files of the
+    folder above: a pattern is a file-name glob, matched in the input folder only."""
+    demos = tmp_path / "demos"
+    (demos / "sub").mkdir(parents=True)
+    _mot_slices(demos, [0], 40)
+    _mot_slices(tmp_path, [10], 40)  # beside the input folder: never an input
+    with pytest.raises(BatchError, match="not a file-name glob"):
+        find_inputs(demos, pattern)
+    assert [p.parent for p in find_inputs(demos, "*.mot")] == [demos]

@@ -187,12 +187,22 @@ def _dask():
 def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
               on_row: Callable[[BatchRow], None]) -> int:
     distributed = _dask()
+    import dask
+
+    # the scheduler's and workers' scratch space in a folder of this run's own, removed after
+    # (Dask's default, dask-scratch-space/ in the temporary folder, outlives the batch)
+    scratch = tempfile.mkdtemp(prefix="gdimitate-dask-")
+    with dask.config.set({"temporary-directory": scratch}):
+        try:
+            return _on_cluster(distributed, tasks, workers, address, scratch, on_row)
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _on_cluster(distributed, tasks: Sequence[Task], workers: int, address: str | None,
+                scratch: str, on_row: Callable[[BatchRow], None]) -> int:
     cluster = None
-    scratch = None
     if address is None:  # a cluster of `workers` processes on this machine, for this batch
-        # its workers' scratch space in a folder of this run's own, removed with the cluster
-        # (Dask's default, dask-scratch-space/ in the temporary folder, outlives the batch)
-        scratch = tempfile.mkdtemp(prefix="gdimitate-dask-")
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
                                            processes=True, host="127.0.0.1",
                                            dashboard_address=None, local_directory=scratch)
@@ -227,8 +237,6 @@ def _run_dask(tasks: Sequence[Task], workers: int, address: str | None,
     finally:
         if cluster is not None:
             cluster.close()
-        if scratch is not None:
-            shutil.rmtree(scratch, ignore_errors=True)
     return n
 
 
