@@ -30,7 +30,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from .errors import GdimitateError, LegDetectionError, OscillatorError
+from .errors import GdimitateError, LegDetectionError, OscillatorError, OutputError
 from .safety import atomic_write, output_job, prepare_output_dir
 from .verdict import EXIT_NOT_FEASIBLE
 
@@ -84,9 +84,12 @@ def _json_file(path: str | None, what: str):
     from .errors import InvalidInputError
 
     try:
-        value = json.loads(Path(path).read_text())
-    except (OSError, ValueError) as e:
+        value = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:  # UnicodeDecodeError and a 5000-digit number too
         raise InvalidInputError(f"{what} {path}: not a readable JSON file ({e})") from None
+    except RecursionError:
+        raise InvalidInputError(f"{what} {path}: nested too deep to be a legs or contacts "
+                                "file (they nest three levels)") from None
     if not isinstance(value, dict):
         raise InvalidInputError(f"{what} {path}: expected a JSON object "
                                 '{"left": {...}, "right": {...}}')
@@ -204,7 +207,7 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
         robot, motion, forces = demo.robot, demo.motion, demo.forces
         print(f"read {demo.source}: {demo.note}", flush=True)
         imitator = _robot(a.imitator, a)
-    force = cast("ForceModel", getattr(a, "force", "segment"))  # one of argparse's choices
+    force = cast("ForceModel", _force_goal(getattr(a, "force", None), a.method, forces))
     print(f"adapting {motion.T} frames of {robot.name} → {imitator.name} "
           f"(method={a.method}, force={force}) …", flush=True)
     options = {"forces": forces} if a.method == "optimal" and forces is not None else {}
@@ -212,6 +215,14 @@ def _adapted(a: argparse.Namespace, demonstration: str | None):
         options["periodic"] = True
     return robot, motion, forces, adapt(motion, robot, imitator, a.method, force=force,
                                         **options)
+
+
+def _force_goal(given: str | None, method: str, forces) -> str:
+    """The force-direction goal: the one given, else the measured push where the
+    demonstration has forces and the method keeps them (optimal), else ``segment``."""
+    if given is not None:
+        return given
+    return "measured" if forces is not None and method == "optimal" else "segment"
 
 
 def _cmd_adapt(a: argparse.Namespace) -> int:
@@ -385,7 +396,9 @@ def _cmd_export(a: argparse.Namespace) -> None:
     out = Path(a.out) if a.out else Path(a.motion).with_suffix(
         {"csv": ".csv", "npz": ".export.npz", "mujoco": ".mujoco.npz",
          "lafan1_csv": ".lafan1.csv", "gmr": ".gmr.pkl", "isaaclab_amp": ".amp.npz"}[a.format])
-    with atomic_write(out) as tmp:
+    if out.is_dir():
+        raise OutputError(f"cannot write {out}: it is a folder; give a file name")
+    with output_job(out.parent), atomic_write(out) as tmp:  # the folder made if needed
         export_motion(demo.robot, demo.motion, tmp, a.format, wrenches=wrenches, fps=a.fps,
                       body_order=a.body_order)
     print(f"wrote {out} ({FORMATS[a.format]}; robot {demo.robot.name}, from {demo.motion.T} "
@@ -498,11 +511,13 @@ def _add_adapt(sub) -> None:
                             "one stride of the shipped real 3-D walk, as demo")
     _add_robot_args(ad, "--imitator", DEFAULT_IMITATOR, "imitator robot")
     ad.add_argument("--method", default="optimal", choices=_METHODS, help=_METHOD_HELP)
-    ad.add_argument("--force", default="segment", choices=["segment", "com", "dynamics",
-                                                            "measured"],
+    ad.add_argument("--force", default=None, choices=["segment", "com", "dynamics",
+                                                       "measured"],
                     help="force-direction model of the goal: segment (hip→sole), com "
-                         "(CoM→sole), dynamics (from the motion), measured (the --grf forces) "
-                         "(default: %(default)s)")
+                         "(CoM→sole), dynamics (from the motion), measured (the "
+                         "demonstration's measured forces: --grf, a C3D's plates, the default "
+                         "story's) (default: measured where the demonstration has forces and "
+                         "the method is optimal, else segment)")
     ad.add_argument("--periodic", action="store_true",
                     help="adapt one stride (heel strike to heel strike of the right foot) as a "
                          "periodic cycle: its end state is its start shifted by one stride "
