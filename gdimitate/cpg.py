@@ -43,6 +43,9 @@ __all__ = ["CPGReplay", "ReplayCheck", "entrain", "BodySignals", "body_signals",
 #: A teaching signal whose Fourier fit leaves an nRMSE above this on some signal is a poor
 #: one (the clip is not periodic at the stride frequency): warned, with the number.
 TEACHER_FIT_WARN = 0.10
+#: A signal whose range over the clip is below this [rad or m] is held still (an unmapped
+#: joint the adaptor keeps near its rest pose): its teacher fit is not warned about.
+HELD_RANGE = 0.02
 #: The replay check: every signal's cycle rate within this fraction of the target's …
 REPLAY_FREQUENCY_TOL = 0.05
 #: … and its amplitude (half the peak-to-peak) within this fraction of the target's.
@@ -53,14 +56,22 @@ CHECK_STRIDES = 4
 
 def stride_frequency(motion: Motion) -> float | None:
     """The stride frequency [Hz] of ``motion``: 1 / the mean interval between successive
-    touchdowns (stance starts) of the same foot in ``motion.contact``, over both feet; None
-    when no foot touches down twice."""
+    touchdowns (stance starts) of the same foot in ``motion.contact``, over both feet. A clip
+    in which no foot touches down twice but that is one closed cycle — every foot's contact
+    at the last frame what it was at the first, with one stance and one swing in between
+    (exactly two changes), as a clip from a heel strike to the same foot's next heel strike
+    is — is one stride: 1 / its duration. None otherwise."""
     gaps: list[float] = []
+    closed = bool(motion.contact)
     for c in motion.contact.values():
         c = np.asarray(c, bool)
         down = np.flatnonzero(~c[:-1] & c[1:]) + 1
         gaps += list(np.diff(motion.t[down]))
-    return 1.0 / float(np.mean(gaps)) if gaps else None
+        closed &= bool(c[0] == c[-1]) and int(np.sum(c[1:] != c[:-1])) == 2
+    if gaps:
+        return 1.0 / float(np.mean(gaps))
+    span = float(motion.t[-1] - motion.t[0])
+    return 1.0 / span if closed and span > 0 else None
 
 
 @dataclass(frozen=True)
@@ -281,7 +292,9 @@ def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: f
     if options.get("frequency") is None:
         options["frequency"] = stride_frequency(motion)
     result = self_adjust(motion.t, X[:, moving], joint_names=learn, **options)
-    fit = result.teacher.fit_nrmse
+    # the fit of a signal held nearly still (an unmapped arm joint held near its rest pose)
+    # is no news: relative to its tiny range any wobble is a large nRMSE
+    fit = np.where(np.ptp(X[:, moving], axis=0) >= HELD_RANGE, result.teacher.fit_nrmse, 0.0)
     if np.max(fit) > TEACHER_FIT_WARN:
         j = int(np.argmax(fit))
         warnings.warn(f"the periodic teaching signal fits {learn[j]} with nRMSE "

@@ -175,6 +175,40 @@ def walks():
             "optimal": (hoap2, optimal)}
 
 
+def test_one_stride_clip_is_one_stride():
+    """`gdimitate entrain` of the demo's 1.22-s stride learned 0.664 Hz "for a 0.664 Hz
+    stride" (no foot touches down twice in one stride, so the teaching signal guessed); a clip
+    that closes on itself — each foot's contact the same at both ends, one stance and one
+    swing between — is one stride. A clip cut short (0.7 of the stride) is not."""
+    from gdimitate.apps.demo import default_demonstration
+    from gdimitate.cpg import stride_frequency
+
+    _, stride, _ = default_demonstration()
+    span = float(stride.t[-1] - stride.t[0])
+    assert stride_frequency(stride) == pytest.approx(1.0 / span, rel=1e-12)
+    assert 0.78 < 1.0 / span < 0.84  # the demo reports 0.811 Hz
+    k = int(0.7 * stride.T)
+    cut = stride.replace(t=stride.t[:k], q=stride.q[:k], v=None,
+                         contact={s: c[:k] for s, c in stride.contact.items()})
+    assert stride_frequency(cut) is None
+
+
+def test_a_joint_held_still_is_not_warned_about(walks):
+    """Every G1 run warned that the teaching signal fits left_shoulder_pitch_joint poorly —
+    an arm joint the adaptor holds near its rest pose. A signal that moves less than
+    HELD_RANGE is taught but not warned about; one that drifts is (the test above)."""
+    from gdimitate.cpg import HELD_RANGE
+
+    robot, motion = walks["analytic"]
+    q = motion.q.copy()
+    rng = np.random.default_rng(0)
+    q[:, robot.idx_q("left_knee")] += 0.4 * HELD_RANGE * rng.uniform(-1, 1, motion.T)
+    q[:, robot.idx_q("left_knee")] -= motion.q[:, robot.idx_q("left_knee")]  # held, wobbling
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gd.oscillator.OscillatorWarning)
+        gd.entrain(robot, motion.replace(q=q))
+
+
 @pytest.mark.parametrize("which", ["demonstration", "analytic", "optimal"])
 def test_entrain_learns_the_stride_frequency(walks, which):
     """The learned frequency is the stride's — measured here from the force plates — for the
