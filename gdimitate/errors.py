@@ -125,6 +125,12 @@ class FileFormatError(InvalidInputError):
     wrong with it."""
 
 
+class C3DFormatError(FileFormatError):
+    """A C3D file whose header, parameter section or data section is truncated or corrupt
+    (checked against the file's length before ``ezc3d`` reads it); the message names the
+    file, the section, the expected and the actual size."""
+
+
 class OpenSimFormatError(OpenSimDataError, FileFormatError):
     """An OpenSim ``.mot``/``.sto`` file that is not a table at all (not UTF-8 text, no column
     names, repeated column names): both an :class:`OpenSimDataError` and a
@@ -135,6 +141,11 @@ class ResourceLimitError(InvalidInputError):
     """An input whose size would exhaust memory or time (a URDF too large or too deep, a
     motion whose time axis is implausible, too many harmonics or cycles); the message states
     the limit (see :mod:`gdimitate.safety`)."""
+
+
+class OsimLimitError(OsimError, ResourceLimitError):
+    """An ``.osim`` file over the size a model may have
+    (:data:`gdimitate.opensim.model.MAX_OSIM_BYTES`)."""
 
 
 class URDFLimitError(URDFError, ResourceLimitError):

@@ -47,7 +47,7 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
     twice = sorted({n for n in short if short.count(n) > 1})
     if twice:
         raise OpenSimFormatError(f"{table.path}: repeated column names {twice}")
-    out = {n: table.data[:, i].copy() for i, n in enumerate(short)}
+    out = {n: table.data[:, i] for i, n in enumerate(short)}  # views: no copy of a big table
     flag = table.header.get("indegrees", "").strip().lower()
     if flag in ("yes", "no"):
         _check_degrees_flag(table.path, out, flag == "yes")
@@ -63,8 +63,8 @@ _NOT_ANGLE = re.compile(r"^time$|_t[xyz]$|_[vp][xyz]$|force|torque|moment|speed|
 def _check_degrees_flag(path: Path, table: dict[str, np.ndarray], in_degrees: bool) -> None:
     """Warn when the angle-like columns contradict the ``inDegrees`` flag."""
     angles = [a for n, a in table.items() if not _NOT_ANGLE.search(n)]
-    finite = [a[np.isfinite(a)] for a in angles]
-    big = max((float(np.abs(a).max()) for a in finite if a.size), default=0.0)
+    big = max((float(np.nanmax(np.abs(np.where(np.isfinite(a), a, np.nan))))
+               for a in angles if np.isfinite(a).any()), default=0.0)  # one column at a time
     if not angles or big == 0.0:
         return
     if not in_degrees and big > 2 * np.pi:

@@ -114,8 +114,10 @@ MAX_KNOT_RATE = 1000.0
 #: Deepest element nesting of an XML file read (URDF, ``.osim``, ExternalLoads ``.xml``):
 #: OpenSim models nest about 12 deep, URDFs 4.
 MAX_XML_DEPTH = 256
-#: Largest text table (``.mot``/``.sto``) read [bytes].
-MAX_TABLE_BYTES = 512 * 2**20
+#: Largest text table (``.mot``/``.sto``, ``.trc``) read [bytes]: reading needs at most 5.4
+#: (``.mot``) and 8.4 (``.trc``) bytes of memory per byte of file (measured, one-digit
+#: numbers; 2–4 for lab files), so 192 MiB stays under 2 GB.
+MAX_TABLE_BYTES = 192 * 2**20
 #: Largest unpacked content of an ``.npz`` file read [bytes] (a compressed archive can
 #: unpack to far more than its size on disk).
 MAX_NPZ_BYTES = 2 * 2**30

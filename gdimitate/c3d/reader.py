@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FileFormatError, ForceDataError, UnitError
+from ..errors import C3DFormatError, FileFormatError, ForceDataError, UnitError
 from ..opensim.grf import CONTACT_THRESHOLD, ground_to_world
-from ..opensim.trc import Markers
+from ..opensim.trc import Markers, check_marker_values
 
 __all__ = ["C3DTrial", "ForcePlate", "read_c3d"]
 
@@ -99,14 +99,28 @@ def _markers(c, path: Path) -> tuple[Markers, np.ndarray, str]:
     names = _labels(par, pts.shape[1])
     skip = {str(v).strip() for g in _NOT_MARKERS if g in par for v in par[g]["value"]}
     keep = [i for i, n in enumerate(names) if n and n not in skip]
-    unit = str(par["UNITS"]["value"][0]).strip().lower() if "UNITS" in par else "mm"
-    if unit not in _LENGTH:
-        raise UnitError(f"{path}: POINT:UNITS={unit!r}; expected one of {sorted(_LENGTH)}")
-    rate = float(par["RATE"]["value"][0])
-    raw = pts[:3, keep].transpose(2, 1, 0) * _LENGTH[unit]  # (T, n, 3)
+    if not keep:
+        raise FileFormatError(f"{path}: the C3D file holds no markers (POINT:USED "
+                              f"{pts.shape[1]}, labels {names[:5]})")
+    units = list(par["UNITS"]["value"]) if "UNITS" in par else []
+    rate = _rate(par, "POINT", path)
+    raw = pts[:3, keep].transpose(2, 1, 0)  # (T, n, 3) in the file's unit
     res = c["data"]["meta_points"]["residuals"][0][keep].T if keep else None
     if res is not None:
         raw[res < 0] = np.nan
+    if raw.shape[0] < 2:
+        raise FileFormatError(f"{path}: the C3D file holds {raw.shape[0]} frame(s) of markers; "
+                              "at least 2 are needed for a motion")
+    t = np.arange(raw.shape[0]) / rate
+    if not units or not str(units[0]).strip():
+        raise UnitError(f"{path}: POINT:UNITS is empty; set it to 'mm', 'cm' or 'm' "
+                        f"(the markers span {_extent(raw):g} in the file's numbers)")
+    unit = str(units[0]).strip().lower()
+    if unit not in _LENGTH:
+        raise UnitError(f"{path}: POINT:UNITS={unit!r}; expected one of {sorted(_LENGTH)}")
+    raw = raw * _LENGTH[unit]
+    check_marker_values(raw, [names[i] for i in keep], t, path, unit, _LENGTH[unit],
+                        "POINT:UNITS")
     up = "Z"
     seen = np.isfinite(raw).all(axis=2).sum(axis=1) >= 2  # frames with 2+ markers
     if seen.any():
@@ -118,10 +132,32 @@ def _markers(c, path: Path) -> tuple[Markers, np.ndarray, str]:
         raise FileFormatError(f"{path}: the markers spread most along the lab's X axis; "
                               "cannot tell which axis is up (labs use Z, sometimes Y)")
     R = ground_to_world(up)
-    t = np.arange(raw.shape[0]) / rate
     note = f"markers {unit} → m; lab {up} up" + (" → x = X, y = −Z, z = Y" if up == "Y" else "")
     mk = Markers(t, tuple(names[i] for i in keep), raw @ R.T, source=str(path), frame_note=note)
     return mk, R, note
+
+
+def _extent(raw: np.ndarray) -> float:
+    """Median over frames of the markers' largest spread along an axis (file units)."""
+    seen = np.isfinite(raw).all(axis=2).sum(axis=1) >= 1
+    if not seen.any():
+        return float("nan")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        X = raw[seen]
+        ext = np.nanmax(np.nanmax(X, axis=1) - np.nanmin(X, axis=1), axis=1)
+    return float(np.median(ext))
+
+
+def _rate(par: dict, group: str, path: Path) -> float:
+    """``group:RATE`` [Hz], a finite number > 0 (else :class:`C3DFormatError`)."""
+    v = list(par["RATE"]["value"]) if "RATE" in par else []
+    x = float(v[0]) if v else float("nan")
+    if not (np.isfinite(x) and x > 0):
+        raise C3DFormatError(f"{path}: {group}:RATE = {v[0] if v else 'nothing'}; it must be "
+                             f"the {'marker' if group == 'POINT' else 'analog'} sample rate, a "
+                             "finite number of Hz > 0")
+    return x
 
 
 def _plate(p: dict, k: int, rate: float, R: np.ndarray, threshold: float, path: Path
@@ -133,6 +169,10 @@ def _plate(p: dict, k: int, rate: float, R: np.ndarray, threshold: float, path: 
                         "and mm, cm or m")
     L, M = _LENGTH[units["position"]], _MOMENT[units["moment"]]
     f = np.asarray(p["force"], float).T @ R.T
+    if len(f) < 2:
+        raise ForceDataError(f"{path}: force plate {k} has {len(f)} analog samples (ANALOG:RATE"
+                             f" {rate:g} Hz, ANALOG:USED channels): at least 2 are needed; "
+                             "check the ANALOG group or drop FORCE_PLATFORM:USED to 0")
     cop = np.asarray(p["center_of_pressure"], float).T * L @ R.T
     tz = np.asarray(p["Tz"], float).T * M @ R.T
     note = ""
@@ -144,6 +184,9 @@ def _plate(p: dict, k: int, rate: float, R: np.ndarray, threshold: float, path: 
     cop = cop.copy()
     cop[f[:, 2] <= threshold] = np.nan
     corners = np.asarray(p["corners"], float).T * L @ R.T
+    if not np.all(np.isfinite(corners)):
+        raise ForceDataError(f"{path}: force plate {k} has NaN/inf corners "
+                             "(FORCE_PLATFORM:CORNERS); give its four corners")
     t = np.arange(len(f)) / rate
     return ForcePlate(t, f, cop, tz, corners, k, threshold), note
 
@@ -153,18 +196,20 @@ def read_c3d(path: str | Path, *, threshold: float = CONTACT_THRESHOLD) -> C3DTr
 
     ``threshold`` [N]: a plate is loaded where its vertical force exceeds it (centre of
     pressure NaN elsewhere). Raises :class:`~gdimitate.errors.FileFormatError` (no such file,
-    not a C3D file, no markers, no vertical axis), :class:`~gdimitate.errors.UnitError`
-    (units not understood) and :class:`~gdimitate.errors.ForceDataError` (NaN forces)."""
+    not a C3D file, no markers, no vertical axis; :class:`~gdimitate.errors.C3DFormatError`,
+    one of them, for a truncated or corrupt file, checked before ezc3d reads it:
+    :func:`gdimitate.c3d.layout.check_c3d`), :class:`~gdimitate.errors.ResourceLimitError`
+    (too large), :class:`~gdimitate.errors.OpenSimDataError` (marker values no body has),
+    :class:`~gdimitate.errors.UnitError` (units not understood) and
+    :class:`~gdimitate.errors.ForceDataError` (NaN forces, plates without samples)."""
     import ezc3d
 
-    from ..safety import MAX_TABLE_BYTES
+    from .layout import check_c3d
 
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"no such C3D file: {path}")
-    if path.stat().st_size > MAX_TABLE_BYTES:
-        raise FileFormatError(f"{path}: {path.stat().st_size / 1e6:.0f} MB is over the "
-                              f"{MAX_TABLE_BYTES / 1e6:.0f} MB a C3D trial may have")
+    check_c3d(path)  # truncated or corrupt layouts crash or hang ezc3d: refused before it
     try:
         c = ezc3d.c3d(str(path), extract_forceplat_data=True)
     except Exception as e:  # ezc3d raises RuntimeError/IOError on a malformed file
@@ -174,7 +219,7 @@ def read_c3d(path: str | Path, *, threshold: float = CONTACT_THRESHOLD) -> C3DTr
         raise FileFormatError(f"{path}: the C3D file holds no markers")
     plates, notes = [], [note]
     if c["data"]["platform"]:
-        rate = float(c["parameters"]["ANALOG"]["RATE"]["value"][0])
+        rate = _rate(c["parameters"]["ANALOG"], "ANALOG", path)
         for k, p in enumerate(c["data"]["platform"], start=1):
             plate, n = _plate(p, k, rate, R, threshold, path)
             plates.append(plate)

@@ -10,7 +10,7 @@ separated (whitespace where a file has no tab); the first column must be ``time`
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,6 +52,23 @@ def _split(line: str) -> list[str]:
     return [p.strip() for p in parts]
 
 
+_ENDHEADER = re.compile(r"(?:^|(?<=[\r\n]))[^\S\r\n]*endheader[^\S\r\n]*(?=\r|\n|\Z)",
+                        re.IGNORECASE)
+_LINE = re.compile(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+\Z")
+
+
+def iter_lines(text: str, start: int = 0, first: int = 1) -> Iterator[tuple[int, str]]:
+    """``(line number, line)`` of ``text`` from character ``start`` (its line numbered
+    ``first``), one at a time (a list of a large file's lines costs ~60 bytes a line), line
+    ends ``\n``, ``\r\n`` or ``\r`` removed."""
+    if text[start:start + 2] == "\r\n":
+        start += 2
+    elif text[start:start + 1] in ("\n", "\r"):
+        start += 1
+    for k, m in enumerate(_LINE.finditer(text, start), start=first):
+        yield k, m.group().rstrip("\r\n")
+
+
 def _in_degrees(header: Mapping[str, str], text: list[str], path: Path) -> bool | None:
     flag = header.get("indegrees")
     if flag is not None:
@@ -85,43 +102,52 @@ def read_table(path: str | Path, *, min_rows: int = 2) -> Table:
     path = Path(path)
     if not path.is_file():
         raise OpenSimDataError(f"no such OpenSim file: {path}")
-    lines = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", OpenSimFormatError,
-                              ResourceLimitError).splitlines()
-    try:
-        end = next(i for i, ln in enumerate(lines) if ln.strip().lower() == "endheader")
-    except StopIteration:
+    text = read_text_bounded(path, MAX_TABLE_BYTES, "OpenSim table", OpenSimFormatError,
+                             ResourceLimitError)
+    end = _ENDHEADER.search(text)
+    if end is None:
         raise OpenSimDataError(f"{path}: no 'endheader' line; not an OpenSim .mot/.sto "
-                               "file (its header must end with a line 'endheader')") from None
-    text = [ln.strip() for ln in lines[:end]]
+                               "file (its header must end with a line 'endheader')")
+    head = text[:end.start()].splitlines()
+    text_lines = [ln.strip() for ln in head]
     header = {}
-    for ln in text:
+    for ln in text_lines:
         if "=" in ln:
             k, _, v = ln.partition("=")
             header[k.strip().lower()] = v.strip()
-    body = [(i, ln) for i, ln in enumerate(lines[end + 1:], start=end + 2) if ln.strip()]
-    if not body:
+    body = iter_lines(text, end.end(), len(head) + 2)
+    first = next(((i, ln) for i, ln in body if ln.strip()), None)
+    if first is None:
         raise OpenSimFormatError(f"{path}: no column names after 'endheader'")
-    names = tuple(n for n in _split(body[0][1]) if n)
+    names = tuple(n for n in _split(first[1]) if n)
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise OpenSimFormatError(f"{path}: repeated column names {twice}")
     if not names or names[0].lower() != "time":
         raise OpenSimDataError(f"{path}: the first column must be 'time'; got "
                                f"{names[0] if names else 'nothing'!r}")
-    rows = []
-    for lineno, ln in body[1:]:
+    # every row of n values takes at least 2n bytes: the table fits in 8 bytes per 2 of text
+    lines = max(text.count("\n", end.end()), text.count("\r", end.end()))
+    cap = min(lines + 2, (len(text) - end.end()) // (2 * len(names)) + 2)
+    data = np.empty((cap, len(names)))
+    rows = 0
+    for lineno, ln in body:
+        if not ln.strip():
+            continue
         vals = [v for v in _split(ln) if v != ""]
         if len(vals) != len(names):
             raise OpenSimDataError(f"{path}, line {lineno}: {len(vals)} values for "
                                    f"{len(names)} columns; every row needs one value per column")
         try:
-            rows.append([float(v) for v in vals])
+            data[rows] = [float(v) for v in vals]
         except ValueError as e:
             raise OpenSimDataError(f"{path}, line {lineno}: not a number ({e})") from None
-    if len(rows) < max(min_rows, 1):
-        raise OpenSimDataError(f"{path}: {len(rows)} data rows; at least {max(min_rows, 1)} "
+        rows += 1
+    del text
+    if rows < max(min_rows, 1):
+        raise OpenSimDataError(f"{path}: {rows} data rows; at least {max(min_rows, 1)} "
                                "are needed")
-    data = np.array(rows)
+    data = data[:rows]
     bad = np.argwhere(~np.isfinite(data))
     if bad.size:
         r, c = bad[0]
@@ -134,4 +160,5 @@ def read_table(path: str | Path, *, min_rows: int = 2) -> Table:
         raise TimeGridError(f"{path}: time must be strictly increasing; row {i + 1} has "
                             f"t = {data[i + 1, 0]!r} after t = {data[i, 0]!r} "
                             f"({steps.size} such rows): remove duplicated or unsorted rows")
-    return Table(path, header, tuple(text), names, data, _in_degrees(header, text, path))
+    return Table(path, header, tuple(text_lines), names, data,
+                 _in_degrees(header, text_lines, path))

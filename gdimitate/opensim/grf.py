@@ -251,6 +251,14 @@ def _xml_sides(table: Table, robot, xml: Path) -> tuple[dict[str, list[_Set]], s
 
 # ---------------------------------------------------------------------- combining, frames
 def _vertical_axis(table: Table, sets: dict[str, list[_Set]]) -> str:
+    cols = [i for v in sets.values() for s in v for i in s.force]
+    peak = float(np.max(np.abs(table.data[:, cols])))
+    if peak <= CONTACT_THRESHOLD:
+        said = "are all zero" if peak == 0 else f"never exceed {peak:.3g} N"
+        raise ForceDataError(
+            f"{table.path}: the forces {said} ({len(cols)} force columns, {table.t.size} rows): "
+            "an unloaded or unconnected plate, not a walk; check the plate's channels and "
+            "that the file holds the trial's forces")
     total = sum(table.data[:, list(s.force)].mean(axis=0) for v in sets.values() for s in v)
     k = int(np.argmax(np.abs(total)))
     if k == 0 or total[k] <= 0:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InvalidInputError, MarkerGapWarning, OpenSimDataError
+from ..errors import InvalidInputError, MarkerGapWarning, OpenSimDataError, SolverError
 from ..motion import Motion
 from .joints import follow_coordinates
 from .trc import Markers
@@ -198,7 +198,13 @@ def inverse_kinematics(robot, markers: Markers, weights: dict[str, float] | None
             tasks[i].set_target(pin.SE3(np.eye(3), X[k, i]))
         active = [tasks[i] for i in seen]
         for it in range(first_iterations if k == 0 else iterations):
-            v = pink.solve_ik(config, active, 1.0, solver="daqp", damping=1e-9, limits=limits)
+            try:
+                v = pink.solve_ik(config, active, 1.0, solver="daqp", damping=1e-9,
+                                  limits=limits)
+            except Exception as e:  # pink.exceptions.NoSolutionFound, a QP solver's error
+                raise _no_solution(robot, markers, names, ids, X[k], seen, k, e) from None
+            if not np.all(np.isfinite(v)):
+                raise _no_solution(robot, markers, names, ids, X[k], seen, k, "a non-finite step")
             config.integrate_inplace(v, 1.0)
             if plans:
                 config.update(follow_coordinates(plans, config.q[None].copy(), robot.idx_q)[0])
@@ -211,6 +217,21 @@ def inverse_kinematics(robot, markers: Markers, weights: dict[str, float] | None
     if not return_result:
         return motion
     return motion, _result(robot, Q, ids, X, names, unused, its)
+
+
+def _no_solution(robot, markers: Markers, names, ids, Xk: np.ndarray, seen, k: int, why
+                 ) -> SolverError:
+    """The error for a frame the marker fit cannot solve: the file, the frame, the markers
+    farthest from the model (a corrupt value shows as one marker metres away)."""
+    m, d = robot.model, robot.model.createData()
+    pin.framesForwardKinematics(m, d, robot.neutral)
+    far = sorted(seen, key=lambda i: -float(np.linalg.norm(Xk[i] - np.median(Xk[seen], 0))))
+    shown = ", ".join(f"{names[i]} at {np.round(Xk[i], 3).tolist()} m" for i in far[:3])
+    return SolverError(
+        f"{markers.source or 'markers'}: marker IK found no solution in frame {k + 1} (t = "
+        f"{markers.t[k]:g} s; {why}); the markers farthest from the others there: {shown}. "
+        "Check that frame for corrupt positions (mark them as not seen, or cut the frame) "
+        "and that the markers belong to this model")
 
 
 def _result(robot, Q, ids, X, names, unused, its) -> IKResult:

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OsimError
+from ..errors import OsimError, OsimLimitError
 from .functions import Function, parse_function
 
 __all__ = ["OsimBody", "OsimCoordinate", "TransformAxis", "OsimJoint", "OsimMarker",
@@ -229,9 +229,21 @@ def _vec(el: ET.Element, tag: str, n: int, where: str, default=None) -> np.ndarr
     return v
 
 
+#: Largest ``.osim`` read [bytes]. The largest real OpenSim models (full-body models with
+#: hundreds of muscles and their display paths, e.g. Rajagopal 2016 or the 2392-muscle
+#: gait models) are a few MB; ElementTree holds 16 bytes per byte of XML (measured on a
+#: 6 MB model), so 64 MiB stays within about 1.1 GB, ten times the largest model's size.
+MAX_OSIM_BYTES = 64 * 2**20
+
+
 def _load_xml(path: Path) -> ET.Element:
     if not path.is_file():
         raise OsimError(f"OpenSim model not found: {path}")
+    size = path.stat().st_size
+    if size > MAX_OSIM_BYTES:
+        raise OsimLimitError(f"{path}: {size:,} bytes is over the {MAX_OSIM_BYTES:,} bytes an "
+                             "OpenSim model may have (gdimitate.opensim.model.MAX_OSIM_BYTES; "
+                             "real models are a few MB): is it a model file?")
     raw = path.read_bytes()
     if re.search(rb"<!(DOCTYPE|ENTITY)", raw, re.I):
         raise OsimError(f"{path}: declares a DOCTYPE/ENTITY, which this reader refuses; "
