@@ -180,3 +180,30 @@ def test_knot_derivatives_in_pieces_match_finite_differences(tmp_path, monkeypat
     Hfd = np.column_stack([(grad(x + eps * e) - grad(x - eps * e)) / (2 * eps) for e in E])
     H = sum(np.array(h(x, p, sigma, lam)) for h in hes)
     np.testing.assert_allclose(H, np.triu(Hfd), atol=2e-4, rtol=1e-5)
+
+
+def test_the_solver_record_says_what_was_compiled(tmp_path, monkeypatch):
+    """summary.json said `"cached": false` when the build took 0.8 s: the NLP was new to the
+    process, its compiled derivatives came from the disk cache. The record now tells the three
+    cases apart: compiled now; loaded from disk (compiled False, cached False); the process's
+    own NLP again (cached True)."""
+    from gdimitate.adapt import adapt
+    from gdimitate.apps.cases import paper_case
+    from gdimitate.retarget import problem as pb
+
+    if codegen._compiler() is None:
+        pytest.skip("no C compiler on this machine")
+    monkeypatch.setenv(codegen.ENV, str(tmp_path))
+    d, i, m = paper_case("I")
+    m = m.replace(t=m.t[:30], q=m.q[:30], contact={s: c[:30] for s, c in m.contact.items()})
+    pb.clear_cache()
+    try:
+        runs = []
+        for fresh in (True, True, False):
+            if fresh:
+                pb.clear_cache()
+            s = adapt(m, d, i, method="optimal", rate=25, verbose=False).solver
+            runs.append((s.compiled, s.cached))
+    finally:
+        pb.clear_cache()
+    assert runs == [(True, False), (False, False), (False, True)]

@@ -32,9 +32,11 @@ class Unmet:
 @dataclass(frozen=True)
 class SolverInfo:
     """How the optimiser ran: IPOPT's ``status``, ``success``, ``iterations``, ``time_s``
-    (solves only), ``build_s`` (0 when the NLP came from the cache), ``cached``, ``elastic``
-    (True when the hard problem failed and the least-infeasible solve ran), ``knots``,
-    ``variables`` (free ones), ``constraints`` (rows the schedule imposes) and ``unmet``."""
+    (solves only), ``build_s`` (0 when the NLP came from the cache), ``cached`` (the NLP was
+    already built in this process), ``elastic`` (True when the hard problem failed and the
+    least-infeasible solve ran), ``knots``, ``variables`` (free ones), ``constraints`` (rows
+    the schedule imposes), ``unmet`` and ``compiled`` (this call compiled the robot's
+    derivatives to C; False: none needed, or they came from the on-disk cache)."""
 
     status: str
     success: bool
@@ -47,6 +49,7 @@ class SolverInfo:
     variables: int
     constraints: int
     unmet: tuple[Unmet, ...] = ()
+    compiled: bool = False
 
 
 def resolve_contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:

@@ -20,7 +20,7 @@ from ..kinematics import actuated_v_indices, robot_motion
 from ..metrics import FORCE_MODELS
 from ..motion import Motion
 from ..robot import SIDES, Robot
-from . import limits
+from . import codegen, limits
 from . import problem as pb
 from .bodymap import body_map
 from .info import SolverInfo, Unmet, limited_robot, resolve_contacts
@@ -475,7 +475,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     act_names = limits.resolve(imitator, actuated_v_indices(imitator), o["limits"]).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,
                                o["contact"].rule)
-    t0 = time.perf_counter()
+    t0, compiles = time.perf_counter(), codegen.COMPILE_COUNT
     form = problem_for(imitator, force, o["contact"], bmap, act_names, periodic=periodic)
     num = setup(form, tg, imitator, demonstrator, o["weights"], o["limits"], o["contact"], cs)
     c, cached = pb.compiled(form, tg.T, num.keep, options.get("ipopt"))
@@ -489,7 +489,8 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
                       iterations=iters, time_s=time.perf_counter() - t1, build_s=build_s,
                       cached=cached, elastic=elastic, knots=tg.T,
                       variables=int(np.sum(num.lbx != num.ubx)),
-                      constraints=int(num.keep.size), unmet=bad)
+                      constraints=int(num.keep.size), unmet=bad,
+                      compiled=codegen.COMPILE_COUNT > compiles)
     out = package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
                   periodic)
     # a planar imitator walks in its own x–z plane: the heading frame is its world
