@@ -151,14 +151,19 @@ def test_walk_refuses_bad_options(cycle):
 
 
 @pytest.mark.slow
-def test_cli_walk_writes_its_files(tmp_path):
+def test_cli_walk_writes_its_files(tmp_path, capsys):
     from gdimitate.cli import main
 
     out = tmp_path / "w"
     status = main(["walk", "--imitator", "hoap2", "--steps", "2", "--no-html", "--out",
                    str(out)])
+    said = capsys.readouterr().out
     d = json.loads((out / "walk.json").read_text())
-    assert status == (0 if d["steps_completed"] == 2 and not d["fell"] else 3)
+    assert status == (0 if d["steps_completed"] == 2 and not d["fell"]
+                      and d["cycle_feasible"] else 3)
+    # an exit status 3 says why (before: "NOT feasible: …", then "steps completed 2/2")
+    assert ("result written, but" in said) == (status == 3)
+    assert ("the walk follows this cycle as it is" in said) == (not d["cycle_feasible"])
     assert isinstance(d["steps_completed"], int) and isinstance(d["fell"], bool)
     assert len(d["per_step_force_direction_rmse_deg"]) == d["steps_completed"]
     assert d["feedback_gain"] == 0.5

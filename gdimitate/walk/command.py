@@ -31,6 +31,9 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
     cycle, forces = periodic_cycle(args[0], args[1], imitator, forces, rate)
     why = "feasible" if cycle.feasible else "NOT feasible: " + ", ".join(cycle.audit.binding[:4])
     log(f"      audit: {why}")
+    if not cycle.feasible:
+        log("      the walk follows this cycle as it is: MuJoCo shows whether the robot still "
+            "walks it, but the cycle itself breaks the limits above")
     log(f"[2/3] network + MuJoCo: {steps} steps, feedback gain {gain:g} …")
     res = walk(cycle=cycle, forces=forces, steps=steps, feedback_gain=gain)
     log("[3/3] writing walk.json, plots, trajectory" + (", walk.html" if html else "") + " …")
@@ -43,4 +46,8 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
         + (f"; push RMS vs measured per step max {max(rmse):.2f}°" if rmse else ""))
     log(f"wrote {out}/" + ", ".join(files))
     ok = cycle.feasible and not d["fell"] and d["steps_completed"] >= steps
+    if not ok:
+        why = ("the cycle is not feasible" if not cycle.feasible
+               else "the robot fell" if d["fell"] else "it walked fewer steps than asked")
+        log(f"result written, but {why}: exit status {EXIT_NOT_FEASIBLE}")
     return 0 if ok else EXIT_NOT_FEASIBLE
