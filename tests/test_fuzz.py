@@ -469,3 +469,36 @@ def test_fuzz_user_numbers_that_size_arrays(rate, fps, shape):
                     call()
         assert time.perf_counter() - t0 < 5.0
         assert list(out.iterdir()) == []
+
+
+# ------------------------------------------------------------------ issue 33: let in
+_BOMB = ('<?xml version="1.0" encoding="{enc}"?>\n<!DOCTYPE r [<!ENTITY e "{big}">]>\n'
+         "<{root}>&e;</{root}>")
+
+
+@pytest.mark.parametrize("enc", ["UTF-8", "UTF-16", "UTF-16LE", "UTF-16BE", "UTF-32"])
+@pytest.mark.parametrize(("kind", "root"), [("urdf", "robot"), ("osim", "OpenSimDocument"),
+                                            ("xml", "OpenSimDocument")])
+def test_no_dtd_or_entity_in_any_encoding(tmp_path, enc, kind, root):
+    """A UTF-16 .osim with <!DOCTYPE>/<!ENTITY> was accepted and the entity expanded (the
+    guard scanned the raw bytes for ASCII): now every XML reader — URDF, OpenSim model,
+    ExternalLoads — refuses a declaration in whatever encoding the file declares."""
+    from gdimitate.opensim.grf import read_external_loads
+
+    text = _BOMB.format(enc=enc, big="x" * 1000, root=root)
+    codec = {"UTF-16": "utf-16", "UTF-16LE": "utf-16-le", "UTF-16BE": "utf-16-be",
+             "UTF-32": "utf-32"}.get(enc, "utf-8")
+    p = tmp_path / f"bomb.{kind}"
+    p.write_bytes(text.encode(codec))
+    read = {"urdf": Robot.from_urdf, "osim": Robot.from_osim, "xml": read_external_loads}[kind]
+    # refused as a declaration, or before: not UTF-8 (URDF), an encoding expat lacks (UTF-32)
+    with pytest.raises(GdimitateError, match="(DOCTYPE|not UTF-8|malformed XML)"):
+        read(p)
+
+
+def test_xml_nested_too_deep_is_refused(tmp_path):
+    """A URDF nested 2,000 elements deep raised RecursionError further on."""
+    p = tmp_path / "deep.urdf"
+    p.write_text('<robot name="r">' + "<a>" * 2000 + "</a>" * 2000 + "</robot>")
+    with pytest.raises(GdimitateError, match="nested 257 elements deep"):
+        Robot.from_urdf(p)

@@ -52,8 +52,9 @@ from ..errors import (
     ResourceLimitError,
     UnitError,
 )
-from ..safety import MAX_TABLE_BYTES, parse_xml, read_text_bounded
+from ..safety import parse_xml, read_text_bounded
 from ._table import Table, read_table
+from .model import MAX_OSIM_BYTES
 
 __all__ = ["CONTACT_THRESHOLD", "ExternalForceSpec", "read_external_loads", "read_grf",
            "ground_to_world"]
@@ -99,7 +100,8 @@ def read_external_loads(path: str | Path) -> tuple[ExternalForceSpec, ...]:
     path = Path(path)
     if not path.is_file():
         raise OpenSimDataError(f"no such ExternalLoads file: {path}")
-    text = read_text_bounded(path, MAX_TABLE_BYTES, "ExternalLoads file", OpenSimDataError,
+    # an XML tree: bounded like an OpenSim model (ElementTree holds ~16 bytes per byte)
+    text = read_text_bounded(path, MAX_OSIM_BYTES, "ExternalLoads file", OpenSimDataError,
                              ResourceLimitError)
     root = parse_xml(text, path, OpenSimDataError)
     out = []

@@ -29,7 +29,6 @@ The XML is parsed with the standard library; files declaring a DOCTYPE or entiti
 from __future__ import annotations
 
 import math
-import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OsimError, OsimLimitError
+from ..safety import parse_xml
 from .functions import Function, parse_function
 
 __all__ = ["OsimBody", "OsimCoordinate", "TransformAxis", "OsimJoint", "OsimMarker",
@@ -244,15 +244,13 @@ def _load_xml(path: Path) -> ET.Element:
         raise OsimLimitError(f"{path}: {size:,} bytes is over the {MAX_OSIM_BYTES:,} bytes an "
                              "OpenSim model may have (gdimitate.opensim.model.MAX_OSIM_BYTES; "
                              "real models are a few MB): is it a model file?")
-    raw = path.read_bytes()
-    if re.search(rb"<!(DOCTYPE|ENTITY)", raw, re.I):
-        raise OsimError(f"{path}: declares a DOCTYPE/ENTITY, which this reader refuses; "
-                        "remove the declaration (OpenSim files need none)")
     try:
-        root = ET.fromstring(raw)
-    except ET.ParseError as e:
-        raise OsimError(f"{path}: not well-formed XML ({e})") from None
-    return root
+        raw = path.read_bytes()
+    except OSError as e:
+        raise OsimError(f"cannot read OpenSim model {path}: {e.strerror or e}") from None
+    # bytes: the parser follows the encoding the file declares (a DTD in a UTF-16 model is
+    # refused as one in UTF-8 is)
+    return parse_xml(raw, path, OsimError)
 
 
 # ---------------------------------------------------------------------- parsing
