@@ -172,6 +172,15 @@ def test_simulate_command(tmp_path, capsys):
     direct = gd.sim.simulate(robot, plan).metrics
     assert s["fell"] is False and s["slip_max_m"] == pytest.approx(direct.slip_max, abs=1e-9)
     assert (tmp_path / "sim" / "simulation.png").stat().st_size > 0
+    # the documented reference: --coordinates/--grf belong to the --reference (issue 33: they
+    # were applied to the plan, "coordinates= goes with an .osim model; plan.npz is .npz")
+    from gdimitate.gait import human_walk_3d_folder
+
+    d3 = human_walk_3d_folder()
+    assert main(["simulate", str(path), "--reference", str(d3 / "subject01.osim"),
+                 "--coordinates", str(d3 / "subject01_walk1_ik.mot"), "--grf",
+                 str(d3 / "subject01_walk1_grf.mot"), "--out", str(tmp_path / "ref")]) == 0
+    assert "walked the whole plan" in capsys.readouterr().out
     # a motion without wrenches is refused with what to do
     bare = tmp_path / "bare.npz"
     plan.motion.replace(v=None, a=None).to_npz(bare, robot=robot)
