@@ -79,21 +79,36 @@ class Demonstration:
 
 def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
                        coordinates: str | Path | None = None, robot: Robot | None = None,
-                       overground: bool = True, markers: str | Path | None = None
-                       ) -> Demonstration:
+                       overground: bool = True, markers: str | Path | None = None,
+                       package_dir: str | Path | None = None) -> Demonstration:
     """Read a demonstration file (see the module docstring for each format).
 
     ``path``: ``.mot``/``.sto``/``.osim``/``.bvh``/``.npz``/``.trc``/``.c3d``; ``grf``:
     OpenSim ground reaction forces (``.mot``/``.sto``); ``coordinates``: the coordinates file
     of an ``.osim`` model; ``markers``: the ``.trc``/``.c3d`` markers of an ``.osim`` model;
     ``robot``: the demonstrator for a full-body ``.mot``/``.sto`` (or to check an ``.npz``
-    against); ``overground``: turn a treadmill trial with forces overground.
+    against); ``overground``: turn a treadmill trial with forces overground;
+    ``package_dir``: the mesh package folder of an ``.npz``'s recorded URDF robot, where it
+    is not the URDF's own folder or below it (a folder recorded in the file is used only
+    there: a file never widens what may be read, docs/security.md).
 
     Raises :class:`~gdimitate.errors.DemonstrationFormatError` for an unknown
     extension (listing :data:`SUPPORTED`) or arguments the format cannot use, and the readers'
     own errors for malformed files.
     """
-    p = Path(path).expanduser()
+    from .errors import InvalidInputError
+    from .inputs import path_arg
+
+    p = path_arg("path", path).expanduser()
+    for name, value in (("grf", grf), ("coordinates", coordinates), ("markers", markers),
+                        ("package_dir", package_dir)):
+        if value is not None:
+            path_arg(name, value)
+    if robot is not None and not isinstance(robot, Robot):
+        raise InvalidInputError(f"robot must be a gdimitate.Robot or None; got "
+                                f"{type(robot).__name__}")
+    if not isinstance(overground, bool):
+        raise InvalidInputError(f"overground must be True or False; got {overground!r:.40}")
     suffix = p.suffix.lower()
     if suffix not in SUPPORTED:
         raise DemonstrationFormatError(
@@ -142,7 +157,7 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
         return Demonstration(bot, motion, None, str(p),
                              f"BVH ({info.unit}, floor at z = 0: {info.grounded}); contacts "
                              "from the feet's height and speed")
-    return _npz(p, robot)
+    return _npz(p, robot, package_dir)
 
 
 def _sagittal(p: Path, grf) -> Demonstration:
@@ -264,11 +279,52 @@ def _kinematic_contact(robot: Robot, motion: Motion) -> tuple[dict, str]:
             "height alone (the feet never stand still: a treadmill?)")
 
 
-def _npz(p: Path, robot: Robot | None) -> Demonstration:
-    import json
+def _recorded_package_dir(p: Path, rec, given: str | Path | None) -> str | None:
+    """The package folder to load an ``.npz``'s recorded robot with: ``given`` (the caller's
+    own) if any; else the recorded one if it is the URDF's own folder or below it (for a
+    library robot: example-robot-data's folder, which the library uses anyway); else
+    :class:`~gdimitate.errors.MeshPathError` — a file must never widen what may be read."""
+    import os
 
-    from .errors import RobotMismatchError
-    from .motion import RobotRecord
+    from .errors import MeshPathError
+
+    if given is not None:
+        return str(given)
+    if rec.kind == "library" or not rec.package_dir:
+        return None  # a library robot's meshes come from the library's own folder
+    if rec.kind != "urdf":
+        return None  # .osim/.bvh robots are rebuilt from their source: no package folder
+    recorded = Path(os.path.realpath(rec.package_dir))
+    urdf_dir = Path(os.path.realpath(Path(rec.source).parent))
+    if recorded.is_relative_to(urdf_dir):
+        return str(recorded)
+    raise MeshPathError(
+        f"{p}: its robot_package_dir {rec.package_dir!r} is not the URDF's folder {urdf_dir} or "
+        "below it; a motion file cannot widen the folders its robot's meshes are read from. "
+        "If that folder is right, pass it yourself: load_demonstration(..., package_dir=...) "
+        "or load the robot with Robot.from_urdf(..., package_dir=...) and pass robot=")
+
+
+def _recorded_json(p: Path, field: str, text: str) -> object:
+    """A JSON option (``robot_legs``/``robot_contacts``) recorded in an ``.npz``, checked
+    (:func:`gdimitate.inputs.loads_json`): :class:`FileFormatError` naming the file and field."""
+    from .errors import FileFormatError
+    from .inputs import loads_json
+
+    if not text:
+        return None
+    value = loads_json(text, f"{p}: robot_{field}", FileFormatError)
+    if not isinstance(value, dict):
+        raise FileFormatError(f"{p}: robot_{field} must be a JSON object {{\"left\": …, "
+                              f"\"right\": …}}; got {type(value).__name__}")
+    return value
+
+
+def _npz(p: Path, robot: Robot | None, package_dir: str | Path | None = None
+         ) -> Demonstration:
+    from .errors import FileFormatError, RobotMismatchError
+    from .library import list_robots
+    from .motion import RobotRecord, check_motion_layout
 
     rec = RobotRecord.from_npz(p)
     motion = Motion.from_npz(p)
@@ -284,22 +340,26 @@ def _npz(p: Path, robot: Robot | None) -> Demonstration:
                 raise RobotMismatchError(
                     f"{p}: its robot {rec.name!r} was built in memory and cannot be rebuilt "
                     "from the file; pass it (robot=; CLI: --demonstrator)")
+            if rec.kind == "library" and rec.source not in list_robots():
+                raise FileFormatError(f"{p}: robot_kind 'library' with robot_source "
+                                      f"{rec.source[:100]!r}, which is not a library robot "
+                                      f"({', '.join(list_robots())})")
+            legs = _recorded_json(p, "legs", rec.legs)
+            contacts = _recorded_json(p, "contacts", rec.contacts)
             if rec.kind == "bvh":
                 from .bvh import read_bvh
 
                 robot = read_bvh(rec.source, name=rec.name)[0]
             else:
-                robot = Robot.load(rec.source, package_dir=rec.package_dir or None,
-                                   legs=json.loads(rec.legs) if rec.legs else None,
-                                   contacts=json.loads(rec.contacts) if rec.contacts else None)
+                robot = Robot.load(rec.source,
+                                   package_dir=_recorded_package_dir(p, rec, package_dir),
+                                   legs=legs, contacts=contacts)  # type: ignore[arg-type]
         if robot.fingerprint != rec.fingerprint:
             raise RobotMismatchError(
                 f"{p} was written for robot {rec.name!r} ({rec.kind} {rec.source}, fingerprint "
                 f"{rec.fingerprint}); {robot.name!r} has fingerprint {robot.fingerprint}: its "
                 "joints, placements, inertias or limits differ (the model file changed?)")
         note = f"gdimitate NPZ of robot {rec.name!r} ({rec.kind}, fingerprint checked)"
-    if tuple(robot.joint_names) != motion.joint_names:
-        raise RobotMismatchError(f"{p}: the motion's joints {list(motion.joint_names)[:6]}… "
-                                 f"are not robot {robot.name!r}'s {list(robot.joint_names)[:6]}…")
+    motion = check_motion_layout(robot, motion, p, RobotMismatchError)
     forces = None
     return Demonstration(robot, motion, forces, str(p), note)

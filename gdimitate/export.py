@@ -62,7 +62,7 @@ import pinocchio as pin
 
 from .errors import ExportError, FileFormatError, OutputError
 from .kinematics import base_joint_id
-from .motion import Motion, check_base_quaternion
+from .motion import Motion, check_base_quaternion, check_motion_layout
 from .robot import PLANAR_BASE, SIDES, Robot
 from .safety import check_array_size, check_positive
 
@@ -100,12 +100,22 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
     ``fps`` whose frames exceed :data:`~gdimitate.safety.MAX_ARRAY_BYTES`,
     :class:`~gdimitate.errors.OutputError` for a ``path`` that is a folder, in a folder that
     does not exist, or cannot be written."""
-    if format not in FORMATS:
-        raise ExportError(f"unknown export format {format!r}; choose one of "
+    from .inputs import path_arg
+
+    if not isinstance(robot, Robot):
+        raise ExportError(f"robot must be a gdimitate.Robot; got {type(robot).__name__}")
+    if not isinstance(motion, Motion):
+        raise ExportError(f"motion must be a gdimitate.Motion; got {type(motion).__name__}")
+    if not isinstance(format, str) or format not in FORMATS:
+        raise ExportError(f"unknown export format {format!r:.40}; choose one of "
                           + ", ".join(f"{k} ({v})" for k, v in FORMATS.items()))
+    fps = check_positive("fps (frames per second)", fps, error=ExportError)
     if tuple(robot.joint_names) != motion.joint_names:
         raise ExportError(f"the motion's joints are not robot {robot.name!r}'s")
-    path = Path(path).expanduser()
+    # the layout (base_nq from the robot, never the motion's own) and every quaternion
+    motion = check_motion_layout(robot, motion, f"export of {robot.name!r}", ExportError,
+                                 recorded=False)
+    path = path_arg("path", path).expanduser()
     if path.is_dir():
         raise OutputError(f"cannot write {path}: it is a folder; give a file name")
     if not path.parent.is_dir():

@@ -19,14 +19,20 @@ from typing import TYPE_CHECKING, Any
 
 import pinocchio as pin
 
-from .errors import InvalidInputError, MeshPathError, UnknownRobotError, URDFError
+from .errors import InvalidInputError, MeshPathError, UnknownRobotError, URDFError, URDFLimitError
+from .inputs import check_contacts, check_legs, path_arg
 from .kinematics import PLANAR_BASE
 from .legs import LEG_PRESETS
 from .library import LIBRARY, MASSLESS_PRESETS, library_entry, list_robots
 from .meshes import confine_meshes
 from .safety import MAX_URDF_BYTES, check_urdf_bounds, parse_xml, read_text_bounded
 from .types import SIDES
-from .urdfcheck import check_urdf_joints, check_urdf_physics
+from .urdfcheck import (
+    check_urdf_joints,
+    check_urdf_physics,
+    check_urdf_size,
+    check_urdf_structure,
+)
 from .urdfgen import PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
 
 if TYPE_CHECKING:
@@ -44,8 +50,11 @@ def _package_dirs(path: Path, package_dir: str | Path | Sequence[str | Path] | N
     if package_dir is None:
         return [path.parent]
     if isinstance(package_dir, str | Path):
-        return [Path(package_dir)]
-    return [Path(d) for d in package_dir]
+        return [path_arg("package_dir", package_dir)]
+    if isinstance(package_dir, bytes) or not isinstance(package_dir, Sequence):
+        raise InvalidInputError(f"package_dir must be a folder path or a list of them; got "
+                                f"{type(package_dir).__name__} {package_dir!r:.80}")
+    return [path_arg("package_dir", d) for d in package_dir]
 
 
 def read_urdf(path: str | Path, *, package_dir: str | Path | Sequence[str | Path] | None = None,
@@ -56,11 +65,34 @@ def read_urdf(path: str | Path, *, package_dir: str | Path | Sequence[str | Path
     to the URDF's folder or a package directory: docs/security.md). ``floating``: add a
     free-flyer root (default: unless the URDF has our planar base joints).
     :class:`~gdimitate.errors.URDFError` (or a subclass) naming the file and what is wrong."""
-    path = Path(path)
-    if not path.is_file():
-        raise URDFError(f"URDF file not found: {path}")
+    path = path_arg("path", path)
+    if floating is not None and not isinstance(floating, bool):
+        raise InvalidInputError(f"floating must be True, False or None; got {floating!r:.80}")
+    if isinstance(massless_joints, str | bytes) or not all(
+            isinstance(j, str) for j in massless_joints):
+        raise InvalidInputError("massless_joints must be a list of joint names (str); got "
+                                f"{massless_joints!r:.80}")
+    try:
+        if not path.is_file():
+            raise URDFError(f"URDF file not found: {path}")
+    except OSError as e:  # a name too long for the file system
+        raise URDFError(f"cannot open URDF {str(path)[:200]}: {e.strerror or e}") from None
     root = parse_xml(read_text_bounded(path, MAX_URDF_BYTES, "URDF"), path)
+    try:
+        return _read_checked(path, root, package_dir, floating, massless_joints)
+    except RecursionError:  # the stdlib serialiser recurses once per nesting level
+        raise URDFLimitError(f"{path}: its XML elements are nested too deeply to process; "
+                             "a URDF is nested a few levels deep (robot > link > visual > "
+                             "geometry > box)") from None
+
+
+def _read_checked(path: Path, root: ET.Element,
+                  package_dir: str | Path | Sequence[str | Path] | None,
+                  floating: bool | None, massless_joints: Iterable[str]
+                  ) -> tuple[pin.Model, pin.GeometryModel, pin.GeometryModel, list[Path]]:
     check_urdf_bounds(root, path)
+    check_urdf_size(root, path)
+    check_urdf_structure(root, path)
     check_urdf_joints(root, path)
     check_urdf_physics(root, path, massless_joints)
     if floating is None:
@@ -96,8 +128,13 @@ def from_urdf(cls: type[Robot], path: str | Path, legs: LegNames | None = None, 
               package_dir: str | Path | Sequence[str | Path] | None = None,
               floating: bool | None = None, contacts: Contacts | None = None,
               massless_joints: Iterable[str] = ()) -> Robot:
-    """:meth:`gdimitate.Robot.from_urdf` (its docstring): :func:`read_urdf`, then ``cls``."""
-    path = Path(path)
+    """:meth:`gdimitate.Robot.from_urdf` (its docstring): :func:`read_urdf`, then ``cls``.
+    The arguments' types are checked first (:class:`InvalidInputError` naming the argument)."""
+    path = path_arg("path", path)
+    if name is not None and not isinstance(name, str):
+        raise InvalidInputError(f"name must be a str; got {type(name).__name__} {name!r:.80}")
+    check_legs(legs)
+    check_contacts(contacts)
     model, visual, collision, pkgs = read_urdf(path, package_dir=package_dir,
                                                floating=floating,
                                                massless_joints=massless_joints)
@@ -141,6 +178,9 @@ def from_library(cls: type[Robot], name: str) -> Robot:
     """:meth:`gdimitate.Robot.from_library`: our planar models or an example-robot-data model
     with its presets (:data:`gdimitate.legs.LEG_PRESETS`,
     :data:`gdimitate.library.MASSLESS_PRESETS`)."""
+    if not isinstance(name, str):
+        raise InvalidInputError(f"robot name must be a str; got {type(name).__name__} "
+                                f"{name!r:.80}; library names: {list_robots()}")
     if name in PLANAR_MODELS:
         return from_spec(cls, PLANAR_MODELS[name])
     if name not in LIBRARY:
@@ -154,6 +194,11 @@ def load(cls: type[Robot], spec: str | Path, *, package_dir: str | Path | None =
          contacts: Contacts | None = None, legs: LegNames | None = None) -> Robot:
     """:meth:`gdimitate.Robot.load` (its docstring): a library name or a ``.urdf``/``.osim``
     path; the arguments kept as ``robot.load_args``."""
+    if isinstance(spec, bytes) or not isinstance(spec, str | Path):
+        raise InvalidInputError(f"robot spec must be a library name or a model file path (str "
+                                f"or Path); got {type(spec).__name__} {spec!r:.80}")
+    check_legs(legs)
+    check_contacts(contacts)
     robot = _dispatch(cls, str(spec), package_dir, contacts, legs)
     robot.load_args = {"spec": str(spec), "package_dir": package_dir, "legs": legs,
                        "contacts": contacts}

@@ -145,14 +145,21 @@ def confine_meshes(root: ET.Element, urdf_path: Path, package_dirs: Sequence[Pat
             if el.tag == "mesh":
                 raise MeshPathError(f"{urdf_path}: {where} has a <mesh> without a filename")
             continue
-        path, roots = resolve_mesh(filename.strip(), urdf_dir, package_dirs)
+        shown = filename if len(filename) <= 200 else f"{filename[:200]}… ({len(filename):,} chars)"
+        try:
+            path, roots = resolve_mesh(filename.strip(), urdf_dir, package_dirs)
+            found = path.is_file()
+        except (OSError, ValueError) as e:  # a name too long for the file system, a NUL byte
+            raise MeshPathError(f"{urdf_path}: {where}: {el.tag} {shown!r} cannot be looked up "
+                                f"({getattr(e, 'strerror', None) or e}); give a valid file "
+                                "name") from None
         if not any(path.is_relative_to(r) for r in roots):
             raise MeshPathError(
-                f"{urdf_path}: {where}: {el.tag} {filename!r} resolves to {path}, outside the "
+                f"{urdf_path}: {where}: {el.tag} {shown!r} resolves to {path}, outside the "
                 f"folders a URDF may read ({', '.join(map(str, roots))}); move the file there "
                 "or pass its package folder as package_dir=")
-        if not path.is_file():
-            raise MeshPathError(f"{urdf_path}: {where}: {el.tag} file {filename!r} not found "
+        if not found:
+            raise MeshPathError(f"{urdf_path}: {where}: {el.tag} file {shown!r} not found "
                                 f"(looked for {path})")
         el.set("filename", str(path))
         refs.append(MeshReference(str(up.get("name")) if up is not None else "", el.tag,

@@ -11,16 +11,36 @@ import numpy as np
 
 from .errors import InvalidInputError, TimeGridError, UnknownNameError
 
-__all__ = ["Motion", "RobotRecord", "check_base_quaternion", "check_time", "differentiate"]
+__all__ = ["Motion", "RobotRecord", "check_base_quaternion", "check_motion_layout",
+           "check_time", "differentiate", "robot_layout"]
 
 #: Largest |norm − 1| of a free-flyer's base quaternion read from a file (float32 rounding
 #: is ~1e-7; a quaternion of another norm is not a rotation).
 QUATERNION_TOL = 1e-5
 
 
+def _floats(name: str, x: object, error: type[InvalidInputError] = InvalidInputError
+            ) -> np.ndarray:
+    """``x`` as a float array, or ``error`` naming ``name`` (an object array, strings, a
+    ragged list, complex numbers)."""
+    if isinstance(x, str | bytes | Mapping) or (
+            isinstance(x, np.ndarray) and x.dtype.kind not in "biuf"):
+        kind = x.dtype if isinstance(x, np.ndarray) else type(x).__name__
+        raise error(f"{name} must be an array of real numbers; got {kind}")
+    try:
+        with np.errstate(all="ignore"):
+            a = np.asarray(x)
+            if a.dtype.kind not in "biuf":
+                raise TypeError(a.dtype)
+            return a.astype(float)
+    except (TypeError, ValueError, OverflowError) as e:
+        raise error(f"{name} must be an array of real numbers; got {type(x).__name__} "
+                    f"({str(e)[:80]})") from None
+
+
 def check_time(t: np.ndarray) -> np.ndarray:
     """Validate a time grid: 1-D, at least 2 samples, finite, strictly increasing [s]."""
-    t = np.asarray(t, dtype=float)
+    t = _floats("time", t, TimeGridError)
     if t.ndim != 1 or t.size < 2:
         raise TimeGridError(f"time must be a 1-D array of at least 2 samples; got shape {t.shape}")
     if not np.all(np.isfinite(t)):
@@ -48,6 +68,77 @@ def check_base_quaternion(q: np.ndarray, base_nq: int, where: object) -> None:
             f"{norm[k]:.6g} at frame {k} ({bad.size} of {len(q)} frames are not unit "
             "quaternions); a free-flyer's orientation must be a unit quaternion — normalise "
             "it (a zero quaternion is no orientation)")
+
+
+def robot_layout(robot) -> tuple[int, tuple[int, ...]]:
+    """``(base_nq, joint_nq)`` of a :class:`~gdimitate.Robot`, from its Pinocchio model: the
+    floating base's columns (7 free-flyer, 3 our planar base, 0 fixed) and each joint's."""
+    m = robot.model
+    base_nq = {"free": 7, "planar": 3}.get(str(robot.base), 0)
+    return base_nq, tuple(int(m.joints[j].nq) for j in range(1, m.njoints))
+
+
+#: Pinocchio joints whose configuration holds a unit-norm part: (first column, width) within
+#: the joint's columns (a free-flyer's quaternion, a spherical joint's, an unbounded
+#: revolute's cos/sin, a planar joint's cos/sin).
+_UNIT_PARTS = {"JointModelFreeFlyer": (3, 4), "JointModelSpherical": (0, 4),
+               "JointModelSphericalZYX": None, "JointModelPlanar": (2, 2)}
+
+
+def _unit_parts(model) -> list[tuple[str, int, int]]:
+    """``(joint name, first q column, width)`` of every unit-norm part of ``model``'s q."""
+    out = []
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        short = jm.shortname()
+        part = _UNIT_PARTS.get(short)
+        if part is None and (short.startswith("JointModelRUB")
+                             or "RevoluteUnbounded" in short):  # unbounded revolute
+            part = (0, 2)
+        if part is not None:
+            out.append((str(model.names[j]), int(jm.idx_q) + part[0], part[1]))
+    return out
+
+
+def check_motion_layout(robot, motion: Motion, where: object,
+                        error: type[InvalidInputError] = InvalidInputError,
+                        recorded: bool = True) -> Motion:
+    """``motion`` with the base layout of ``robot``'s model, refused unless it fits the robot
+    — the same joints, each joint's q columns and ``v``/``a`` of width ``nv`` (``error``
+    naming ``where``) — and unless every unit-norm part of q (a free-flyer's or spherical
+    joint's quaternion, an unbounded revolute's cos/sin), found from the robot's model, has
+    norm 1 within :data:`QUATERNION_TOL` in every frame (:class:`InvalidInputError` naming
+    the joint and the frame). ``base_nq`` comes from the robot model, never from a file: a
+    file's ``base_nq=0`` used to skip the quaternion check. ``recorded`` (a motion read from a
+    file): a recorded ``base_nq`` that says free-flyer for a robot without one, or the reverse,
+    is refused too (our planar base's three 1-DoF columns may be recorded as 0 or 3)."""
+    base_nq, joint_nq = robot_layout(robot)
+    if tuple(robot.joint_names) != motion.joint_names:
+        raise error(f"{where}: the motion's joints {list(motion.joint_names)[:6]}… are not "
+                    f"robot {robot.name!r}'s {list(robot.joint_names)[:6]}…")
+    if motion.joint_nq != joint_nq or (recorded and (motion.base_nq == 7) != (base_nq == 7)):
+        raise error(f"{where}: the motion records base_nq = {motion.base_nq} and joint_nq "
+                    f"{list(motion.joint_nq)[:8]}…, robot {robot.name!r} has base_nq = "
+                    f"{base_nq} ({robot.base} base) and joint_nq {list(joint_nq)[:8]}…: the "
+                    "motion's layout is not its robot's")
+    nv = int(robot.model.nv)
+    for name in ("v", "a"):
+        x = getattr(motion, name)
+        if x is not None and x.shape[1] != nv:
+            raise error(f"{where}: {name} has {x.shape[1]} columns; robot {robot.name!r} has "
+                        f"nv = {nv}")
+    for joint, c, w in _unit_parts(robot.model):
+        norm = np.linalg.norm(motion.q[:, c:c + w], axis=1)
+        bad = np.flatnonzero(~(np.abs(norm - 1.0) <= QUATERNION_TOL))
+        if bad.size:
+            k = int(bad[0])
+            what = "quaternion" if w == 4 else "(cos, sin) pair"
+            raise InvalidInputError(
+                f"{where}: joint {joint!r}: its {what} (q columns {c}–{c + w - 1}) has norm "
+                f"{norm[k]:.6g} at frame {k} ({bad.size} of {motion.T} frames are not of unit "
+                "norm); it must be of unit norm — normalise it (a zero quaternion is no "
+                "orientation)")
+    return motion if motion.base_nq == base_nq else motion.replace(base_nq=base_nq)
 
 
 @dataclass(frozen=True)
@@ -79,11 +170,24 @@ class Motion:
 
     def __post_init__(self) -> None:
         t = check_time(self.t)
-        q = np.asarray(self.q, dtype=float)
+        q = _floats("q", self.q)
+        if isinstance(self.joint_names, str | bytes) or not all(
+                isinstance(n, str) for n in self.joint_names):
+            raise InvalidInputError(f"joint_names must be a sequence of str; got "
+                                    f"{self.joint_names!r:.80}")
         names = tuple(self.joint_names)
-        nqs = tuple(self.joint_nq) if self.joint_nq else (1,) * len(names)
+        nqs = tuple(self.joint_nq) if len(self.joint_nq) else (1,) * len(names)
+        if not all(isinstance(k, int | np.integer) and not isinstance(k, bool) and 1 <= k <= 7
+                   for k in nqs):
+            raise InvalidInputError(f"joint_nq must be integers 1…7 (columns of q per joint); "
+                                    f"got {nqs!r:.80}")
+        nqs = tuple(int(k) for k in nqs)
         if len(nqs) != len(names):
             raise InvalidInputError(f"joint_nq has {len(nqs)} entries for {len(names)} joints")
+        if isinstance(self.base_nq, bool) or self.base_nq not in (0, 3, 7):
+            raise InvalidInputError(f"base_nq must be 0 (fixed base), 3 (planar) or 7 "
+                                    f"(free-flyer); got {self.base_nq!r:.40}")
+        object.__setattr__(self, "base_nq", int(self.base_nq))
         if q.ndim != 2 or q.shape != (t.size, sum(nqs)):
             raise InvalidInputError(
                 f"q must have shape (T, nq) = ({t.size}, {sum(nqs)}); got {q.shape}")
@@ -91,8 +195,11 @@ class Motion:
             r, c = np.argwhere(~np.isfinite(q))[0]
             raise InvalidInputError(f"q has NaN/inf at frame {r}, column {c}")
         contact = {}
+        if not isinstance(self.contact, Mapping):
+            raise InvalidInputError(f"contact must be a dict {{side: (T,) bool}}; got "
+                                    f"{type(self.contact).__name__}")
         for side, c in dict(self.contact).items():
-            c = np.asarray(c, dtype=bool)
+            c = _floats(f"contact[{side!r}]", c).astype(bool)
             if c.shape != t.shape:
                 raise InvalidInputError(
                     f"contact[{side!r}] must have shape {t.shape}; got {c.shape}")
@@ -106,7 +213,7 @@ class Motion:
             x = getattr(self, name)
             if x is None:
                 continue
-            x = np.asarray(x, dtype=float)
+            x = _floats(name, x)
             if x.ndim != 2 or x.shape[0] != t.size:
                 raise InvalidInputError(f"{name} must have shape (T, nv) with T = {t.size}; "
                                         f"got {x.shape}")
@@ -207,16 +314,45 @@ class Motion:
                 free-flyer base quaternion that is not of unit norm,
                 :func:`check_base_quaternion`).
         """
+        from .errors import FileFormatError
         from .safety import open_npz
 
         with open_npz(path, ("t", "q", "joint_names", "joint_nq", "base_nq")) as z:
             contact = {k[8:]: z[k] for k in z.files if k.startswith("contact_")}
-            motion = cls(t=z["t"], joint_names=tuple(str(s) for s in z["joint_names"]),
-                         q=z["q"], contact=contact, base_nq=int(z["base_nq"]),
-                         joint_nq=tuple(int(i) for i in z["joint_nq"]),
-                         v=z["v"] if "v" in z.files else None,
-                         a=z["a"] if "a" in z.files else None)
-        check_base_quaternion(motion.q, motion.base_nq, path)
+            layout = {}
+            for key in ("joint_names", "joint_nq", "base_nq"):
+                x = z[key]
+                kinds = "U" if key == "joint_names" else "iu"
+                if x.dtype.kind not in kinds or x.ndim != (0 if key == "base_nq" else 1):
+                    raise FileFormatError(
+                        f"{path}: {key!r} must be a {'scalar' if key == 'base_nq' else '1-D'} "
+                        f"array of {'str' if kinds == 'U' else 'integers'}; got dtype "
+                        f"{x.dtype}, shape {x.shape}")
+                layout[key] = x
+            try:
+                motion = cls(t=z["t"], joint_names=tuple(str(s) for s in layout["joint_names"]),
+                             q=z["q"], contact=contact, base_nq=int(layout["base_nq"]),
+                             joint_nq=tuple(int(i) for i in layout["joint_nq"]),
+                             v=z["v"] if "v" in z.files else None,
+                             a=z["a"] if "a" in z.files else None)
+            except InvalidInputError as e:  # name the file (TimeGridError stays one)
+                raise type(e)(f"{path}: {e}") from None
+        first = motion.joint_nq[0] if motion.joint_nq else 0
+        if (first == 7) != (motion.base_nq == 7) or (
+                motion.base_nq == 3 and motion.joint_nq[:3] != (1, 1, 1)):
+            raise FileFormatError(
+                f"{path}: base_nq = {motion.base_nq} contradicts joint_nq "
+                f"{list(motion.joint_nq)[:4]}… (a free-flyer is one joint of 7 columns, base_nq "
+                "7; our planar base three of 1, base_nq 3): the file's layout is inconsistent")
+        for name in ("v", "a"):
+            x = getattr(motion, name)
+            if x is not None and x.shape[1] > motion.q.shape[1]:
+                raise FileFormatError(f"{path}: {name} has {x.shape[1]} columns, more than q's "
+                                      f"{motion.q.shape[1]} (nv ≤ nq)")
+        if motion.v is not None and motion.a is not None and motion.v.shape != motion.a.shape:
+            raise FileFormatError(f"{path}: v {motion.v.shape} and a {motion.a.shape} differ in "
+                                  "shape")
+        check_base_quaternion(motion.q, max(motion.base_nq, 7 if first == 7 else 0), path)
         return motion
 
     def to_csv(self, path, columns: list[str] | None = None) -> None:

@@ -89,6 +89,18 @@ MAX_URDF_BYTES = 16 * 2**20
 MAX_URDF_LINKS = 2000
 #: Deepest kinematic chain, in joints from the root link (example-robot-data's deepest: 21).
 MAX_URDF_DEPTH = 1000
+#: Most degrees of freedom of a URDF's joints (revolute, continuous, prismatic: 1; planar: 3;
+#: floating: 6; the free-flyer the loader adds not counted). Pinocchio's ``pin.Data``, which
+#: every loaded robot builds, holds eight nv × nv × nv second-derivative tensors: about
+#: 64·nv³ bytes. Measured through ``Robot.from_urdf``: nv = 212 → 0.70 GB peak RSS, 0.6 s;
+#: 312 → 2.0 GB, 1.8 s; 412 → 4.5 GB, 8.7 s (a 500-joint chain: 5.2 GB and MemoryError).
+#: 250 (nv 256 with the free-flyer: 1.2 GB) stays within 2 GB; example-robot-data's most:
+#: 101 (TIAGo dual).
+MAX_URDF_DOF = 250
+#: Most ``<visual>`` plus ``<collision>`` elements of a URDF. Pinocchio's
+#: ``buildGeomFromUrdfString`` takes time cubic in their number: 1000 boxes 1.0–1.6 s, 2000:
+#: 8–14 s, 4000: 82 s (20 000 did not load in 150 s); example-robot-data's most: 223.
+MAX_URDF_GEOMETRIES = 1000
 #: Largest median time step of a motion [s]: slower than 1 Hz is not a sampled motion (a time
 #: axis in milliseconds read as seconds gives 16.7 "s" for 60 Hz data).
 MAX_SAMPLE_INTERVAL_S = 1.0
@@ -121,6 +133,11 @@ MAX_TABLE_BYTES = 192 * 2**20
 #: Largest unpacked content of an ``.npz`` file read [bytes] (a compressed archive can
 #: unpack to far more than its size on disk).
 MAX_NPZ_BYTES = 2 * 2**30
+#: Largest BVH file read [bytes]. ``read_bvh`` peaks at about 5 bytes of memory per byte of
+#: a motion-capture file (CMU's clip repeated: 80 MB → 0.57 GB, 11 s) and 16 per byte of the
+#: densest text (one-digit values: 60 MB → 1.14 GB, 33 s; a 300 MB file hit MemoryError at
+#: 5 GB): 64 MiB (12 minutes of a 96-channel skeleton at 120 Hz) stays within 1.2 GB.
+MAX_BVH_BYTES = 64 * 2**20
 
 
 # ---------------------------------------------------------------------------------- numbers

@@ -17,8 +17,14 @@ CHANNELS, an unknown channel, a frame line with the wrong number of values, NaN/
 zero or negative ``Frame Time``, fewer or more frame lines than ``Frames:`` says — raises
 :class:`~gdimitate.errors.BVHError` naming the line and what to fix. Nothing is dropped.
 
+Numbers are ASCII (``Frames: ²`` or ``CHANNELS ⁶``, digits Python's ``int()`` would take,
+are refused), finite, offsets and positions within :data:`MAX_BVH_POSITION` file units and
+rotations within :data:`MAX_BVH_ROTATION_DEG` (beyond them a value is corrupt, and the unit
+detection and the URDF's placements overflow).
+
 Bounds (:mod:`gdimitate.safety`, checked before anything is allocated): a file of at most
-:data:`~gdimitate.safety.MAX_TABLE_BYTES`; a hierarchy at most :data:`MAX_BVH_DEPTH` joints
+:data:`~gdimitate.safety.MAX_BVH_BYTES` (reading peaks at up to 16 bytes of memory per byte
+of the file); a hierarchy at most :data:`MAX_BVH_DEPTH` joints
 deep; a ``Frame Time`` between :data:`~gdimitate.safety.MIN_SAMPLE_INTERVAL_S` and
 :data:`~gdimitate.safety.MAX_SAMPLE_INTERVAL_S` and a clip of at most
 :data:`~gdimitate.safety.MAX_MOTION_DURATION_S`; frames × channels within
@@ -48,15 +54,23 @@ import numpy as np
 
 from ..errors import BVHError, ResourceLimitError
 from ..safety import (
+    MAX_BVH_BYTES,
     MAX_MOTION_DURATION_S,
     MAX_SAMPLE_INTERVAL_S,
-    MAX_TABLE_BYTES,
     MIN_SAMPLE_INTERVAL_S,
     check_array_size,
     read_text_bounded,
 )
 
-__all__ = ["BVHJoint", "BVHFile", "parse_bvh", "CHANNEL_NAMES", "MAX_BVH_DEPTH"]
+__all__ = ["BVHJoint", "BVHFile", "parse_bvh", "CHANNEL_NAMES", "MAX_BVH_DEPTH",
+           "MAX_BVH_POSITION", "MAX_BVH_ROTATION_DEG"]
+
+#: Largest |OFFSET| or position channel value [file units]: 10 km in millimetres (a
+#: skeleton is ~2000 mm tall; a clip of an hour's walk travels ~5e6 mm).
+MAX_BVH_POSITION = 1e7
+#: Largest |rotation channel| [degrees]: a million turns (unwrapped angles grow by 360 a
+#: turn; sin and cos of larger numbers lose their digits).
+MAX_BVH_ROTATION_DEG = 3.6e8
 
 #: Deepest joint hierarchy read (a human skeleton with fingers is ~15 deep; the recursive
 #: reader and Python's stack stop far above it).
@@ -148,12 +162,15 @@ class _Tokens:
 
     def number(self, what: str) -> float:
         tok, line = self.take(what=what)
-        try:
-            x = float(tok)
-        except ValueError:
+        x = _ascii_float(tok)
+        if x is None:
             raise self.error(line, f"{what}: {tok!r} is not a number") from None
         if not math.isfinite(x):
             raise self.error(line, f"{what} is {tok!r}; give a finite number")
+        if abs(x) > MAX_BVH_POSITION:
+            raise self.error(line, f"{what} is {tok!r}; offsets must lie within "
+                                   f"±{MAX_BVH_POSITION:g} file units (gdimitate.bvh.parse."
+                                   "MAX_BVH_POSITION): is the file corrupt?")
         return x
 
 
@@ -189,7 +206,7 @@ def _read_block(tk: _Tokens, name: str, kind: str, line0: int, parent: int,
                              "'CHANNELS 3 Zrotation Xrotation Yrotation'")
     tk.take()
     n_tok, n_line = tk.take(what=f"the channel count of {owner}")
-    if not n_tok.isdigit() or int(n_tok) > 6:
+    if not (n_tok.isascii() and n_tok.isdigit()) or int(n_tok) > 6:
         raise tk.error(n_line, f"CHANNELS of {owner}: the count {n_tok!r} must be an integer "
                                "0..6")
     channels = []
@@ -260,7 +277,7 @@ def parse_bvh(path: str | Path) -> BVHFile:
     path = Path(path)
     if not path.is_file():
         raise BVHError(f"no such BVH file: {path}")
-    lines = read_text_bounded(path, MAX_TABLE_BYTES, "BVH file", BVHError,
+    lines = read_text_bounded(path, MAX_BVH_BYTES, "BVH file", BVHError,
                               ResourceLimitError).splitlines()
     p = str(path)
     motion_at = next((i for i, s in enumerate(lines) if s.strip().upper() == "MOTION"), None)
@@ -281,13 +298,12 @@ def parse_bvh(path: str | Path) -> BVHFile:
         raise BVHError(f"{p}: joint names must be unique; repeated: {dup}")
     assert motion_at is not None
     value, i = _header_value(lines, motion_at + 1, p, "Frames:")
-    if not value.isdigit() or int(value) < 1:
+    if not (value.isascii() and value.isdigit()) or int(value) < 1:
         raise BVHError(f"{p}, line {i}: 'Frames: {value}' must be a positive integer")
     n_frames = int(value)
     value, i = _header_value(lines, i, p, "Frame Time:")
-    try:
-        dt = float(value)
-    except ValueError:
+    dt = _ascii_float(value)
+    if dt is None:
         raise BVHError(f"{p}, line {i}: 'Frame Time: {value}' is not a number") from None
     if not (math.isfinite(dt) and dt > 0):
         raise BVHError(f"{p}, line {i}: 'Frame Time: {value}' must be a positive number of "
@@ -324,6 +340,11 @@ def _channel_label(joints: list[BVHJoint], col: int) -> str:
 def _read_frames(lines: list[str], start: int, path: str, n_frames: int, n_channels: int,
                  joints: list[BVHJoint]) -> np.ndarray:
     data = np.empty((n_frames, n_channels))
+    limit = np.full(n_channels, MAX_BVH_ROTATION_DEG)
+    for j in joints:
+        for c, name in enumerate(j.channels):
+            if name.endswith("position"):
+                limit[j.column + c] = MAX_BVH_POSITION
     k = 0
     last_line = start
     for i in range(start, len(lines)):
@@ -338,17 +359,26 @@ def _read_frames(lines: list[str], start: int, path: str, n_frames: int, n_chann
             raise BVHError(f"{path}, line {i + 1}: frame {k} has {len(parts)} values; the "
                            f"hierarchy declares {n_channels} channels")
         try:
+            if not lines[i].isascii() or "_" in lines[i]:
+                raise ValueError
             row = [float(x) for x in parts]
         except ValueError:
-            bad = next(x for x in parts if not _is_float(x))
+            bad = next(x for x in parts if _ascii_float(x) is None)
             raise BVHError(f"{path}, line {i + 1}: frame {k}: {bad!r} is not a number") from None
         data[k] = row
-        bad_cols = np.flatnonzero(~np.isfinite(data[k]))
+        bad_cols = np.flatnonzero(~(np.abs(data[k]) <= limit))
         if bad_cols.size:
             c = int(bad_cols[0])
-            raise BVHError(f"{path}, line {i + 1}: frame {k}, value {c + 1} "
-                           f"({_channel_label(joints, c)}) is {parts[c]!r}; every value must "
-                           "be finite (fill or cut the gap before reading)")
+            label = _channel_label(joints, c)
+            if not math.isfinite(data[k, c]):
+                raise BVHError(f"{path}, line {i + 1}: frame {k}, value {c + 1} ({label}) is "
+                               f"{parts[c]!r}; every value must be finite (fill or cut the gap "
+                               "before reading)")
+            kind, name = (("a position", "MAX_BVH_POSITION") if "position" in label else
+                          ("a rotation", "MAX_BVH_ROTATION_DEG"))
+            raise BVHError(f"{path}, line {i + 1}: frame {k}, value {c + 1} ({label}) is "
+                           f"{parts[c]!r}; {kind} must lie within ±{limit[c]:g} "
+                           f"(gdimitate.bvh.parse.{name}): is the file corrupt?")
         k += 1
     if k < n_frames:
         raise BVHError(f"{path}, line {last_line}: the MOTION section is truncated: 'Frames: "
@@ -357,9 +387,12 @@ def _read_frames(lines: list[str], start: int, path: str, n_frames: int, n_chann
     return data
 
 
-def _is_float(x: str) -> bool:
+def _ascii_float(x: str) -> float | None:
+    """``float(x)`` for ASCII number text without underscores (Python's ``float`` also takes
+    ``"١٫٥"`` and ``"1_0"``); ``None`` for anything else."""
+    if not x.isascii() or "_" in x:
+        return None
     try:
-        float(x)
+        return float(x)
     except ValueError:
-        return False
-    return True
+        return None
