@@ -528,14 +528,16 @@ def _add_adapt(sub) -> None:
 
 def _add_walk(sub) -> None:
     """``gdimitate walk``: a periodic cycle walked in MuJoCo under an oscillator network."""
-    from .apps.demo import DEFAULT_IMITATOR
+    from .apps.demo import WALK_IMITATOR
 
     wk = sub.add_parser("walk", help="a periodic cycle, a whole-body oscillator network and N "
                                      "steps in MuJoCo (walk.json, plots, trajectory, HTML)",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the robot fell, fewer steps "
                                "than asked, or the cycle is not feasible")
     _add_demonstration_args(wk, "demonstration", "the shipped real 3-D walk")
-    _add_robot_args(wk, "--imitator", DEFAULT_IMITATOR, "imitator robot")
+    _add_robot_args(wk, "--imitator", WALK_IMITATOR, "imitator robot (a robot whose periodic "
+                    "cycle of the shipped walk the audit passes and MuJoCo walks; G1's and "
+                    "Talos's do not yet)")
     wk.add_argument("--steps", type=int, default=20, help="steps to walk (default: %(default)s)")
     wk.add_argument("--gain", type=float, default=0.5,
                     help="feedback gain of the ground into the network (0: open loop) "

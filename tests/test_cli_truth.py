@@ -152,6 +152,7 @@ def test_adapt_entrain_view_default_to_the_demos_walk_and_g1(tmp_path, capsys):
     assert sub["view"].get_default("imitator") == "g1"
     assert sub["entrain"].get_default("robot") == "g1"
     assert sub["demo"].get_default("imitator") == "g1"
+    assert sub["walk"].get_default("imitator") == "hoap2"  # a cycle that is feasible and walks
     robot, stride, forces = default_demonstration()
     c = stride.contact["right"]
     assert c[0] and c[-1] and not c[-2]  # heel strike to heel strike

@@ -155,10 +155,12 @@ def test_cli_walk_writes_its_files(tmp_path, capsys):
     from gdimitate.cli import main
 
     out = tmp_path / "w"
-    status = main(["walk", "--imitator", "hoap2", "--steps", "2", "--no-html", "--out",
-                   str(out)])
+    # the defaults (issue 34: walk defaulted to G1, whose cycle is not feasible): HOAP-2's
+    # cycle of the shipped walk passes the audit and walks
+    status = main(["walk", "--steps", "2", "--no-html", "--out", str(out)])
     said = capsys.readouterr().out
     d = json.loads((out / "walk.json").read_text())
+    assert d["imitator"] == "hoap2" and d["cycle_feasible"] and status == 0
     assert status == (0 if d["steps_completed"] == 2 and not d["fell"]
                       and d["cycle_feasible"] else 3)
     # an exit status 3 says why (before: "NOT feasible: …", then "steps completed 2/2")
