@@ -345,7 +345,7 @@ def _tampered(src: Path, dst: Path, **changes) -> Path:
     return dst
 
 
-def test_npz_recorded_package_dir_never_widens_the_mesh_sandbox(walker, tmp_path):
+def test_npz_recorded_package_dir_never_widens_the_mesh_sandbox(walker, tmp_path, capsys):
     """`robot_package_dir="/"` (with the URDF's fingerprint) let `gdimitate view evil.npz`
     open and embed a mesh outside the URDF's folder. A recorded folder is used only if it is
     the URDF's folder or below it; else MeshPathError unless the caller passes it."""
@@ -363,6 +363,11 @@ def test_npz_recorded_package_dir_never_widens_the_mesh_sandbox(walker, tmp_path
                          robot_package_dir=pkg, robot_fingerprint=legit.fingerprint)
         with pytest.raises(MeshPathError, match="robot_package_dir"):
             gd.load_demonstration(evil)
+    from gdimitate.cli import main
+
+    html = tmp_path / "v.html"  # the reported command: refused before any page is made
+    assert main(["view", str(evil), "--html", str(html)]) == 2
+    assert "robot_package_dir" in capsys.readouterr().err and not html.exists()
     # below the URDF's folder: used; passed by the caller: used
     sub = tmp_path / "evil" / "pkg"
     sub.mkdir()
