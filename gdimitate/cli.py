@@ -82,14 +82,9 @@ def _json_file(path: str | None, what: str):
     if path is None:
         return None
     from .errors import InvalidInputError
+    from .inputs import read_json
 
-    try:
-        value = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as e:  # UnicodeDecodeError and a 5000-digit number too
-        raise InvalidInputError(f"{what} {path}: not a readable JSON file ({e})") from None
-    except RecursionError:
-        raise InvalidInputError(f"{what} {path}: nested too deep to be a legs or contacts "
-                                "file (they nest three levels)") from None
+    value = read_json(path, what)  # bounded: size, nesting, digits, no NaN
     if not isinstance(value, dict):
         raise InvalidInputError(f"{what} {path}: expected a JSON object "
                                 '{"left": {...}, "right": {...}}')
