@@ -21,6 +21,7 @@ import math
 import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
+from typing import cast
 
 import numpy as np
 
@@ -199,14 +200,15 @@ def check_urdf_joints(root: ET.Element, source: object) -> None:
                                     "finite numbers") from None
                 if vals is None or key == "rpy":
                     continue
+                given = cast(ET.Element, el.find(tag)).get(key)  # found: it gave numbers
                 if tag == "origin" and max(map(abs, vals)) > MAX_URDF_LENGTH_M:
-                    raise URDFError(f"{source}: {what}: <origin xyz={el.find(tag).get(key)!r}>"
+                    raise URDFError(f"{source}: {what}: <origin xyz={given!r}>"
                                     f" is more than {MAX_URDF_LENGTH_M:g} m from its parent "
                                     "(gdimitate.urdfcheck.MAX_URDF_LENGTH_M): is the unit "
                                     "right?")
                 if tag == "axis" and math.hypot(*vals) < 1e-9 and el.tag == "joint" and \
                         el.get("type") != "fixed":
-                    raise URDFError(f"{source}: {what}: <axis xyz={el.find(tag).get(key)!r}> is "
+                    raise URDFError(f"{source}: {what}: <axis xyz={given!r}> is "
                                     "the zero vector; a joint needs a direction to turn or "
                                     "slide about (e.g. xyz=\"0 1 0\")")
     zero: dict[str, list[str]] = {"effort": [], "velocity": []}
@@ -214,20 +216,20 @@ def check_urdf_joints(root: ET.Element, source: object) -> None:
         lim, name = j.find("limit"), j.get("name")
         if lim is None or j.get("type") in ("fixed", "floating", "planar"):
             continue
-        vals = {}
+        lim_vals: dict[str, float | None] = {}
         for key in ("lower", "upper", "effort", "velocity"):
             try:
                 v = _numbers(lim, key, 1)
             except ValueError:
                 raise URDFError(f"{source}: joint {name!r}: <limit {key}={lim.get(key)!r}> "
                                 "must be a finite number") from None
-            vals[key] = None if v is None else v[0]
-        lo, hi = vals["lower"], vals["upper"]
+            lim_vals[key] = None if v is None else v[0]
+        lo, hi = lim_vals["lower"], lim_vals["upper"]
         if j.get("type") != "continuous" and lo is not None and hi is not None and lo > hi:
             raise URDFError(f"{source}: joint {name!r} has lower limit {lo:g} > upper limit "
                             f"{hi:g}; swap them (no position could satisfy both)")
         for key in zero:
-            if vals[key] == 0 and name not in PLANAR_BASE:  # our planar base: unactuated
+            if lim_vals[key] == 0 and name not in PLANAR_BASE:  # our planar base: unactuated
                 zero[key].append(str(name))
     for key, names in zero.items():
         if names:
@@ -324,8 +326,8 @@ def check_urdf_structure(root: ET.Element, source: object) -> None:
                             f"{', '.join(JOINT_DOF)}")
         ends = {}
         for tag in ("parent", "child"):
-            el = j.find(tag)
-            link = el.get("link") if el is not None else None
+            end = j.find(tag)
+            link = end.get("link") if end is not None else None
             if not link:
                 raise URDFError(f"{source}: joint {name!r} has no <{tag} link=\"…\"/>; a joint "
                                 "connects a parent link to a child link")
