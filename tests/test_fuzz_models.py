@@ -579,3 +579,19 @@ def test_bounds_are_generous_for_real_robots():
         check_urdf_size(root, p)
         check_urdf_structure(root, p)
     assert json.loads(json.dumps({"ok": True}))
+
+
+@pytest.mark.parametrize("content", [b"[" * 100_000 + b"]" * 100_000, b'{"joints": \xff}',
+                                     b'{"joints": ' + b"9" * 5000 + b"}", b"[1, 2]",
+                                     b'{"joints": NaN}'],
+                         ids=["nested", "not-utf8", "5000-digits", "not-an-object", "nan"])
+def test_a_body_map_file_that_cannot_be_one_says_so(tmp_path, content):
+    """A body-map JSON file nested deep, not UTF-8 or with a 5,000-digit number raised a
+    bare RecursionError/ValueError (BodyMap.from_json caught only OSError/JSONDecodeError)."""
+    from gdimitate.errors import InvalidInputError
+    from gdimitate.retarget.bodymap import BodyMap
+
+    p = tmp_path / "map.json"
+    p.write_bytes(content)
+    with pytest.raises(InvalidInputError, match="body map"):
+        BodyMap.from_json(p)

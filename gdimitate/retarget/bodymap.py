@@ -27,7 +27,6 @@ unmapped and held (:data:`HOLD_RANGE`). A user's own map is a dict or a JSON fil
 
 from __future__ import annotations
 
-import json
 import re
 import warnings
 from collections.abc import Mapping
@@ -218,11 +217,13 @@ class BodyMap:
     @classmethod
     def from_json(cls, path: str | Path) -> BodyMap:
         """Read :meth:`from_dict`'s format from a JSON file."""
+        from ..inputs import read_json
+
         p = Path(path)
-        try:
-            d = json.loads(p.read_text())
-        except (OSError, json.JSONDecodeError) as e:
-            raise InvalidInputError(f"cannot read the body map {p}: {e}") from None
+        d = read_json(p, "body map")  # bounded: size, nesting, digits; no NaN
+        if not isinstance(d, dict):
+            raise InvalidInputError(f"body map {p}: expected a JSON object "
+                                    '{"joints": {...}, "segments": {...}}')
         return cls.from_dict(d, name=p.stem)
 
     def validate(self, demonstrator: Robot, imitator: Robot) -> BodyMap:
