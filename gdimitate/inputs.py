@@ -138,20 +138,25 @@ def read_json(path: str | os.PathLike, what: str,
     return loads_json(data, f"{what} {p}", error)
 
 
+def _per_side(value: object, where: str, shape: str) -> list[tuple[object, object]]:
+    """The ``(side, entry)`` items of a per-foot option ``{"left": …, "right": …}``, or
+    :class:`InvalidInputError` (``shape``: what one entry looks like, for the message)."""
+    if not isinstance(value, Mapping):
+        raise InvalidInputError(f"{where} must be a dict {{'left': {shape}, 'right': {{…}}}}; "
+                                f"got {type(value).__name__} {value!r:.80}")
+    bad = [k for k in value if k not in ("left", "right")]
+    if bad:
+        raise InvalidInputError(f"{where}: keys must be 'left' and 'right'; got {bad[:5]!r:.120}")
+    return list(value.items())
+
+
 def check_legs(legs: object, where: str = "legs=") -> None:
     """Refuse a ``legs=`` value that is not ``None`` or ``{"left": {...}, "right": {...}}`` of
     role (``hip``, ``knee``, ``ankle``, ``sole``) → name (``str``; ``ankle`` may be
     ``None``)."""
     if legs is None:
         return
-    if not isinstance(legs, Mapping):
-        raise InvalidInputError(f"{where} must be a dict {{'left': {{'hip': …, 'knee': …, "
-                                f"'ankle': …, 'sole': …}}, 'right': {{…}}}}; got "
-                                f"{type(legs).__name__} {legs!r:.80}")
-    bad = [k for k in legs if k not in ("left", "right")]
-    if bad:
-        raise InvalidInputError(f"{where}: keys must be 'left' and 'right'; got {bad[:5]!r:.120}")
-    for side, d in legs.items():
+    for side, d in _per_side(legs, where, "{'hip': …, 'knee': …, 'ankle': …, 'sole': …}"):
         if not isinstance(d, Mapping):
             raise InvalidInputError(f"{where}[{side!r}] must be a dict of hip, knee, ankle, "
                                     f"sole names; got {type(d).__name__} {d!r:.80}")
@@ -173,14 +178,7 @@ def check_contacts(contacts: object, where: str = "contacts=") -> None:
 
     if contacts is None:
         return
-    if not isinstance(contacts, Mapping):
-        raise InvalidInputError(f"{where} must be a dict {{'left': {{'half_length': m, "
-                                f"'half_width': m, …}}, 'right': {{…}}}}; got "
-                                f"{type(contacts).__name__} {contacts!r:.80}")
-    bad = [k for k in contacts if k not in ("left", "right")]
-    if bad:
-        raise InvalidInputError(f"{where}: keys must be 'left'/'right'; got {bad[:5]!r:.120}")
-    for side, g in contacts.items():
+    for side, g in _per_side(contacts, where, "{'half_length': m, 'half_width': m, …}"):
         if isinstance(g, SoleContact):
             g = {k: getattr(g, k) for k in ("frame", "half_length", "half_width", "mu")}
         if not isinstance(g, Mapping):
