@@ -204,3 +204,56 @@ def test_a_run_killed_mid_write_leaves_no_half_written_result(tmp_path):
                         str(out)], capture_output=True, text=True, timeout=300)
     assert r.returncode in (0, 3), r.stderr
     assert json.loads((out / "report.json").read_text())["method"] == "analytic"
+
+
+# ------------------------------------------------------------------ nothing left behind
+def test_a_viewer_never_closed_leaves_no_log(tmp_path):
+    """`Viewer.start()` without `close()` left `gdimitate-meshcat-*.log` in the temporary
+    folder; the server's own log is now removed with it at interpreter exit."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    r = subprocess.run([sys.executable, "-c", "from gdimitate.viz import Viewer\n"
+                        "v = Viewer.start(quiet=True)\nprint(v.server.log_path)"],
+                       capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "TMPDIR": str(tmp)})
+    assert r.returncode == 0, r.stderr
+    assert str(tmp) in r.stdout  # the log was there while the server ran
+    deadline = time.time() + 10
+    while list(tmp.iterdir()) and time.time() < deadline:
+        time.sleep(0.1)
+    assert list(tmp.iterdir()) == []
+
+
+def test_an_npz_whose_header_promises_more_than_it_holds_is_refused(tmp_path):
+    """A member's .npy header claiming shape (10¹¹,) asked NumPy for 745 GiB; every member's
+    header is now checked against what the member holds before anything is loaded."""
+    import io
+    import zipfile
+
+    import gdimitate as gd
+    from gdimitate.errors import FileFormatError
+    from gdimitate.motion import Motion
+
+    robot = gd.Robot.from_library("hoap2")
+    good = tmp_path / "good.npz"
+    gd.adapt(*_sagittal(robot), "analytic").motion.to_npz(good, robot=robot)
+    with zipfile.ZipFile(good) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+    for shape in [(10**11,), (10**6, 10**6), (2**62,)]:
+        buf = io.BytesIO()
+        np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False,
+                                                   "shape": shape})
+        buf.write(b"\0" * 64)
+        p = tmp_path / "forged.npz"
+        with zipfile.ZipFile(p, "w") as zf:  # a real motion file, its q replaced
+            for n, data in members.items():
+                zf.writestr(n, buf.getvalue() if n == "q.npy" else data)
+        with pytest.raises(FileFormatError, match="truncated or forged"):
+            Motion.from_npz(p)
+
+
+def _sagittal(robot):
+    from gdimitate.gait import human_walk
+
+    human, walk = human_walk()
+    return walk, human, robot
