@@ -96,19 +96,7 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
     extension (listing :data:`SUPPORTED`) or arguments the format cannot use, and the readers'
     own errors for malformed files.
     """
-    from .errors import InvalidInputError
-    from .inputs import path_arg
-
-    p = path_arg("path", path).expanduser()
-    for name, value in (("grf", grf), ("coordinates", coordinates), ("markers", markers),
-                        ("package_dir", package_dir)):
-        if value is not None:
-            path_arg(name, value)
-    if robot is not None and not isinstance(robot, Robot):
-        raise InvalidInputError(f"robot must be a gdimitate.Robot or None; got "
-                                f"{type(robot).__name__}")
-    if not isinstance(overground, bool):
-        raise InvalidInputError(f"overground must be True or False; got {overground!r:.40}")
+    p = _check_arguments(path, grf, coordinates, robot, overground, markers, package_dir)
     suffix = p.suffix.lower()
     if suffix not in SUPPORTED:
         raise DemonstrationFormatError(
@@ -158,6 +146,25 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
                              f"BVH ({info.unit}, floor at z = 0: {info.grounded}); contacts "
                              "from the feet's height and speed")
     return _npz(p, robot, package_dir)
+
+
+def _check_arguments(path, grf, coordinates, robot, overground, markers, package_dir) -> Path:
+    """:func:`load_demonstration`'s arguments of the right types (paths, a Robot, a bool) →
+    the demonstration's path; :class:`InvalidInputError` naming the argument otherwise."""
+    from .errors import InvalidInputError
+    from .inputs import path_arg
+
+    p = path_arg("path", path).expanduser()
+    for name, value in (("grf", grf), ("coordinates", coordinates), ("markers", markers),
+                        ("package_dir", package_dir)):
+        if value is not None:
+            path_arg(name, value)
+    if robot is not None and not isinstance(robot, Robot):
+        raise InvalidInputError(f"robot must be a gdimitate.Robot or None; got "
+                                f"{type(robot).__name__}")
+    if not isinstance(overground, bool):
+        raise InvalidInputError(f"overground must be True or False; got {overground!r:.40}")
+    return p
 
 
 def _sagittal(p: Path, grf) -> Demonstration:

@@ -183,18 +183,10 @@ def _walk(r: _Reader, start: int, end: int, path: Path
     return groups, params
 
 
-def check_c3d(path: Path) -> C3DLayout:
-    """Check ``path``'s header, parameter section and data section against its length and
-    each other (see the module docstring) → :class:`C3DLayout`. Raises
-    :class:`~gdimitate.errors.C3DFormatError` (truncated, corrupt, not a C3D file: the message
-    says which section, the expected and actual size) and
-    :class:`~gdimitate.errors.ResourceLimitError` (over :data:`MAX_C3D_BYTES`, or a layout
-    needing more than :data:`MAX_C3D_MEMORY` to read)."""
-    size = path.stat().st_size
-    if size > MAX_C3D_BYTES:
-        raise ResourceLimitError(f"{path}: {size:,} bytes is over the {MAX_C3D_BYTES:,} bytes "
-                                 "a C3D file may have (gdimitate.c3d.layout.MAX_C3D_BYTES); "
-                                 "cut the trial into shorter ones")
+def _sections(path: Path, size: int) -> tuple[bytes, bytes, int, int, int]:
+    """The header block and the parameter section of ``path`` →
+    ``(header, section, first parameter block, parameter blocks, processor type)``, each
+    checked against the file's ``size`` [bytes]."""
     with open(path, "rb") as fh:
         head = fh.read(BLOCK)
         if len(head) < BLOCK:
@@ -229,125 +221,170 @@ def check_c3d(path: Path) -> C3DLayout:
             raise C3DFormatError(f"{path}: processor type {proc} in the parameter section "
                                  "(84 Intel, 85 DEC, 86 MIPS): the file is corrupt")
         fh.seek(start)
-        section = fh.read(nblocks * BLOCK)
-    r = _Reader(head, proc == 85, path)
-    w = [r.u16(2 * i) for i in range(12)]
-    first, last = w[3], w[4]
-    scale_h = r.floats(12, 1)[0]
-    dstart, byframe_h = w[8], w[9]
-    ps = _Reader(section, proc == 85, path)
-    groups, raw = _walk(ps, 4, len(section), path)
-    names = {(groups.get(g, f"#{g}"), n): v for (g, n), v in raw.items()}
+        return head, fh.read(nblocks * BLOCK), pblock, nblocks, proc
 
-    def values(group: str, name: str) -> np.ndarray | None:
-        if (group, name) not in names:
+
+class _Params:
+    """The parameter section's values by ``(group, name)``, read as ezc3d reads them."""
+
+    def __init__(self, ps: _Reader, path: Path):
+        self.ps, self.path = ps, path
+        self.groups, raw = _walk(ps, 4, len(ps.data), path)
+        self.names = {(self.groups.get(g, f"#{g}"), n): v for (g, n), v in raw.items()}
+
+    def values(self, group: str, name: str) -> np.ndarray | None:
+        if (group, name) not in self.names:
             return None
-        typ, dims, at = names[(group, name)]
-        n = math.prod(dims)
+        typ, dims, at = self.names[(group, name)]
         if typ == -1:
             return None
-        return ps.floats(at, n) if typ == 4 else ps.ints(at, n, typ)
+        n = math.prod(dims)
+        return self.ps.floats(at, n) if typ == 4 else self.ps.ints(at, n, typ)
 
-    def scalar(group: str, name: str, default: float) -> float:
-        v = values(group, name)
+    def scalar(self, group: str, name: str, default: float) -> float:
+        v = self.values(group, name)
         if v is None:
-            if (group, name) in names:  # a character parameter where a number belongs
-                raise C3DFormatError(f"{path}: {group}:{name} is text; it must be a number")
+            if (group, name) in self.names:  # a character parameter where a number belongs
+                raise C3DFormatError(f"{self.path}: {group}:{name} is text; it must be a "
+                                     "number")
             return default
         if v.size == 0:
-            raise C3DFormatError(f"{path}: {group}:{name} has no value; give it one")
+            raise C3DFormatError(f"{self.path}: {group}:{name} has no value; give it one")
         x = float(v[0])
         if not math.isfinite(x):
-            raise C3DFormatError(f"{path}: {group}:{name} = {x}; it must be a finite number")
+            raise C3DFormatError(f"{self.path}: {group}:{name} = {x}; it must be a finite "
+                                 "number")
         return x
 
-    def series(group: str, name: str) -> list[float]:
+    def series(self, group: str, name: str) -> list[float]:
         out: list[float] = []
         for key in [name] + [f"{name}{i}" for i in range(2, 100)]:
-            v = values(group, key)
+            v = self.values(group, key)
             if v is None:
                 break
             out += v.tolist()
         return out
 
-    floats = scale_h < 0
-    if not math.isfinite(scale_h):
-        raise C3DFormatError(f"{path}: header scale factor (words 7–8) is {scale_h}; it must "
-                             "be a finite number (negative for float data)")
-    points = int(scalar("POINT", "USED", 0))
-    channels_used = int(scalar("ANALOG", "USED", 0))
-    rate = scalar("POINT", "RATE", 0.0)
-    arate = scalar("ANALOG", "RATE", 0.0)
+
+def _counts(P: _Params) -> tuple[int, int, float, float]:
+    """``(points, analog channels, POINT:RATE, ANALOG:RATE)``, each ≥ 0."""
+    points = int(P.scalar("POINT", "USED", 0))
+    channels_used = int(P.scalar("ANALOG", "USED", 0))
+    rate = P.scalar("POINT", "RATE", 0.0)
+    arate = P.scalar("ANALOG", "RATE", 0.0)
     for what, v in (("POINT:USED", points), ("ANALOG:USED", channels_used),
                     ("POINT:RATE", rate), ("ANALOG:RATE", arate)):
         if v < 0:
-            raise C3DFormatError(f"{path}: {what} = {v:g}; it must be ≥ 0 (the file is "
+            raise C3DFormatError(f"{P.path}: {what} = {v:g}; it must be ≥ 0 (the file is "
                                  "corrupt)")
     if points:
-        scalar("POINT", "SCALE", -1.0)
-    # frames, as ezc3d counts them (header 1-based, or 0-based where first frame is 0)
+        P.scalar("POINT", "SCALE", -1.0)
+    return points, channels_used, rate, arate
+
+
+def _frames(P: _Params, first: int, last: int) -> tuple[int, float]:
+    """The frame count as ezc3d takes it (header 1-based, or 0-based where the first frame is
+    0; a non-zero ``POINT:FRAMES`` wins) → ``(frames, POINT:FRAMES)``."""
     one = first != 0
     f0, f1 = (first - 1, last - 1 if last else 0) if one else (0, last)
     frames = f1 - f0 + 1
-    pf = scalar("POINT", "FRAMES", 0)
-    if pf < 0 and names.get(("POINT", "FRAMES"), (0,))[0] == 2:
+    pf = P.scalar("POINT", "FRAMES", 0)
+    if pf < 0 and P.names.get(("POINT", "FRAMES"), (0,))[0] == 2:
         pf += 65536  # an unsigned 16-bit count (> 32767 frames) read as signed
     if int(pf) != 0 and int(pf) != frames:
         frames = int(pf)
-    # analog samples per frame: ANALOG:RATE / POINT:RATE, as ezc3d's updateHeader
+    return frames, pf
+
+
+def _subframes(P: _Params, rate: float, arate: float, byframe_h: int) -> int:
+    """Analog samples per frame: ``ANALOG:RATE / POINT:RATE``, as ezc3d's ``updateHeader``."""
     if int(rate) == 0:
-        sub = 1
+        return 1
+    if int(arate / rate) != byframe_h and not (byframe_h == 1 and "SHADOW" in
+                                               P.groups.values()):
+        return int(arate / rate)
+    return byframe_h
+
+
+def _rotations_end(P: _Params, frames: int, rate: float) -> tuple[int, str]:
+    """Where the ROTATION group's data ends [bytes] (0: none used), and what it holds."""
+    rstart = int(P.scalar("ROTATION", "DATA_START", 0))
+    rused = int(P.scalar("ROTATION", "USED", 0))
+    if ("ROTATION", "RATIO") in P.names:
+        ratio = int(P.scalar("ROTATION", "RATIO", 0))
     else:
-        sub = byframe_h
-        if int(arate / rate) != byframe_h and not (byframe_h == 1 and "SHADOW" in
-                                                    groups.values()):
-            sub = int(arate / rate)
+        rrate = P.scalar("ROTATION", "RATE", 0.0)
+        ratio = int(rrate / rate) if rate > 0 else 0
+    if rstart < 1 or rused < 0 or ratio < 0:
+        raise C3DFormatError(f"{P.path}: ROTATION:DATA_START {rstart}, USED {rused}, ratio "
+                             f"{ratio}: the ROTATION group is corrupt")
+    end = (rstart - 1) * BLOCK + frames * ratio * rused * 17 * 4 if ratio * rused else 0
+    return end, (f"rotations from block {rstart}: {frames} frames × {ratio} × {rused} "
+                 "rotations × 68 bytes")
+
+
+def _check_analog(P: _Params, channels: int) -> None:
+    """One ``ANALOG:SCALE`` and ``OFFSET`` per channel (ezc3d indexes them unchecked)."""
+    for key in ("SCALE", "OFFSET"):
+        have = len(P.series("ANALOG", key))
+        if have < channels:
+            raise C3DFormatError(f"{P.path}: ANALOG:{key} has {have} values for {channels} "
+                                 "analog channels (ANALOG:USED); one per channel is needed")
+    P.scalar("ANALOG", "GEN_SCALE", 1.0)
+
+
+def check_c3d(path: Path) -> C3DLayout:
+    """Check ``path``'s header, parameter section and data section against its length and
+    each other (see the module docstring) → :class:`C3DLayout`. Raises
+    :class:`~gdimitate.errors.C3DFormatError` (truncated, corrupt, not a C3D file: the message
+    says which section, the expected and actual size) and
+    :class:`~gdimitate.errors.ResourceLimitError` (over :data:`MAX_C3D_BYTES`, or a layout
+    needing more than :data:`MAX_C3D_MEMORY` to read)."""
+    size = path.stat().st_size
+    if size > MAX_C3D_BYTES:
+        raise ResourceLimitError(f"{path}: {size:,} bytes is over the {MAX_C3D_BYTES:,} bytes "
+                                 "a C3D file may have (gdimitate.c3d.layout.MAX_C3D_BYTES); "
+                                 "cut the trial into shorter ones")
+    head, section, pblock, nblocks, proc = _sections(path, size)
+    r = _Reader(head, proc == 85, path)
+    w = [r.u16(2 * i) for i in range(12)]
+    first, last, dstart, byframe_h = w[3], w[4], w[8], w[9]
+    scale_h = r.floats(12, 1)[0]
+    P = _Params(_Reader(section, proc == 85, path), path)
+    if not math.isfinite(scale_h):
+        raise C3DFormatError(f"{path}: header scale factor (words 7–8) is {scale_h}; it must "
+                             "be a finite number (negative for float data)")
+    floats = scale_h < 0
+    points, channels_used, rate, arate = _counts(P)
+    frames, pf = _frames(P, first, last)
+    sub = _subframes(P, rate, arate, byframe_h)
     channels = channels_used if sub else 0  # ezc3d: ANALOG:USED, none without subframes
-    rotation = "ROTATION" in groups.values()
+    rotation = "ROTATION" in P.groups.values()
     if points == 0 and channels == 0 and not rotation:
         frames = 0
     if frames < 0:
         raise C3DFormatError(f"{path}: the header says frames {first}–{last} and POINT:FRAMES "
                              f"is {pf:g}: {frames} frames; the file is corrupt")
     if channels:
-        for key in ("SCALE", "OFFSET"):
-            have = len(series("ANALOG", key))
-            if have < channels:
-                raise C3DFormatError(f"{path}: ANALOG:{key} has {have} values for "
-                                     f"{channels} analog channels (ANALOG:USED); one per "
-                                     "channel is needed")
-        scalar("ANALOG", "GEN_SCALE", 1.0)
+        _check_analog(P, channels)
     if frames and dstart < 1 + (pblock - 1) + nblocks:
         raise C3DFormatError(f"{path}: the header's data start block {dstart} (word 9) lies "
                              f"before the end of the parameter section (blocks {pblock}–"
                              f"{pblock + nblocks - 1}): the file is corrupt")
     bpv = 4 if floats else 2
-    per_frame = (4 * points + channels * sub) * bpv
-    data_end = (dstart - 1) * BLOCK + frames * per_frame if frames else 0
+    data_end = (dstart - 1) * BLOCK + frames * (4 * points + channels * sub) * bpv \
+        if frames else 0
     what = (f"data from block {dstart}: {frames} frames × ({points} points × 4 + "
             f"{channels} analog channels × {sub} samples) × {bpv} bytes")
-    if rotation and frames:
-        rstart = int(scalar("ROTATION", "DATA_START", 0))
-        rused = int(scalar("ROTATION", "USED", 0))
-        if ("ROTATION", "RATIO") in names:
-            ratio = int(scalar("ROTATION", "RATIO", 0))
-        else:
-            rrate = scalar("ROTATION", "RATE", 0.0)
-            ratio = int(rrate / rate) if rate > 0 else 0
-        if rstart < 1 or rused < 0 or ratio < 0:
-            raise C3DFormatError(f"{path}: ROTATION:DATA_START {rstart}, USED {rused}, ratio "
-                                 f"{ratio}: the ROTATION group is corrupt")
-        rend = (rstart - 1) * BLOCK + frames * ratio * rused * 17 * 4
-        if ratio * rused and rend > data_end:  # ezc3d writes the group with none used
-            data_end = rend
-            what = (f"rotations from block {rstart}: {frames} frames × {ratio} × {rused} "
-                    "rotations × 68 bytes")
+    rend, rwhat = _rotations_end(P, frames, rate) if rotation and frames else (0, "")
+    if rend > data_end:  # ezc3d writes the group with none used
+        data_end, what = rend, rwhat
     if data_end > size:
         raise _truncated(path, data_end, size, what)
-    plates = int(scalar("FORCE_PLATFORM", "USED", 0))
+    plates = int(P.scalar("FORCE_PLATFORM", "USED", 0))
     if plates:
-        _check_plates(path, plates, names, values)
-    params = {k: values(*k) for k in names if names[k][0] != -1}
+        _check_plates(path, plates, P.names, P.values)
+    params = {k: P.values(*k) for k in P.names if P.names[k][0] != -1}
     layout = C3DLayout(frames, points, channels, sub, floats, max(plates, 0), data_end, size,
                        params)
     need = estimated_memory(layout)

@@ -188,6 +188,34 @@ def _count(head: dict[str, str], key: str, path: Path) -> int:
     return int(x)
 
 
+def _rows(it, cap: int, n: int, path: Path) -> tuple[np.ndarray, int]:
+    """The data rows of ``it`` (``(index, line)`` pairs after the 5 header lines; at most
+    ``cap``) → ``((cap, 1 + 3·n) table: time then x, y, z per marker, NaN in gaps; rows
+    filled)``, bounded by :data:`MAX_TRC_ARRAY_BYTES` before it is allocated."""
+    if 8.0 * cap * (1 + 3 * n) > MAX_TRC_ARRAY_BYTES:
+        raise ResourceLimitError(
+            f"{path}: {cap:,} lines of {n} markers would need {8e-9 * cap * (1 + 3 * n):.2f} "
+            f"GB as numbers; the limit is {MAX_TRC_ARRAY_BYTES / 1e9:g} GB "
+            "(gdimitate.opensim.trc.MAX_TRC_ARRAY_BYTES): cut the trial or drop markers")
+    data = np.empty((cap, 1 + 3 * n))
+    rows = 0
+    for lineno, ln in ((k + 5, x) for k, x in it):
+        if not ln.strip():
+            continue
+        f = ln.split("\t")
+        extra = [v for v in f[2 + 3 * n:] if v.strip()]
+        if len(f) < 2 or extra:
+            raise OpenSimDataError(f"{path}, line {lineno}: expected frame, time and {3 * n} "
+                                   f"coordinates; got {len(f)} fields")
+        vals = f[1:2 + 3 * n] + [""] * max(0, 2 + 3 * n - len(f))
+        try:
+            data[rows] = [float(v) if v.strip() else np.nan for v in vals]
+        except ValueError as e:
+            raise OpenSimDataError(f"{path}, line {lineno}: not a number ({e})") from None
+        rows += 1
+    return data, rows
+
+
 def read_trc(path: str | Path, *, up: str | None = None) -> Markers:
     """Read a ``.trc`` marker file → :class:`Markers` (metres, our world frame).
 
@@ -227,27 +255,7 @@ def read_trc(path: str | Path, *, up: str | None = None) -> Markers:
                                f"names {n} markers")
     # one row per line at most (a row may leave its trailing markers out: they are gaps)
     cap = max(text.count("\n"), text.count("\r")) + 1
-    if 8.0 * cap * (1 + 3 * n) > MAX_TRC_ARRAY_BYTES:
-        raise ResourceLimitError(
-            f"{path}: {cap:,} lines of {n} markers would need {8e-9 * cap * (1 + 3 * n):.2f} "
-            f"GB as numbers; the limit is {MAX_TRC_ARRAY_BYTES / 1e9:g} GB "
-            "(gdimitate.opensim.trc.MAX_TRC_ARRAY_BYTES): cut the trial or drop markers")
-    data = np.empty((cap, 1 + 3 * n))
-    rows = 0
-    for lineno, ln in ((k + 5, x) for k, x in it):
-        if not ln.strip():
-            continue
-        f = ln.split("\t")
-        extra = [v for v in f[2 + 3 * n:] if v.strip()]
-        if len(f) < 2 or extra:
-            raise OpenSimDataError(f"{path}, line {lineno}: expected frame, time and {3 * n} "
-                                   f"coordinates; got {len(f)} fields")
-        vals = f[1:2 + 3 * n] + [""] * max(0, 2 + 3 * n - len(f))
-        try:
-            data[rows] = [float(v) if v.strip() else np.nan for v in vals]
-        except ValueError as e:
-            raise OpenSimDataError(f"{path}, line {lineno}: not a number ({e})") from None
-        rows += 1
+    data, rows = _rows(it, cap, n, path)
     del text
     if rows < 2:
         raise OpenSimDataError(f"{path}: {rows} frames; at least 2 are needed")
