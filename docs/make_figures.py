@@ -55,33 +55,6 @@ def adaptor_g1() -> Path:
     return path
 
 
-def subject01_c3d(path: Path) -> Path:
-    """The shipped subject01 trial written as a gait-lab C3D: its 41 markers (60 Hz) and one
-    force plate per foot (the measured ground reaction, 600 Hz; plate = the rectangle around
-    that foot's centres of pressure)."""
-    import warnings
-
-    import gdimitate as gd
-    from gdimitate.c3d import ForcePlate, write_c3d
-
-    folder = gd.gait.human_walk_3d_folder()
-    robot = gd.Robot.from_osim(folder / "subject01.osim")
-    forces = gd.opensim.read_grf(folder / "subject01_walk1_grf.mot", robot,
-                                 folder / "subject01_walk1_grf.xml")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        markers = gd.opensim.read_trc(folder / "subject01_walk1.trc")
-    plates = []
-    for k, side in enumerate(("right", "left"), start=1):
-        f = forces[side]
-        c = f.cop[f.contact]
-        lo, hi, z = c.min(0) - 0.1, c.max(0) + 0.1, float(c[:, 2].mean())
-        corners = np.array([[lo[0], lo[1], z], [hi[0], lo[1], z], [hi[0], hi[1], z],
-                            [lo[0], hi[1], z]])
-        plates.append(ForcePlate(forces.t, f.force, f.cop, f.torque, corners, k))
-    return write_c3d(path, markers, plates)
-
-
 def gait_lab() -> Path:
     """From the gait lab to G1: the subject01 trial as a C3D → marker-based inverse
     kinematics (vs OpenSim's own IK .mot), the plates' forces on the feet, and for one stride
@@ -96,7 +69,7 @@ def gait_lab() -> Path:
 
     folder = gd.gait.human_walk_3d_folder()
     with tempfile.TemporaryDirectory() as tmp:
-        c3d = subject01_c3d(Path(tmp) / "subject01_walk1.c3d")
+        c3d = gd.c3d.write_subject01(Path(tmp) / "subject01_walk1.c3d")
         demo = gd.load_demonstration(folder / "subject01.osim", markers=c3d)
     human, walk, forces = demo.robot, demo.motion, demo.forces
     ref = gd.opensim.read_coordinates(folder / "subject01_walk1_ik.mot", human)

@@ -14,7 +14,7 @@ from .errors import InvalidInputError, UnitsWarning
 from .motion import Motion
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
-           "human_walk_3d_folder", "one_stride"]
+           "human_walk_3d_folder", "one_stride", "cmu_walk_path"]
 
 
 def human_walk_path() -> Path:
@@ -209,6 +209,13 @@ def human_walk_3d_folder() -> Path:
     ``subject01_walk1_ik.mot``, ``subject01_walk1_grf.mot`` + ``.xml``, ``subject01_walk1.trc``,
     OpenSim's own ``std_subject01_InverseDynamics.sto``; README.txt, LICENSE.txt, NOTICE)."""
     return Path(str(resources.files("gdimitate") / "data" / "gait" / "opensim_subject01_walk1_3d"))
+
+
+def cmu_walk_path() -> Path:
+    """The shipped BVH walk: CMU motion-capture subject 02, trial 01 (``cmu_02_01.bvh``; its
+    README.txt gives the origin and terms)."""
+    return Path(str(resources.files("gdimitate") / "data" / "gait" / "cmu_02_01" /
+                    "cmu_02_01.bvh"))
 
 
 def human_walk_3d(overground: bool = True):
