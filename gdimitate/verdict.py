@@ -30,13 +30,16 @@ class Verdict:
     failed, most violated first (the audit's ``binding``; for the kinematic methods the
     unreachable frames and violated limits); ``unmet``: ``(name, violation, knot)`` of each
     goal the optimiser's least-infeasible fallback leaves unmet (violation in the row's own
-    scaled units); ``solver``: the solver's record (:func:`solver_record`) or None."""
+    scaled units); ``solver``: the solver's record (:func:`solver_record`) or None;
+    ``reasons``: each failed check as the judge measured it, ``"name value unit > bound at
+    knot k"`` (the audit's numbers: what the console prints as the reason)."""
 
     feasible: bool
     judge: str
     failed: tuple[str, ...]
     unmet: tuple[tuple[str, float, int], ...]
     solver: dict[str, Any] | None
+    reasons: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -50,10 +53,11 @@ class Verdict:
 
     def lines(self) -> list[str]:
         """The verdict as console lines (no leading indentation)."""
+        said = self.reasons or self.failed
         out = [f"{self.judge}: " + ("feasible" if self.feasible else
-                                    "NOT feasible; failed: " + ", ".join(self.failed[:6])
-                                    + (f" (and {len(self.failed) - 6} more)"
-                                       if len(self.failed) > 6 else ""))]
+                                    "NOT feasible; failed: " + "; ".join(said[:6])
+                                    + (f" (and {len(said) - 6} more)"
+                                       if len(said) > 6 else ""))]
         s = self.solver
         if s is not None:
             out.append(f"solver: {s['status']}, {s['iterations']} iterations, "
@@ -61,19 +65,39 @@ class Verdict:
                                                  "least-infeasible motion" if s["elastic"]
                                                  else ""))
         if self.unmet:
-            out.append("goals unmet: " + "; ".join(
-                f"{n} off by {v:.3g}{_unit(n, v)} at knot {k}" for n, v, k in self.unmet[:6]))
+            out.append("goals unmet: " + "; ".join(self.unmet_texts()[:6]))
         if not self.ok:
             why = "a goal is unmet" if self.feasible else "it is not feasible"
             out.append(f"result written, but {why}: exit status {EXIT_NOT_FEASIBLE}")
         return out
 
+    def unmet_texts(self) -> list[str]:
+        """Each unmet goal as every output prints it: ``"name off by v unit at knot k"``."""
+        return [f"{n} off by {v:.3g}{_unit(n, v)} at knot {k}" for n, v, k in self.unmet]
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``feasible``, ``ok``, ``judge``, ``failed``, ``unmet`` (list of
         ``{name, violation, knot}``)."""
         return {"feasible": self.feasible, "ok": self.ok, "judge": self.judge,
-                "failed": list(self.failed),
+                "failed": list(self.failed), "reasons": list(self.reasons),
                 "unmet": [{"name": n, "violation": v, "knot": k} for n, v, k in self.unmet]}
+
+
+def _as_check(row: str) -> str:
+    """The audit check that measures a solver row group (``"force direction: left"`` →
+    ``"force_direction:left"``; ``"audit: cop:left"`` → ``"cop:left"``)."""
+    if row.startswith("audit: "):
+        return row[len("audit: "):]
+    head, _, side = row.partition(": ")
+    return f"{head.replace(' ', '_')}:{side}" if side else row
+
+
+def _reason(c: Any) -> str:
+    """A failed audit check as the console says it: ``"cop:left -0.0031 m < 0 at knot 12"``."""
+    op = ">" if c.sense == "max" else "<"
+    where = f" at knot {c.knot}" if c.knot >= 0 else ""
+    unit = f" {c.unit}" if c.unit not in ("", "-") else ""
+    return f"{c.name} {c.value:.3g}{unit} {op} {c.bound:.3g}{where}"
 
 
 def _unit(name: str, v: float) -> str:
@@ -100,14 +124,19 @@ def solver_record(solver: Any) -> dict[str, Any] | None:
 
 def verdict(result: Any) -> Verdict:
     """The verdict of an :class:`~gdimitate.adapt.AdaptedMotion`: the audit's for the optimal
-    method (plus the solver's unmet goals), Eq. (1)'s reachability and the position limits
-    for the kinematic ones."""
+    method, Eq. (1)'s reachability and the position limits for the kinematic ones; plus the
+    solver's unmet goals that the judge does not measure itself. A goal the audit checks (the
+    push direction against its target, ``force_direction:<side>``) is judged by the audit's
+    value and bound alone: the solver's scaled row violation is not a second number for it."""
     solver = solver_record(getattr(result, "solver", None))
     unmet = tuple((u["name"], u["violation"], u["knot"]) for u in (solver or {}).get("unmet", ()))
     aud = getattr(result, "audit", None)
     if aud is not None:
-        return Verdict(bool(aud.feasible), "audit (Pinocchio)",
-                       tuple(aud.binding), unmet, solver)
+        checked = {c.name for c in aud.checks}
+        unmet = tuple(u for u in unmet if _as_check(u[0]) not in checked)
+        worst = sorted((c for c in aud.checks if not c.passed), key=lambda c: -c.violation)
+        return Verdict(bool(aud.feasible), "audit (Pinocchio)", tuple(aud.binding), unmet,
+                       solver, tuple(_reason(c) for c in worst))
     r = result.report
     failed = [f"{s}: {n} frames unreachable" for s, n in r.infeasible_frames.items() if n]
     failed += [f"position:{j} exceeded by {v:.3g} rad" for j, v in

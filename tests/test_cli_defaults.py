@@ -29,6 +29,16 @@ def test_the_goal_is_the_measured_push_where_forces_were_measured(tmp_path, caps
     rep = json.loads((out / "report.json").read_text())
     assert rep["force_model"] == "measured"
     assert status == (0 if rep["verdict"]["ok"] else 3)
+    # one number per quantity (issue 34: "force direction: right off by 3.86e-05 rad (0.0°)"
+    # was printed as the reason for NOT feasible while the audit measured 0.0204 > 0.001):
+    # a goal the audit checks is judged by the audit's value and bound only, and every failed
+    # check is printed with the audit's own numbers
+    checks = {c["name"]: c for c in rep["audit"]["checks"]}
+    assert "force_direction:left" in checks and "force_direction:right" in checks
+    assert not [u for u in rep["verdict"]["unmet"] if "force direction" in u["name"]]
+    for c in (c for c in checks.values() if not c["passed"]):
+        assert f"{c['name']} {c['value']:.3g}" in said and f"{c['bound']:.3g}" in said
+    assert rep["verdict"]["ok"] == rep["audit"]["feasible"]
     main(["adapt", str(SAG), "--imitator", "hoap2", "--method", "analytic", "--out",
           str(tmp_path / "a")])  # no forces: the segment model
     assert "force=segment" in capsys.readouterr().out

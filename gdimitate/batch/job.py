@@ -286,7 +286,7 @@ def _adapt_one(path: Path, options: BatchOptions) -> tuple[Any, dict[str, Any]]:
     if adapted.audit is not None:
         cols.update(_audit_margins(adapted.audit))
     if adapted.solver is not None:
-        cols["goals_unmet"] = "; ".join(f"{n} {v:.3g}@{k}" for n, v, k in verdict(adapted).unmet)
+        cols["goals_unmet"] = "; ".join(verdict(adapted).unmet_texts())
     if options.simulate:
         from ..sim import simulate
 
