@@ -21,7 +21,7 @@ def _functions() -> list[ca.Function]:
     return [ca.Function("val", [x], [y]), ca.Function("dval", [x], [ca.jacobian(y, x)])]
 
 
-def test_compiled_once_then_loaded(tmp_path, monkeypatch):
+def test_compiled_once_then_loaded(tmp_path, monkeypatch, capfd):
     cache, work = tmp_path / "cache", tmp_path / "work"
     work.mkdir()
     monkeypatch.setenv(codegen.ENV, str(cache))
@@ -30,8 +30,15 @@ def test_compiled_once_then_loaded(tmp_path, monkeypatch):
         pytest.skip("no C compiler on this machine")
     n = codegen.COMPILE_COUNT
     key = f"test-{os.getpid()}-{np.random.default_rng().integers(1 << 30)}"
-    funs, compiled = codegen.compiled_functions(key, _functions)
+    funs, compiled = codegen.compiled_functions(key, _functions, "the test's")
     assert compiled and codegen.COMPILE_COUNT == n + 1
+    # the first run says what it compiles and roughly how long it takes, then how long it took
+    # (issue 34: G1's first compile was 76 s of silence)
+    said = capfd.readouterr().err
+    total = sum(f.n_instructions() for f in _functions())
+    assert (f"compiling the test's optimal-adaptor derivatives to C, once for this robot and "
+            f"problem ({total / 1e6:.2f} M instructions in 2 files") in said
+    assert "roughly 0 s" in said and "compiled in" in said
     assert list(work.iterdir()) == []  # nothing in the working folder
     assert any(p.suffix == ".so" for p in cache.iterdir())
 
@@ -40,6 +47,7 @@ def test_compiled_once_then_loaded(tmp_path, monkeypatch):
 
     again, compiled2 = codegen.compiled_functions(key, must_not_build)
     assert compiled2 and codegen.COMPILE_COUNT == n + 1
+    assert "compiling" not in capfd.readouterr().err  # a cache hit is silent
     ref = {f.name(): f for f in _functions()}
     x = np.array([0.3, -1.2, 0.7])
     for name in ("val", "dval"):

@@ -19,7 +19,9 @@ import hashlib
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
+import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -28,7 +30,8 @@ import casadi as ca
 import numpy as np
 
 __all__ = ["cache_dir", "compiled_functions", "SlowDerivativesWarning", "source_digest",
-           "COMPILE_COUNT", "split_rows", "pieces", "PIECE_SIZE", "OVERLAP"]
+           "COMPILE_COUNT", "split_rows", "pieces", "PIECE_SIZE", "OVERLAP",
+           "INSTRUCTIONS_PER_S"]
 
 ENV = "GDIMITATE_CACHE_DIR"
 CFLAGS = ("-O1", "-fPIC", "-fno-math-errno")
@@ -38,6 +41,10 @@ PIECE_SIZE = 120_000
 """SX instructions above which :func:`split_rows` cuts a function into pieces: the C
 compiler's time grows faster than the size of one function body (its register allocation
 over one basic block; docs/design.md §6, "the solver")."""
+INSTRUCTIONS_PER_S = 5500.0
+"""SX instructions the system compiler turns into code per second on two cores at
+:data:`CFLAGS` (measured: G1's walking problem, 0.54 M instructions, 73 s; Talos's, 0.88 M,
+191 s): the first run's announced estimate, within a factor of about 1.5."""
 OVERLAP = 1.15
 """A cut is kept when its two pieces together take at most this many times the instructions
 of the whole (what they recompute both)."""
@@ -80,26 +87,44 @@ def _warn(why: str) -> None:
         _WARNED = True
 
 
-def _build(funcs: list[ca.Function], lib: Path, cc: str) -> None:
+def _build(funcs: list[ca.Function], lib: Path, cc: str, label: str = "") -> None:
     """One C file per function, compiled in parallel (one compiler per core: the Hessian's
-    file dominates; separate files also bound the compiler's memory), linked into ``lib``."""
+    file dominates; separate files also bound the compiler's memory), linked into ``lib``.
+    Says on stderr what it compiles, about how long it takes (:data:`INSTRUCTIONS_PER_S`) and
+    how far it is (a progress bar over the files), then how long it took."""
     global COMPILE_COUNT
+    from tqdm import tqdm
+
     lib.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp:
+    total = sum(f.n_instructions() for f in funcs)
+    t0 = time.perf_counter()
+    print(f"gdimitate: compiling {label or 'the'} optimal-adaptor derivatives to C, once for "
+          f"this robot and problem ({total / 1e6:.2f} M instructions in {len(funcs)} files, "
+          f"roughly {_minutes(total / INSTRUCTIONS_PER_S)}; kept in {lib.parent}) …",
+          file=sys.stderr, flush=True)
+    with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp, \
+            tqdm(total=len(funcs), unit="file", file=sys.stderr, leave=False) as bar:
         objs: list[str] = []
         procs: list[subprocess.Popen] = []
+
+        def running() -> list[subprocess.Popen]:
+            return [p for p in procs if p.poll() is None]
+
         for f in sorted(funcs, key=lambda f: -f.n_instructions()):
             cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
             cg.add(f)
             cg.generate(tmp + os.sep)
             obj = Path(tmp) / f"{f.name()}.o"
             objs.append(str(obj))
-            while len([p for p in procs if p.poll() is None]) >= (os.cpu_count() or 1):
-                procs[[p.poll() is None for p in procs].index(True)].wait()
+            while len(running()) >= (os.cpu_count() or 1):
+                running()[0].wait()
+            bar.n = len(procs) - len(running())
+            bar.refresh()
             procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(Path(tmp) / f"{f.name()}.c"),
                                            "-o", str(obj)], stderr=subprocess.PIPE, text=True))
         for p in procs:
             _, err = p.communicate()
+            bar.update(1)
             if p.returncode:
                 raise subprocess.CalledProcessError(p.returncode, p.args, stderr=err)
         out = Path(tmp) / lib.name
@@ -107,6 +132,12 @@ def _build(funcs: list[ca.Function], lib: Path, cc: str) -> None:
                        capture_output=True, text=True)
         os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
     COMPILE_COUNT += 1
+    print(f"gdimitate: compiled in {time.perf_counter() - t0:.0f} s; later runs load it",
+          file=sys.stderr, flush=True)
+
+
+def _minutes(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.0f} min"
 
 
 def split_rows(name: str, n: int, weight: np.ndarray,
@@ -152,12 +183,12 @@ def pieces(fun: dict[str, ca.Function], name: str) -> list[ca.Function]:
     return out
 
 
-def compiled_functions(key: str, make: Callable[[], list[ca.Function]]
+def compiled_functions(key: str, make: Callable[[], list[ca.Function]], label: str = ""
                        ) -> tuple[dict[str, ca.Function], bool]:
     """``({name: function}, compiled)`` for the functions ``make()`` builds: loaded from the
     cached library of ``key`` when it exists (``make`` is then not called), else built,
-    compiled and cached; ``make()``'s own functions when no C compiler is available
-    (``compiled`` False)."""
+    compiled and cached (``label``, e.g. ``"g1's"``, names them in the message that says so);
+    ``make()``'s own functions when no C compiler is available (``compiled`` False)."""
     lib = cache_dir() / f"knot-{key[:24]}.so"
     names_file = lib.with_suffix(".names")
     if lib.exists() and names_file.exists():
@@ -174,7 +205,7 @@ def compiled_functions(key: str, make: Callable[[], list[ca.Function]]
     try:
         names_file.parent.mkdir(parents=True, exist_ok=True)
         names_file.write_text("\n".join(f.name() for f in funcs))
-        _build(funcs, lib, cc)
+        _build(funcs, lib, cc, label)
     except (OSError, subprocess.CalledProcessError) as e:
         detail = getattr(e, "stderr", "") or str(e)
         _warn(f"compiling the derivatives failed ({detail.strip()[:200]})")

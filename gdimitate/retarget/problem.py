@@ -258,7 +258,7 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
             _knot_expressions(k, parts)
         digest = hashlib.sha1(repr((key, _SOURCE)).encode()).hexdigest()
         fun, comp = codegen.compiled_functions(
-            digest, lambda: _functions(k, g_rows, slices, costs, prow, x0))
+            digest, lambda: _functions(k, g_rows, slices, costs, prow, x0), f"{robot.name}'s")
         seams = [p for p in parts if isinstance(p, SeamConstraint)]
         seam, seam_labels, seam_sizes = seam_functions(k, seams) if seams else (None, [], [])
         return Formulation(k, parts, cons, slices, pairs, pslices, labels, scale, fun, comp,
