@@ -295,6 +295,34 @@ def test_headless_chromium_draws_the_robots(scene, tmp_path):
 
 
 @pytest.mark.browser
+def test_the_saved_page_names_what_it_shows(scene, tmp_path):
+    """The demo's page had no legend and the title "MeshCat": one could not tell the plan
+    from the simulation. A saved page is titled after its tracks and carries a legend, one
+    line per track; Chromium draws it (the top-left corner changes against the same page
+    without the legend) and leaves the robots' scene as it was elsewhere."""
+    from PIL import Image
+
+    from gdimitate.viz.export import LEGEND_ID
+
+    page = scene["full"].read_text()
+    assert "<title>gdimitate: talos, " in page and "MeshCat</title>" not in page
+    box = page[page.index(f'id="{LEGEND_ID}"'):]
+    box = box[:box.index("</div></div>")]
+    assert ">talos</div>" in box and box.count("<span") == 2
+    bare = tmp_path / "bare.html"
+    bare.write_text(re.sub(rf'<div id="{LEGEND_ID}".*?</div></div>', "", page, count=1,
+                           flags=re.DOTALL))
+    exe = _chromium()
+    with_png = screenshot_html(scene["full"], tmp_path / "legend.png", chromium=exe, **SHOT)
+    bare_png = screenshot_html(bare, tmp_path / "bare.png", chromium=exe, **SHOT)
+    a = np.asarray(Image.open(with_png).convert("L"), dtype=float)
+    b = np.asarray(Image.open(bare_png).convert("L"), dtype=float)
+    corner = (slice(0, 80), slice(0, 160))  # the legend's box, top-left
+    assert np.mean(np.abs(a[corner] - b[corner]) > 20) > 0.2, "no legend drawn"
+    assert np.mean(np.abs(a[240:, 320:] - b[240:, 320:]) > 20) < 0.01  # the scene unchanged
+
+
+@pytest.mark.browser
 def test_headless_chromium_plays_the_animation(scene, tmp_path):
     exe = _chromium()
     a = screenshot_html(scene["playing"], tmp_path / "a.png", chromium=exe,

@@ -66,9 +66,10 @@ def _write_html(path: Path, demo_robot: Robot, demo: Motion, imit: Robot, sim, L
         show_simulation(imit, sim, viewer=v, gap=1.5 * L)
         v.show(demo_robot, demo, name="demonstrator", scale=L / demo_robot.legs["left"].length,
                offset=(0.0, -3.0 * L, 0.0), color=(0.85, 0.65, 0.45), opacity=0.4,
-               foot_paths=False)
+               foot_paths=False, label=f"demonstrator ({demo_robot.name}, scaled to "
+                                       f"{imit.name}'s legs, translucent)")
         v.animate(fps=30)
-        v.save_html(path)
+        v.save_html(path, title=f"gdimitate demo: {demo_robot.name} → {imit.name}")
     finally:
         v.close()
     return str(path)

@@ -51,9 +51,11 @@ def show_simulation(robot: Robot, result: SimResult, *, gap: float = 1.0, fps: f
     def draw(v: Viewer) -> None:
         v.show(robot, result.plan_motion(), name="plan", offset=(0.0, -gap / 2, 0.0),
                force_directions=_directions(result.plan_forces, min_force),
-               color=(0.55, 0.75, 1.0), opacity=0.6)
+               color=(0.55, 0.75, 1.0), opacity=0.6,
+               label=f"{robot.name}: plan (the adaptor's motion, translucent)")
         v.show(robot, result.motion(), name="simulation", offset=(0.0, gap / 2, 0.0),
-               force_directions=_directions(result.contact_forces, min_force))
+               force_directions=_directions(result.contact_forces, min_force),
+               label=f"{robot.name}: MuJoCo simulation of the plan")
 
     return animated_scene(draw, track="simulation", fps=fps, html=html, viewer=viewer,
                           port=port, open_browser=open_browser, camera=camera)

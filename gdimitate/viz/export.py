@@ -16,8 +16,11 @@ from pathlib import Path
 from ..errors import OutputError, ViewerError
 from ..safety import atomic_write
 
-__all__ = ["check_writable", "inline_html", "network_references", "notebook_display",
-           "write_html"]
+__all__ = ["LEGEND_ID", "check_writable", "inline_html", "network_references",
+           "notebook_display", "with_legend", "write_html"]
+
+#: The ``id`` of the legend box a saved page carries (:func:`with_legend`).
+LEGEND_ID = "gdimitate-legend"
 
 # Attributes and JS/CSS constructs that make a browser fetch a URL when the page loads.
 _FETCHING = re.compile(
@@ -39,6 +42,33 @@ def network_references(html: str) -> list[str]:
     URLs that only appear inside strings (licence headers, error messages) are not counted.
     """
     return [html[max(m.start() - 40, 0): m.end() + 60] for m in _FETCHING.finditer(html)]
+
+
+def with_legend(page: str, title: str,
+                entries: list[tuple[str, tuple[float, float, float] | None]]) -> str:
+    """meshcat's static ``page`` with the ``title`` (meshcat's own is "MeshCat") and a legend
+    box in the top-left corner (the viewer's controls are top-right): one line per
+    ``(label, rgb)`` entry, a colour swatch (``rgb`` in [0, 1]; None: the model's own colours,
+    drawn grey) before its label, so that a reader can tell the demonstrator from the plan
+    and the simulation."""
+    rows = "".join(
+        f'<div><span style="display:inline-block;width:0.9em;height:0.9em;margin-right:0.4em;'
+        f'vertical-align:-0.1em;border:1px solid #555;background:{_css(rgb)}"></span>'
+        f"{_html.escape(label)}</div>" for label, rgb in entries)
+    box = (f'<div id="{LEGEND_ID}" style="position:fixed;top:10px;left:10px;z-index:10;'
+           "padding:8px 12px;background:rgba(255,255,255,0.88);border:1px solid #888;"
+           'border-radius:4px;font:15px/1.5 sans-serif;color:#111">'
+           f"<div style=\"font-weight:bold\">{_html.escape(title)}</div>{rows}</div>")
+    page = re.sub(r"<title>.*?</title>", lambda _: f"<title>{_html.escape(title)}</title>",
+                  page, count=1, flags=re.DOTALL)
+    return re.sub(r"<body>", lambda m: m.group(0) + box, page, count=1)
+
+
+def _css(rgb: tuple[float, float, float] | None) -> str:
+    if rgb is None:
+        return "linear-gradient(135deg,#ddd,#777)"
+    r, g, b = (int(round(255 * min(max(c, 0.0), 1.0))) for c in rgb)
+    return f"rgb({r},{g},{b})"
 
 
 def check_writable(path: str | os.PathLike) -> Path:

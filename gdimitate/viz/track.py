@@ -35,6 +35,7 @@ class Track:
         size: the robot's leg length [m], the unit of :class:`Style` sizes.
         foot_paths: whether the soles' paths are drawn.
         frames: sampled kinematics of the last animation (or of frame 0).
+        label: what the page's legend calls it; color: its RGB in [0, 1] (None: the URDF's).
     """
 
     name: str
@@ -51,6 +52,8 @@ class Track:
     size: float = 1.0
     foot_paths: bool = True
     frames: Frames | None = field(default=None, repr=False)
+    label: str = ""
+    color: tuple[float, float, float] | None = None
 
 
 def leg_length(robot: Any) -> float:

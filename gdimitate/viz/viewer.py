@@ -38,7 +38,7 @@ from .animate import (
     sample_frames,
 )
 from .camera import framing, ground_extent, place_camera
-from .export import check_writable, notebook_display, write_html
+from .export import check_writable, notebook_display, with_legend, write_html
 from .scene import (
     Style,
     draw_arrow,
@@ -163,7 +163,7 @@ class Viewer:
              color: Sequence[float] | None = None, opacity: float = 1.0,
              force_directions: PushDirections | None = None,
              com: np.ndarray | bool | None = True, foot_paths: bool = True,
-             skeleton: bool = False) -> str:
+             skeleton: bool = False, label: str | None = None) -> str:
         """Add a robot following a motion; draw it at the motion's first frame.
 
         Args:
@@ -185,6 +185,8 @@ class Viewer:
             foot_paths: draw each sole's path over the whole motion as a line.
             skeleton: draw joints and rods if the robot has no visual geometry (otherwise
                 that raises :class:`ViewerError`).
+            label: the track's line in the saved page's legend (default: ``"<robot>:
+                <name>"``, e.g. ``"g1: plan"``).
 
         Returns:
             The track name.
@@ -204,9 +206,12 @@ class Viewer:
         root = self.vis[track_name]
         root.set_transform(_root_transform(inp.offset, float(scale)))
         nodes = draw_geometry(root["robot"], inp.visual, color, opacity)
+        default = inp.name if track_name == inp.name else f"{inp.name}: {track_name}"
         track = Track(track_name, inp.model, inp.visual, inp.t, inp.q, inp.soles, inp.force,
                       inp.com, inp.offset, float(scale), nodes, inp.size, bool(foot_paths),
-                      frames)
+                      frames, label or default,
+                      None if color is None else (float(color[0]), float(color[1]),
+                                                  float(color[2])))
         self.tracks[track_name] = track
         self._draw_decorations(track, opacity)
         self._place(track, frames, 0)
@@ -327,14 +332,17 @@ class Viewer:
         if self.tracks and not self._animated:
             self.animate()
 
-    def html(self) -> str:
+    def html(self, title: str | None = None) -> str:
         """The scene as one self-contained HTML page (viewer, meshes and animation embedded;
-        ~14 MB for a Talos). Animates first if :meth:`animate` was not called since the last
-        :meth:`show`."""
+        ~14 MB for a Talos), with a ``title`` (default: ``"gdimitate: "`` and the tracks'
+        labels) and a legend naming each track (:func:`~.export.with_legend`). Animates first
+        if :meth:`animate` was not called since the last :meth:`show`."""
         self._ensure_animated()
-        return self.vis.static_html()
+        entries = [(t.label or t.name, t.color) for t in self.tracks.values()]
+        name = title or "gdimitate: " + ", ".join(label for label, _ in entries)
+        return with_legend(self.vis.static_html(), name, entries)
 
-    def save_html(self, path: str | os.PathLike[str]) -> Path:
+    def save_html(self, path: str | os.PathLike[str], title: str | None = None) -> Path:
         """Write :meth:`html` to ``path``; the file plays offline. Returns the absolute path.
 
         Raises:
@@ -342,7 +350,7 @@ class Viewer:
                 before the scene is fetched).
         """
         p = check_writable(path)  # fail before the (slow) scene transfer
-        return write_html(self.html(), p)
+        return write_html(self.html(title), p)
 
     def display(self, height: int = 480, live: bool = False) -> object:
         """Show the scene in a Jupyter cell and return the ``IPython.display.HTML`` object.
