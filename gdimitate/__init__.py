@@ -63,6 +63,7 @@ if TYPE_CHECKING:
     )
     from .adapt import adapt
     from .apps.cases import paper_case
+    from .audit.dataset import MotionAudit, audit_motion
     from .contact import ContactForces, FootForces, SoleContact
     from .cpg import CPGReplay, entrain
     from .demonstration import Demonstration, load_demonstration
@@ -85,6 +86,8 @@ _LAZY_NAMES: dict[str, str] = {
     "AdaptationReport": ".result",
     "AdaptedMotion": ".result",
     "paper_case": ".apps.cases",
+    "audit_motion": ".audit.dataset",
+    "MotionAudit": ".audit.dataset",
     "ContactForces": ".contact",
     "FootForces": ".contact",
     "SoleContact": ".contact",
@@ -171,6 +174,7 @@ __all__ = [
     "MatsuokaBank",
     "MatsuokaParams",
     "Motion",
+    "MotionAudit",
     "OscillatorError",
     "Robot",
     "ROBOT_GAIT",
@@ -186,6 +190,7 @@ __all__ = [
     "Weights",
     "adapt",
     "audit",
+    "audit_motion",
     "bvh",
     "c3d",
     "contact",

@@ -1,6 +1,5 @@
 """The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``,
-``export``,
-``batch``.
+``walk``, ``export``, ``simulate``, ``batch``, ``audit``.
 
 Without a demonstration file, ``adapt``, ``entrain`` and ``view`` use the default story of
 ``demo``: one stride of the shipped real 3-D walk (with its measured forces) and the G1
@@ -383,6 +382,29 @@ def _cmd_batch(a: argparse.Namespace) -> int:
     return EXIT_NOT_FEASIBLE if bad else 0
 
 
+def _cmd_audit(a: argparse.Namespace) -> int:
+    from .batch.audit import audit_csv, audit_files, audit_table, find_motion_files
+
+    files = find_motion_files(a.files)
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
+        out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
+        audited = audit_files(files, lambda: _robot(a.robot, a) if a.robot else None, a.fps)
+        with atomic_write(out / "report.json") as tmp:
+            tmp.write_text(json.dumps([f.to_dict() for f in audited], indent=2, default=str))
+        with atomic_write(out / "audit.csv") as tmp:
+            tmp.write_text(audit_csv(audited))
+    for line in audit_table(audited):
+        print(line)
+    bad = [f for f in audited if not f.audit.feasible]
+    for f in bad:
+        print(f"{f.path.name}: NOT feasible; failed checks:")
+        for line in f.audit.failed():
+            print(f"  {line}")
+    print(f"{len(audited) - len(bad)} of {len(audited)} clip(s) feasible; wrote "
+          f"{out}/report.json, audit.csv")
+    return EXIT_NOT_FEASIBLE if bad else 0
+
+
 def _cmd_export(a: argparse.Namespace) -> None:
     from .export import FORMATS, export_motion, read_wrenches
 
@@ -465,7 +487,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
     for add in (_add_demo, _add_paper, _add_adapt, _add_walk, _add_view, _add_entrain,
-                _add_export, _add_simulate, _add_batch):
+                _add_export, _add_simulate, _add_batch, _add_audit):
         add(sub)
     return p
 
@@ -664,6 +686,25 @@ def _add_batch(sub) -> None:
     ba.add_argument("--pattern", default="*", help="file-name glob in INPUT_DIR (default: *)")
     ba.add_argument("--quiet", action="store_true", help="no progress bar")
     ba.set_defaults(func=_cmd_batch)
+
+
+def _add_audit(sub) -> None:
+    """``gdimitate audit``: robot motion files checked for physical feasibility."""
+    from .batch.audit import AUDIT_FORMATS
+
+    au = sub.add_parser("audit", help="check robot motion files (gdimitate .npz, CSV, LAFAN1 / "
+                        "BeyondMimic CSV, GMR pickle, Isaac Lab AMP or MuJoCo qpos NPZ) for "
+                        "physical feasibility: torques, friction, CoP, slip, penetration")
+    au.add_argument("files", nargs="+", metavar="FILE_OR_FOLDER",
+                    help="motion files, or folders (every motion file directly in them): "
+                    + "; ".join(f"{k}: {v}" for k, v in AUDIT_FORMATS.items()))
+    _add_robot_args(au, "--robot", None, "the robot the motions were made for (optional for "
+                    "a gdimitate .npz, which records it)")
+    au.add_argument("--out", default="gdimitate-audit",
+                    help="output folder for report.json and audit.csv (default: %(default)s)")
+    au.add_argument("--fps", type=float, default=30.0,
+                    help="frame rate of a LAFAN1 CSV [Hz] (default: %(default)s)")
+    au.set_defaults(func=_cmd_audit)
 
 
 def _on_signal(signum: int, frame: object) -> None:

@@ -10,6 +10,7 @@ distances between the robot's own collision geometries (limb–limb, limb–trun
 """
 
 from .core import audit
+from .dataset import MotionAudit, audit_motion
 from .report import (
     CORNER_NAMES,
     AuditReport,
@@ -31,8 +32,10 @@ __all__ = [
     "FootAudit",
     "ForceDirectionAudit",
     "JointAudit",
+    "MotionAudit",
     "Penetration",
     "SelfCollisionAudit",
     "Worst",
     "audit",
+    "audit_motion",
 ]

@@ -1,0 +1,188 @@
+"""``gd.audit_motion`` and ``gdimitate audit``: a robot motion dataset checked for physical
+feasibility. Each verdict and number is compared with an independent reference: the audit of
+the same motion computed here step by step (:func:`gdimitate.motion.differentiate`,
+:func:`gdimitate.wrenches.estimate_wrenches`, :func:`gdimitate.audit.audit`), and the same
+motion before it was written to another format."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import gdimitate as gd
+from gdimitate.apps.cases import paper_case
+from gdimitate.audit import audit
+from gdimitate.cli import main
+from gdimitate.demonstration import load_demonstration
+from gdimitate.verdict import EXIT_NOT_FEASIBLE
+from gdimitate.wrenches import estimate_wrenches
+
+
+def _slice(m, a, b):
+    return m.replace(t=m.t[a:b], q=m.q[a:b], contact={s: c[a:b] for s, c in m.contact.items()})
+
+
+@pytest.fixture(scope="module")
+def case2():
+    d, i, m = paper_case("II")
+    return d, i, _slice(m, 0, 60)
+
+
+@pytest.fixture(scope="module")
+def optimal(case2):
+    d, i, m = case2
+    return gd.adapt(m, d, i, method="optimal", rate=25, verbose=False)
+
+
+def _same_checks(got: list[dict], ref, tol: float) -> None:
+    """Every check of the report ``ref`` has the same value, bound and verdict in the JSON
+    checks ``got`` (NaN ↔ None), and the same worst knot where ``tol`` is round-off only."""
+    by = {c["name"]: c for c in got}
+    assert set(by) == {c.name for c in ref.checks}
+    for c in ref.checks:
+        g = by[c.name]
+        for key in ("value", "bound"):
+            want, have = getattr(c, key), g[key]
+            if not math.isfinite(want):
+                assert have is None, (c.name, key, have)
+            else:
+                assert have == pytest.approx(want, rel=tol, abs=tol), (c.name, key)
+        assert g["passed"] == c.passed, c.name
+        if tol <= 1e-9:  # read back from another format, two knots may tie for the worst
+            assert g["knot"] == c.knot, c.name
+
+
+def _cli(capsys, *args):
+    status = main(["audit", *map(str, args)])
+    out = capsys.readouterr()
+    return status, out.out, out.err
+
+
+def test_an_optimal_result_audits_feasible_as_its_direct_audit(case2, optimal, tmp_path, capsys):
+    _, i, _ = case2
+    path = tmp_path / "optimal.npz"
+    optimal.save(path, "npz")
+    status, out, _ = _cli(capsys, path, "--out", tmp_path / "out")  # robot recorded
+    # the reference: the file's motion, its wrenches estimated and audited here
+    motion = load_demonstration(path).motion
+    assert motion.v is not None and motion.contact
+    ref = audit(i, motion, estimate_wrenches(i, motion).wrenches)
+    assert ref.feasible and optimal.audit.feasible  # and the adaptor's own audit agrees
+    assert status == 0 and "1 of 1 clip(s) feasible" in out and "optimal.npz" in out
+    (row,) = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert row["summary"]["feasible"] is True and row["audit"]["feasible"] is True
+    _same_checks(row["audit"]["checks"], ref, 1e-9)
+    assert row["summary"]["share_feasible"] == ref.knot_feasible.mean() == 1.0
+    lines = (tmp_path / "out" / "audit.csv").read_text().splitlines()
+    assert lines[0].startswith("file,format,robot,frames,share_feasible,torque_ratio")
+    assert lines[1].split(",")[:4] == ["optimal.npz", "npz", "hoap2", str(motion.T)]
+    assert lines[1].split(",")[12] == "yes"
+
+
+def test_a_joint_copy_is_not_feasible_with_its_failed_checks_printed(case2, tmp_path, capsys):
+    d, i, m = case2
+    copy = gd.adapt(m, d, i, method="copy")
+    path = tmp_path / "copy.npz"
+    copy.save(path, "npz")
+    status, out, _ = _cli(capsys, path, "--robot", "hoap2", "--out", tmp_path / "out")
+    motion = load_demonstration(path).motion
+    motion = gd.motion.differentiate(i.model, motion)
+    ref = audit(i, motion, estimate_wrenches(i, motion).wrenches)
+    assert not ref.feasible
+    assert status == EXIT_NOT_FEASIBLE and "0 of 1 clip(s) feasible" in out
+    for name in ref.binding:
+        assert f"  {name}: " in out, name
+    c = ref.check(ref.binding[0])
+    assert f"{c.value:.4g}" in out and f"at knot {c.knot}" in out
+    (row,) = json.loads((tmp_path / "out" / "report.json").read_text())
+    _same_checks(row["audit"]["checks"], ref, 1e-9)
+    assert row["summary"]["binding"] == list(ref.binding)
+    assert row["summary"]["share_feasible"] == pytest.approx(ref.knot_feasible.mean(), abs=0)
+
+
+def test_summary_numbers_are_the_reports_checks(case2):
+    """Each per-clip number against the check of the same quantity (another path through the
+    report: its checks rather than its feet and joints)."""
+    d, i, m = case2
+    a = gd.audit_motion(i, gd.adapt(m, d, i, method="copy").motion)
+    r = a.report
+    sides = ("left", "right")
+    assert a.share_feasible == np.mean(np.all(r.knot_checks, axis=0))
+    assert a.slip == max(r.check(f"slip:{s}").value for s in sides)
+    assert a.cop_margin == min(r.check(f"cop:{s}").value for s in sides)
+    assert a.friction == max(r.check(f"friction:{s}").value for s in sides)
+    assert a.hover == max(r.check(f"contact_gap:{s}").value for s in sides)
+    assert a.penetration == r.check("penetration").value
+    torque = {c.name[7:]: c.value for c in r.checks if c.name.startswith("torque:")}  # |τ|/limit
+    joint = max(torque, key=torque.__getitem__)
+    assert a.torque_joint == joint and a.torque_ratio == pytest.approx(torque[joint], rel=1e-12)
+    assert a.self_collision is None and a.frames == m.T and not a.feasible
+    assert a.to_dict()["summary"]["torque_joint"] == joint
+
+
+def test_a_csv_export_audits_as_the_motion_it_holds(case2, optimal, tmp_path, capsys):
+    """A planar robot's motion through the ``csv`` export (base as a 3-D pose): no contacts,
+    no velocities in the file — found from the sole heights and speeds and differenced, the
+    same as auditing the motion's q alone."""
+    _, i, _ = case2
+    path = tmp_path / "optimal.csv"
+    optimal.save(path, "csv")
+    status, out, _ = _cli(capsys, path, "--robot", "hoap2", "--out", tmp_path / "out")
+    ref = gd.audit_motion(i, optimal.motion.replace(contact={}, v=None, a=None))
+    assert ref.contact_source != "motion"
+    (row,) = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert row["format"] == "csv" and row["summary"]["contact_source"] == ref.contact_source
+    _same_checks(row["audit"]["checks"], ref.report, 1e-6)
+    assert status == (0 if ref.feasible else EXIT_NOT_FEASIBLE)
+
+
+@pytest.fixture(scope="module")
+def g1_copy():
+    """G1, a joint copy of 70 frames (60 Hz) of the shipped 3-D walk (no compilation) and the
+    reference: the audit of its q alone."""
+    human, walk, _ = gd.gait.human_walk_3d()
+    g1 = gd.Robot.from_library("g1")
+    motion = gd.adapt(_slice(walk, 0, 70), human, g1, method="copy").motion
+    assert np.allclose(np.diff(motion.t), 1 / 60)
+    return g1, motion, gd.audit_motion(g1, motion.replace(contact={}, v=None, a=None))
+
+
+@pytest.mark.parametrize("fmt, name", [("lafan1_csv", "walk.csv"), ("gmr", "walk.pkl"),
+                                       ("isaaclab_amp", "walk.npz"), ("mujoco", "walk.npz")])
+def test_g1_training_formats_audit_as_the_motion_they_hold(g1_copy, fmt, name, tmp_path,
+                                                           capsys):
+    """The motion written at its own rate (60 Hz) in a training pipeline's format (LAFAN1 /
+    BeyondMimic CSV, GMR pickle, Isaac Lab AMP NPZ, MuJoCo qpos NPZ) and the folder audited
+    with ``--fps 60``: the same checks as the motion itself; not feasible (a joint copy)."""
+    g1, motion, ref = g1_copy
+    gd.export_motion(g1, motion, tmp_path / name, fmt, fps=60)
+    status, out, _ = _cli(capsys, tmp_path, "--robot", "g1", "--fps", "60",
+                          "--out", tmp_path / "out")
+    (row,) = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert row["format"] == fmt and row["summary"]["frames"] == motion.T
+    _same_checks(row["audit"]["checks"], ref.report, 1e-6)
+    assert ref.self_collision is not None and row["summary"]["self_collision"] == \
+        pytest.approx(ref.self_collision, abs=1e-6)
+    assert status == EXIT_NOT_FEASIBLE and not ref.feasible and "0 of 1 clip(s)" in out
+
+
+def test_bad_inputs_exit_2_saying_what_to_pass(case2, tmp_path, capsys):
+    _, i, m = case2
+    odd = tmp_path / "motion.txt"
+    odd.write_text("1,2,3\n")
+    status, _, err = _cli(capsys, odd, "--robot", "hoap2", "--out", tmp_path / "o1")
+    assert status == 2 and "unknown motion format '.txt'" in err and "lafan1_csv" in err
+    csv = tmp_path / "m.csv"
+    gd.export_motion(i, m, csv, "csv")
+    status, _, err = _cli(capsys, csv, "--out", tmp_path / "o2")
+    assert status == 2 and "records no robot" in err and "--robot" in err
+    bare = tmp_path / "bare.npz"
+    m.to_npz(bare)  # no robot recorded
+    status, _, err = _cli(capsys, bare, "--out", tmp_path / "o3")
+    assert status == 2 and "--robot" in err
+    status, _, err = _cli(capsys, tmp_path / "missing.npz", "--out", tmp_path / "o4")
+    assert status == 2 and "does not exist" in err
+    assert not (tmp_path / "o1").exists() and not (tmp_path / "o2").exists()
