@@ -69,7 +69,7 @@ def gait_lab() -> Path:
 
     folder = gd.gait.human_walk_3d_folder()
     with tempfile.TemporaryDirectory() as tmp:
-        c3d = gd.c3d.write_subject01(Path(tmp) / "subject01_walk1.c3d")
+        c3d = gd.gait.write_subject01_c3d(Path(tmp) / "subject01_walk1.c3d")
         demo = gd.load_demonstration(folder / "subject01.osim", markers=c3d)
     human, walk, forces = demo.robot, demo.motion, demo.forces
     ref = gd.opensim.read_coordinates(folder / "subject01_walk1_ik.mot", human)

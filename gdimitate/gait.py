@@ -14,7 +14,7 @@ from .errors import InvalidInputError, UnitsWarning
 from .motion import Motion
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
-           "human_walk_3d_folder", "one_stride", "cmu_walk_path"]
+           "human_walk_3d_folder", "one_stride", "cmu_walk_path", "write_subject01_c3d"]
 
 
 def human_walk_path() -> Path:
@@ -216,6 +216,36 @@ def cmu_walk_path() -> Path:
     README.txt gives the origin and terms)."""
     return Path(str(resources.files("gdimitate") / "data" / "gait" / "cmu_02_01" /
                     "cmu_02_01.bvh"))
+
+
+def write_subject01_c3d(path: str | Path) -> Path:
+    """Write the shipped 3-D walk (OpenSim subject01 walk1) as a gait-lab C3D at ``path`` →
+    the path: its 41 markers (60 Hz) and one force plate per foot (the measured ground
+    reaction at the file's 600 Hz; each plate the rectangle around that foot's centres of
+    pressure, 10 cm wider on every side), read back like a lab's own file (the README's
+    gait-lab example, the docs' figure)."""
+    import warnings
+
+    from .c3d import ForcePlate, write_c3d
+    from .opensim import read_grf, read_trc
+    from .robot import Robot
+
+    folder = human_walk_3d_folder()
+    robot = Robot.from_osim(folder / "subject01.osim")
+    forces = read_grf(folder / "subject01_walk1_grf.mot", robot,
+                      folder / "subject01_walk1_grf.xml")
+    with warnings.catch_warnings():  # the trial's own marker gaps, reported when it is read
+        warnings.simplefilter("ignore")
+        markers = read_trc(folder / "subject01_walk1.trc")
+    plates = []
+    for k, side in enumerate(("right", "left"), start=1):
+        f = forces[side]
+        c = f.cop[f.contact]
+        lo, hi, z = c.min(0) - 0.1, c.max(0) + 0.1, float(c[:, 2].mean())
+        corners = np.array([[lo[0], lo[1], z], [hi[0], lo[1], z], [hi[0], hi[1], z],
+                            [lo[0], hi[1], z]])
+        plates.append(ForcePlate(forces.t, f.force, f.cop, f.torque, corners, k))
+    return write_c3d(path, markers, plates)
 
 
 def human_walk_3d(overground: bool = True):

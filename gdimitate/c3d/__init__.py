@@ -7,16 +7,13 @@
     trial.plates[0].force, trial.plates[0].cop    # (T, 3) [N], (T, 3) [m] (NaN unloaded)
     forces = trial.contact_forces(robot, motion)  # ContactForces: plates to feet by proximity
     gd.c3d.write_c3d("out.c3d", markers, plates)  # the reverse (synthetic trials, conversions)
-    gd.c3d.write_subject01("subject01_walk1.c3d")  # the shipped trial as a lab's C3D
 
-:mod:`.reader` reads, :mod:`.plates` assigns plates to feet, :mod:`.writer` writes,
-:mod:`.example` writes the shipped trial.
+:mod:`.reader` reads, :mod:`.plates` assigns plates to feet, :mod:`.writer` writes
+(:func:`gdimitate.gait.write_subject01_c3d` writes the shipped trial as a lab's C3D).
 """
 
-from .example import write_subject01
 from .plates import assign_plates
 from .reader import C3DTrial, ForcePlate, read_c3d
 from .writer import write_c3d
 
-__all__ = ["C3DTrial", "ForcePlate", "assign_plates", "read_c3d", "write_c3d",
-           "write_subject01"]
+__all__ = ["C3DTrial", "ForcePlate", "assign_plates", "read_c3d", "write_c3d"]
