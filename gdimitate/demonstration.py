@@ -251,7 +251,9 @@ def _with_forces(robot: Robot, motion: Motion, grf, trial, overground: bool, sou
     from .opensim import read_grf, treadmill_to_overground
 
     if grf is None and trial is None:
-        contact, how = _kinematic_contact(robot, motion)
+        from .bvh.contacts import kinematic_stance
+
+        contact, how = kinematic_stance(robot, motion.q, motion.t)
         return Demonstration(robot, motion.replace(contact=contact), None, source,
                              f"{what}; contacts from the sole corners' {how} (no forces given)")
     if trial is not None:
@@ -268,22 +270,6 @@ def _with_forces(robot: Robot, motion: Motion, grf, trial, overground: bool, sou
         motion, forces = treadmill_to_overground(robot, motion, forces)
         note += "; " + forces.frame_note
     return Demonstration(robot, motion, forces, source, note)
-
-
-def _kinematic_contact(robot: Robot, motion: Motion) -> tuple[dict, str]:
-    """Stance masks from the sole corners (height and speed); a foot that never stands
-    still (a treadmill trial: stance feet ride the belt) → height alone. Returns the masks
-    and which rule was used."""
-    from .bvh.contacts import ContactRule, detect_contacts, sole_corners
-
-    robot.require_contacts()
-    hip = max(robot.legs[s].length + robot.legs[s].foot for s in ("left", "right"))
-    corners = sole_corners(robot, motion.q)
-    contact = detect_contacts(corners, motion.t, hip)
-    if min(c.mean() for c in contact.values()) >= 0.1:
-        return contact, "height and speed"
-    return (detect_contacts(corners, motion.t, hip, ContactRule(speed=1e6)),
-            "height alone (the feet never stand still: a treadmill?)")
 
 
 def _recorded_package_dir(p: Path, rec, given: str | Path | None) -> str | None:

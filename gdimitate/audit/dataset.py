@@ -158,18 +158,12 @@ def stance_schedule(robot, motion: Motion) -> tuple[dict[str, np.ndarray], str]:
     stands still there (a treadmill) → height alone."""
     if all(s in motion.contact for s in SIDES):
         return {s: np.asarray(motion.contact[s], bool) for s in SIDES}, "motion"
-    from ..bvh.contacts import ContactRule, detect_contacts, sole_corners
+    from ..bvh.contacts import kinematic_stance
 
-    robot.require_contacts()
     if motion.T < 3:
         raise InvalidInputError(f"a motion of {motion.T} frame(s) cannot be audited: its "
                                 "velocities need at least 3 frames")
-    hip = max(robot.legs[s].length + robot.legs[s].foot for s in SIDES)
-    corners = sole_corners(robot, motion.q)
-    contact = detect_contacts(corners, motion.t, hip)
-    if min(c.mean() for c in contact.values()) >= 0.1:
-        return contact, "height and speed"
-    return (detect_contacts(corners, motion.t, hip, ContactRule(speed=1e6)), "height alone")
+    return kinematic_stance(robot, motion.q, motion.t)
 
 
 def audit_motion(robot, motion: Motion, contacts: Mapping[str, SoleContact] | None = None, *,

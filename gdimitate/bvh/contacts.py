@@ -27,6 +27,7 @@ from ..errors import InvalidInputError
 from ..kinematics import frame_placements
 
 __all__ = ["ContactRule", "detect_contacts", "estimate_floor", "sole_corners", "close_gaps",
+           "kinematic_stance",
            "low_pass"]
 
 
@@ -83,6 +84,21 @@ def sole_corners(robot, q: np.ndarray) -> dict[str, np.ndarray]:
         M = P[c.frame]
         out[s] = np.einsum("cj,tij->tci", c.corners(), M.rotation) + M.translation[:, None]
     return out
+
+
+def kinematic_stance(robot, q: np.ndarray, t: np.ndarray) -> tuple[dict[str, np.ndarray], str]:
+    """Stance flags ``{side: (T,) bool}`` of a motion ``q`` ``(T, nq)`` on times ``t``
+    ``(T,)`` [s] from its sole corners' height and speed (:func:`detect_contacts`, thresholds
+    in hip heights), and the rule used: a foot that never stands still (a treadmill trial: the
+    stance feet ride the belt) → height alone."""
+    robot.require_contacts()
+    hip = max(robot.legs[s].length + robot.legs[s].foot for s in ("left", "right"))
+    corners = sole_corners(robot, q)
+    contact = detect_contacts(corners, t, hip)
+    if min(c.mean() for c in contact.values()) >= 0.1:
+        return contact, "height and speed"
+    return (detect_contacts(corners, t, hip, ContactRule(speed=1e6)),
+            "height alone (the feet never stand still: a treadmill?)")
 
 
 def estimate_floor(corners: dict[str, np.ndarray]) -> float:
