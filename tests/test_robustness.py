@@ -510,7 +510,9 @@ def test_body_map_entries_of_the_wrong_kind_are_named(tmp_path, entry, says):
         BodyMap.from_dict(d)
     p = tmp_path / "map.json"
     p.write_text(json.dumps(d, allow_nan=True))
-    with pytest.raises(InvalidInputError, match="body map joint"):
+    # from a file, a NaN is refused as it is read (JSON has no NaN), the rest per entry
+    nan = isinstance(entry, list) and any(isinstance(x, float) and x != x for x in entry)
+    with pytest.raises(InvalidInputError, match="body map .*NaN" if nan else "body map joint"):
         BodyMap.from_json(p)
 
 
