@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import signal
 import sys
 from pathlib import Path
@@ -729,7 +730,10 @@ def _for_the_command_line(e: GdimitateError) -> str:
                     '"sole": FRAME}, "right": {...}} with the names above; a BVH '
                     "demonstration's legs are named in Python: gdimitate.bvh.read_bvh(path, "
                     "legs=...)")
-    return text
+    # an option of the Python API only
+    return re.sub(r"or pass massless_joints=(\(.*?\)) if that is intended",
+                  r"or, if that is intended, load it in Python with gdimitate.Robot.from_urdf("
+                  r"path, massless_joints=\1) (the command line has no such option)", text)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -70,3 +70,16 @@ def test_option_files_that_cannot_be_read_say_so(tmp_path, capsys, content):
                  "--out", str(tmp_path / "o")]) == 2
     assert "--legs" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_advice_names_only_what_the_command_line_can_do(tmp_path, capsys):
+    """`adapt --imitator romeo.urdf` (Romeo's hand links have no mass) ended "or pass
+    massless_joints=('RHand',)", an option the command line does not have."""
+    from gdimitate.library import library_entry
+
+    urdf, _ = library_entry("romeo")
+    assert main(["adapt", "--imitator", str(urdf), "--method", "copy", "--out",
+                 str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "massless" in err and "or pass massless_joints=" not in err
+    assert "gdimitate.Robot.from_urdf(path, massless_joints=(" in err
