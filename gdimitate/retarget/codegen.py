@@ -118,13 +118,12 @@ def _build(funcs: list[ca.Function], lib: Path, cc: str, label: str = "") -> Non
             objs.append(str(obj))
             while len(running()) >= (os.cpu_count() or 1):
                 running()[0].wait()
-            bar.n = len(procs) - len(running())
-            bar.refresh()
+                bar.update(len(procs) - len(running()) - bar.n)
             procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(Path(tmp) / f"{f.name()}.c"),
                                            "-o", str(obj)], stderr=subprocess.PIPE, text=True))
         for p in procs:
             _, err = p.communicate()
-            bar.update(1)
+            bar.update(len(procs) - len(running()) - bar.n)
             if p.returncode:
                 raise subprocess.CalledProcessError(p.returncode, p.args, stderr=err)
         out = Path(tmp) / lib.name
