@@ -44,8 +44,13 @@ __all__ = ["CPGReplay", "ReplayCheck", "entrain", "BodySignals", "body_signals",
 #: one (the clip is not periodic at the stride frequency): warned, with the number.
 TEACHER_FIT_WARN = 0.10
 #: A signal whose range over the clip is below this [rad or m] is held still (an unmapped
-#: joint the adaptor keeps near its rest pose): its teacher fit is not warned about.
+#: joint the adaptor keeps near its rest pose): its teacher fit is not warned about …
 HELD_RANGE = 0.02
+#: … nor that of a joint whose range is below this share of the largest joint's (G1's
+#: unmapped arm joints wander within their ±0.1 rad band, 0.2 rad, against the legs' ~1 rad):
+#: a small, non-rhythmic signal the replay carries as well as it can (the replay check still
+#: measures it), not the rhythm the user teaches.
+HELD_SHARE = 0.25
 #: The replay check: every signal's cycle rate within this fraction of the target's …
 REPLAY_FREQUENCY_TOL = 0.05
 #: … and its amplitude (half the peak-to-peak) within this fraction of the target's.
@@ -253,6 +258,15 @@ def _compose(robot: Robot, sig: BodySignals, t: np.ndarray, Y: np.ndarray) -> np
     return q
 
 
+def _carries_rhythm(sig: BodySignals, robot: Robot) -> np.ndarray:
+    """``(n,)`` bool: the signals whose teacher fit is worth a warning — a range of at least
+    :data:`HELD_RANGE`, and for a joint at least :data:`HELD_SHARE` of the largest joint's."""
+    span = np.ptp(sig.X, axis=0)
+    joint = np.array([not n.startswith("base_") for n in sig.names])
+    largest = float(span[joint].max()) if joint.any() else 0.0
+    return (span >= HELD_RANGE) & (~joint | (span >= HELD_SHARE * largest))
+
+
 def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: float | None = None,
             **options) -> CPGReplay:
     """Teach one Matsuoka network the motion's whole body (:func:`body_signals`: every
@@ -293,8 +307,8 @@ def entrain(robot: Robot, motion: Motion, duration: float | None = None, rate: f
         options["frequency"] = stride_frequency(motion)
     result = self_adjust(motion.t, X[:, moving], joint_names=learn, **options)
     # the fit of a signal held nearly still (an unmapped arm joint held near its rest pose)
-    # is no news: relative to its tiny range any wobble is a large nRMSE
-    fit = np.where(np.ptp(X[:, moving], axis=0) >= HELD_RANGE, result.teacher.fit_nrmse, 0.0)
+    # is no news: relative to its small range any wobble is a large nRMSE
+    fit = np.where(_carries_rhythm(sig, robot)[moving], result.teacher.fit_nrmse, 0.0)
     if np.max(fit) > TEACHER_FIT_WARN:
         j = int(np.argmax(fit))
         warnings.warn(f"the periodic teaching signal fits {learn[j]} with nRMSE "
