@@ -413,7 +413,8 @@ def _cmd_export(a: argparse.Namespace) -> None:
     wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
     out = Path(a.out) if a.out else Path(a.motion).with_suffix(
         {"csv": ".csv", "npz": ".export.npz", "mujoco": ".mujoco.npz",
-         "lafan1_csv": ".lafan1.csv", "gmr": ".gmr.pkl", "isaaclab_amp": ".amp.npz"}[a.format])
+         "lafan1_csv": ".lafan1.csv", "gmr": ".gmr.pkl", "isaaclab_amp": ".amp.npz",
+         "beyondmimic_npz": ".beyondmimic.npz"}[a.format])
     if out.is_dir():
         raise OutputError(f"cannot write {out}: it is a folder; give a file name")
     with output_job(out.parent), atomic_write(out) as tmp:  # the folder made if needed
@@ -628,8 +629,8 @@ def _add_export(sub) -> None:
     ex.add_argument("--out", default=None,
                     help="output file (default: beside the motion, with the format's suffix)")
     ex.add_argument("--fps", type=float, default=30.0,
-                    help="frame rate of lafan1_csv, gmr, isaaclab_amp [Hz] (default: "
-                         "%(default)s)")
+                    help="frame rate of lafan1_csv, gmr, isaaclab_amp, beyondmimic_npz [Hz] "
+                         "(default: %(default)s)")
     ex.add_argument("--body-order", default=None, choices=["depth", "breadth"],
                     help="body order of gmr / isaaclab_amp: depth-first (MuJoCo; gmr's "
                          "default) or breadth-first (PhysX; isaaclab_amp's default)")

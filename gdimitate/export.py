@@ -40,6 +40,18 @@ call :func:`export_motion`):
   ``body_linear_velocities``/``body_angular_velocities`` ``(N, B, 3)`` [m/s, rad/s] in the
   world (of each body's origin); float64 (the loader casts to float32).
   :func:`read_isaaclab_amp`.
+- ``"beyondmimic_npz"``: the motion NPZ BeyondMimic's ``whole_body_tracking`` trains from (its
+  ``csv_to_npz.py`` makes it by replaying a CSV in Isaac Sim; mjlab and holosoma read the same
+  keys): ``fps`` ``(1,)``, ``joint_pos``/``joint_vel`` ``(N, J)`` [rad, rad/s] in MuJoCo's
+  joint order (``joint_names``), and for every body of the MuJoCo model
+  :func:`gdimitate.sim.build_model` makes (``body_names``, MuJoCo's order, the world left
+  out) ``body_pos_w`` ``(N, B, 3)`` [m], ``body_quat_w`` ``(N, B, 4)`` (w, x, y, z),
+  ``body_lin_vel_w``/``body_ang_vel_w`` ``(N, B, 3)`` [m/s, rad/s] of the body frame's origin
+  in the world — MuJoCo's own ``mj_forward`` and ``mj_objectVelocity`` on that model; float64
+  (the loaders cast to float32). With ``wrenches`` it also carries gdimitate's
+  ``contact_wrench_<side>`` ``(N, 6)`` [N, N·m] (each sole frame, ``contact_frame_<side>``).
+  Isaac Sim numbers an articulation's bodies breadth-first; the file's ``body_names`` say which
+  body is which. :func:`read_beyondmimic_npz`.
 
 Both resample onto the ``fps`` grid (as ``"lafan1_csv"``) and need a free-flyer robot with
 1-DoF joints. Bodies are the robot's moving links: the root and the child link of every joint
@@ -56,6 +68,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -66,8 +79,9 @@ from .motion import Motion, check_base_quaternion, check_motion_layout
 from .robot import PLANAR_BASE, SIDES, Robot
 from .safety import check_array_size, check_positive
 
-__all__ = ["BODY_ORDERS", "FORMATS", "MujocoMotion", "body_links", "export_motion", "read_csv",
-           "read_gmr", "read_isaaclab_amp", "read_lafan1_csv", "read_mujoco", "read_wrenches"]
+__all__ = ["BODY_ORDERS", "FORMATS", "BeyondMimicMotion", "MujocoMotion", "body_links",
+           "export_motion", "read_beyondmimic_npz", "read_csv", "read_gmr", "read_isaaclab_amp",
+           "read_lafan1_csv", "read_mujoco", "read_wrenches"]
 
 #: Export formats and the file each one writes.
 FORMATS: dict[str, str] = {
@@ -80,6 +94,8 @@ FORMATS: dict[str, str] = {
            "link_body_list (GMR; bodies depth-first)",
     "isaaclab_amp": "NPZ: fps, dof_names, body_names, dof/body positions, rotations (w x y z), "
                     "velocities (Isaac Lab AMP; bodies breadth-first)",
+    "beyondmimic_npz": "NPZ: fps, joint_pos/vel, body_pos_w, body_quat_w (w x y z), "
+                       "body_lin/ang_vel_w from MuJoCo (BeyondMimic, mjlab, holosoma)",
 }
 #: Body orders of the ``"gmr"``/``"isaaclab_amp"`` exports (see the module docstring).
 BODY_ORDERS = ("depth", "breadth")
@@ -92,9 +108,11 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
     """Write ``motion`` (of ``robot``) to ``path`` in ``format`` (:data:`FORMATS`).
 
     ``wrenches``: ``{"left": (T, 6), "right": (T, 6)}`` sole-frame contact wrenches [N, N·m]
-    (``"npz"`` stores them); ``fps`` [Hz]: the frame rate of ``"lafan1_csv"``, ``"gmr"`` and
-    ``"isaaclab_amp"``; ``body_order``: ``"depth"`` or ``"breadth"`` for the latter two
-    (default: ``"depth"`` for ``"gmr"``, ``"breadth"`` for ``"isaaclab_amp"``). Returns the
+    (``"npz"`` and ``"beyondmimic_npz"`` store them); ``fps`` [Hz]: the frame rate of
+    ``"lafan1_csv"``, ``"gmr"``, ``"isaaclab_amp"`` and ``"beyondmimic_npz"`` (BeyondMimic's
+    own ``csv_to_npz.py`` writes 50); ``body_order``: ``"depth"`` or ``"breadth"`` for
+    ``"gmr"`` and ``"isaaclab_amp"`` (default: ``"depth"`` for ``"gmr"``, ``"breadth"`` for
+    ``"isaaclab_amp"``). Returns the
     path written. Raises :class:`~gdimitate.errors.ExportError` for an unknown format or a
     robot/motion the format cannot hold, :class:`~gdimitate.errors.ResourceLimitError` for an
     ``fps`` whose frames exceed :data:`~gdimitate.safety.MAX_ARRAY_BYTES`,
@@ -127,7 +145,7 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
                           "isaaclab_amp formats")
     writer = {"csv": _write_csv, "npz": _write_npz, "mujoco": _write_mujoco,
               "lafan1_csv": _write_lafan1, "gmr": _write_gmr,
-              "isaaclab_amp": _write_isaaclab_amp}[format]
+              "isaaclab_amp": _write_isaaclab_amp, "beyondmimic_npz": _write_beyondmimic}[format]
     try:
         writer(robot, motion, path, wrenches=wrenches, fps=fps, body_order=body_order)
     except OSError as e:
@@ -494,3 +512,76 @@ def read_isaaclab_amp(path: str | Path, robot: Robot) -> Motion:
     dof = dof[:, [names.index(n) for n in want]]
     root = np.column_stack([bp[:, 0], br[:, 0][:, [1, 2, 3, 0]]])
     return _free_motion(robot, np.arange(len(dof)) / fps, root, dof, path)
+
+
+# ---------------------------------------------------------------------- beyondmimic npz
+def _write_beyondmimic(robot, motion, path, fps=30.0, wrenches=None, **_) -> None:
+    import mujoco
+
+    from .sim import build_model
+
+    t, q, v = _training_frames(robot, motion, fps, "beyondmimic_npz")
+    sim = build_model(robot)
+    mj = sim.mj
+    d = mujoco.MjData(mj)
+    N, B = len(t), mj.nbody - 1
+    pos, quat = np.empty((N, B, 3)), np.empty((N, B, 4))
+    lin, ang = np.empty((N, B, 3)), np.empty((N, B, 3))
+    qpos, qvel = np.empty((N, mj.nq)), np.empty((N, mj.nv))
+    vel = np.empty(6)
+    for k in range(N):
+        d.qpos[:], d.qvel[:] = sim.qpos_from_q(q[k]), sim.qvel_from_v(q[k], v[k])
+        mujoco.mj_forward(mj, d)
+        qpos[k], qvel[k] = d.qpos, d.qvel
+        pos[k], quat[k] = d.xpos[1:], d.xquat[1:]
+        for b in range(1, mj.nbody):  # [angular; linear] at the body frame's origin
+            # (XBODY: the body frame; BODY would be its inertial frame), world axes
+            mujoco.mj_objectVelocity(mj, d, mujoco.mjtObj.mjOBJ_XBODY, b, vel, 0)
+            ang[k, b - 1], lin[k, b - 1] = vel[:3], vel[3:]
+    name = mujoco.mjtObj
+    free = int(mj.jnt_type[0]) == int(mujoco.mjtJoint.mjJNT_FREE) if mj.njnt else False
+    joints = [mujoco.mj_id2name(mj, name.mjOBJ_JOINT, j) for j in range(int(free), mj.njnt)]
+    arrays: dict[str, Any] = dict(fps=np.array([fps]), joint_names=np.array(joints),
+                  body_names=np.array([mujoco.mj_id2name(mj, name.mjOBJ_BODY, b)
+                                       for b in range(1, mj.nbody)]),
+                  joint_pos=qpos[:, 7 if free else 0:], joint_vel=qvel[:, 6 if free else 0:],
+                  body_pos_w=pos, body_quat_w=quat, body_lin_vel_w=lin, body_ang_vel_w=ang)
+    for s, w in (wrenches or {}).items():  # gdimitate's extras, on the same frames
+        w = np.asarray(w, float)
+        arrays[f"contact_wrench_{s}"] = np.column_stack(
+            [np.interp(t, motion.t, w[:, i]) for i in range(6)])
+        arrays[f"contact_frame_{s}"] = np.array(robot.require_contacts()[s].frame)
+    with open(path, "wb") as f:
+        np.savez(f, **arrays)
+
+
+@dataclass(frozen=True)
+class BeyondMimicMotion:
+    """A ``"beyondmimic_npz"`` file: ``fps`` [Hz], ``joint_names``, ``joint_pos``/
+    ``joint_vel`` ``(N, J)``, ``body_names``, ``body_pos_w`` ``(N, B, 3)``, ``body_quat_w``
+    ``(N, B, 4)`` (w, x, y, z), ``body_lin_vel_w``/``body_ang_vel_w`` ``(N, B, 3)``."""
+
+    fps: float
+    joint_names: tuple[str, ...]
+    joint_pos: np.ndarray
+    joint_vel: np.ndarray
+    body_names: tuple[str, ...]
+    body_pos_w: np.ndarray
+    body_quat_w: np.ndarray
+    body_lin_vel_w: np.ndarray
+    body_ang_vel_w: np.ndarray
+
+
+def read_beyondmimic_npz(path: str | Path) -> BeyondMimicMotion:
+    """Read a ``"beyondmimic_npz"`` file (ours; BeyondMimic's own files have the same keys
+    but no ``joint_names``/``body_names``: an empty tuple then)."""
+    from .safety import open_npz
+
+    keys = ("fps", "joint_pos", "joint_vel", "body_pos_w", "body_quat_w", "body_lin_vel_w",
+            "body_ang_vel_w")
+    with open_npz(path, keys) as z:
+        names = {k: tuple(str(n) for n in z[k]) if k in z.files else ()
+                 for k in ("joint_names", "body_names")}
+        return BeyondMimicMotion(float(np.ravel(z["fps"])[0]), names["joint_names"],
+                                 z["joint_pos"], z["joint_vel"], names["body_names"],
+                                 *(z[k] for k in keys[3:]))

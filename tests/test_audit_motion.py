@@ -151,11 +151,13 @@ def g1_copy():
 
 
 @pytest.mark.parametrize("fmt, name", [("lafan1_csv", "walk.csv"), ("gmr", "walk.pkl"),
-                                       ("isaaclab_amp", "walk.npz"), ("mujoco", "walk.npz")])
+                                       ("isaaclab_amp", "walk.npz"), ("mujoco", "walk.npz"),
+                                       ("beyondmimic_npz", "walk.npz")])
 def test_g1_training_formats_audit_as_the_motion_they_hold(g1_copy, fmt, name, tmp_path,
                                                            capsys):
     """The motion written at its own rate (60 Hz) in a training pipeline's format (LAFAN1 /
-    BeyondMimic CSV, GMR pickle, Isaac Lab AMP NPZ, MuJoCo qpos NPZ) and the folder audited
+    BeyondMimic CSV, GMR pickle, Isaac Lab AMP NPZ, MuJoCo qpos NPZ, BeyondMimic NPZ) and
+    the folder audited
     with ``--fps 60``: the same checks as the motion itself; not feasible (a joint copy)."""
     g1, motion, ref = g1_copy
     gd.export_motion(g1, motion, tmp_path / name, fmt, fps=60)

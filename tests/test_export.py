@@ -334,3 +334,59 @@ def test_cli_exports_gmr_and_isaaclab_amp(tmp_path):
     assert main(["export", str(npz), "--format", "isaaclab_amp", "--body-order", "depth",
                  "--out", str(tmp_path / "a.npz")]) == 0
     assert str(np.load(tmp_path / "a.npz")["body_order"]) == "depth"
+    from gdimitate.export import read_beyondmimic_npz
+
+    assert main(["export", str(npz), "--format", "beyondmimic_npz", "--fps", "60"]) == 0
+    bm = read_beyondmimic_npz(tmp_path / "g1.beyondmimic.npz")
+    np.testing.assert_allclose(bm.joint_pos, motion.q[:, 7:], atol=1e-12)
+
+
+def test_beyondmimic_npz_keys_and_bodies_match_pinocchio(tmp_path):
+    """BeyondMimic's motion NPZ (the file its whole_body_tracking, mjlab and holosoma train
+    from; made elsewhere by replaying a CSV through Isaac Sim): its keys, shapes and dtypes;
+    quaternions w, x, y, z; every MuJoCo body's world position, rotation and the velocity of
+    its frame origin equal Pinocchio's kinematics of the same links (another engine, 1e-9);
+    the joints in MuJoCo's order equal the motion's resampled joint angles; and the contact
+    wrenches we computed ride along under documented names."""
+    import mujoco
+
+    from gdimitate.export import read_beyondmimic_npz
+    from gdimitate.sim import build_model
+
+    g1, motion = _g1_motion()
+    wrenches = {s: np.tile(np.arange(6.0), (motion.T, 1)) for s in ("left", "right")}
+    p = export_motion(g1, motion, tmp_path / "walk.npz", "beyondmimic_npz", fps=60,
+                      wrenches=wrenches)
+    z = np.load(p)
+    N, J = motion.T, len(g1.joint_names) - 1
+    mj = build_model(g1).mj
+    B = mj.nbody - 1
+    shapes = {"fps": (1,), "joint_pos": (N, J), "joint_vel": (N, J), "body_pos_w": (N, B, 3),
+              "body_quat_w": (N, B, 4), "body_lin_vel_w": (N, B, 3),
+              "body_ang_vel_w": (N, B, 3), "contact_wrench_left": (N, 6)}
+    for k, shape in shapes.items():
+        assert z[k].shape == shape and z[k].dtype == np.float64, k
+    assert float(z["fps"][0]) == 60.0 and str(z["contact_frame_left"]) == \
+        g1.contacts["left"].frame
+    np.testing.assert_allclose(z["contact_wrench_right"], wrenches["right"], atol=1e-12)
+    back = read_beyondmimic_npz(p)
+    names = list(back.body_names)
+    assert names == [mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, B + 1)]
+    assert list(back.joint_names) == list(g1.joint_names[1:])  # MuJoCo's order is the URDF's
+    np.testing.assert_allclose(back.joint_pos, motion.q[:, 7:], atol=1e-12)
+    m, d = g1.model, g1.model.createData()
+    ids = [m.getFrameId(n) for n in names]
+    from gdimitate.motion import differentiate
+
+    v = differentiate(m, motion).v  # the writer's own velocities (the same 60 Hz grid)
+    for k in range(N):
+        pin.forwardKinematics(m, d, motion.q[k], v[k])
+        pin.updateFramePlacements(m, d)
+        for b, i in enumerate(ids):
+            np.testing.assert_allclose(back.body_pos_w[k, b], d.oMf[i].translation, atol=1e-9)
+            w = back.body_quat_w[k, b]
+            np.testing.assert_allclose(pin.Quaternion(w[0], w[1], w[2], w[3]).matrix(),
+                                       d.oMf[i].rotation, atol=1e-9)
+            nu = pin.getFrameVelocity(m, d, i, pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(back.body_lin_vel_w[k, b], nu.linear, atol=1e-9)
+            np.testing.assert_allclose(back.body_ang_vel_w[k, b], nu.angular, atol=1e-9)

@@ -31,6 +31,7 @@ AUDIT_FORMATS: dict[str, str] = {
     "npz": ".npz with q (gdimitate's own; the robot recorded)",
     "isaaclab_amp": ".npz with dof_positions (Isaac Lab AMP)",
     "mujoco": ".npz with qpos (MuJoCo qpos, gdimitate's mujoco export)",
+    "beyondmimic_npz": ".npz with joint_pos and body_pos_w (BeyondMimic / mjlab / holosoma)",
     "csv": ".csv with a header row (gdimitate's csv export)",
     "lafan1_csv": ".csv without header: x y z qx qy qz qw joints (LAFAN1 / BeyondMimic)",
     "gmr": ".pkl (GMR motion pickle; pickle runs code: only files you trust)",
@@ -83,11 +84,13 @@ def _npz_format(path: Path) -> str:
 
     with open_npz(path) as z:
         keys = set(z.files)
-    for fmt, key in (("npz", "q"), ("isaaclab_amp", "dof_positions"), ("mujoco", "qpos")):
+    for fmt, key in (("npz", "q"), ("isaaclab_amp", "dof_positions"), ("mujoco", "qpos"),
+                     ("beyondmimic_npz", "joint_pos")):
         if key in keys:
             return fmt
     raise FileFormatError(f"{path}: an .npz with none of the keys q (gdimitate), "
-                          "dof_positions (Isaac Lab AMP), qpos (MuJoCo); cannot audit it")
+                          "dof_positions (Isaac Lab AMP), qpos (MuJoCo), joint_pos "
+                          "(BeyondMimic); cannot audit it")
 
 
 def motion_format(path: Path) -> str:
@@ -139,7 +142,42 @@ def read_robot_motion(path: Path, robot: Robot | None, fps: float = 30.0
         return robot, export.read_gmr(path, robot), fmt
     if fmt == "isaaclab_amp":
         return robot, export.read_isaaclab_amp(path, robot), fmt
+    if fmt == "beyondmimic_npz":
+        return robot, _read_beyondmimic(path, robot), fmt
     return robot, _read_mujoco(path, robot), fmt
+
+
+def _read_beyondmimic(path: Path, robot: Robot) -> Motion:
+    """A BeyondMimic motion NPZ onto a free-flyer ``robot``: the root pose from its first
+    body (the free joint's), the joints by the file's ``joint_names`` where it has them (ours),
+    else in MuJoCo's order for the model :func:`gdimitate.sim.build_model` makes."""
+    import mujoco
+
+    from ..export import read_beyondmimic_npz
+    from ..sim.model import build_model
+
+    bm = read_beyondmimic_npz(path)
+    sim = build_model(robot)
+    mj = sim.mj
+    if not mj.njnt or int(mj.jnt_type[0]) != int(mujoco.mjtJoint.mjJNT_FREE):
+        raise FileFormatError(f"{path}: a BeyondMimic motion is of a free-floating robot; "
+                              f"{robot.name!r} has no free base")
+    names = [mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(1, mj.njnt)]
+    pos = np.asarray(bm.joint_pos, float)
+    if bm.joint_names:
+        missing = [n for n in names if n not in bm.joint_names]
+        if missing:
+            raise FileFormatError(f"{path}: joint_names lacks {robot.name!r}'s joints "
+                                  f"{missing[:5]}; is it another robot's motion?")
+        pos = pos[:, [list(bm.joint_names).index(n) for n in names]]
+    if pos.ndim != 2 or pos.shape[1] != len(names) or bm.body_pos_w.shape[:1] != pos.shape[:1]:
+        raise FileFormatError(f"{path}: joint_pos has shape {pos.shape}; robot {robot.name!r} "
+                              f"has {len(names)} joints in its MuJoCo model")
+    qpos = np.column_stack([bm.body_pos_w[:, 0], bm.body_quat_w[:, 0], pos])
+    q = np.array([sim.q_from_qpos(x) for x in qpos])
+    nq = tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints))
+    return Motion(t=np.arange(len(q)) / bm.fps, joint_names=robot.joint_names, q=q,
+                  base_nq=7, joint_nq=nq)
 
 
 def _read_mujoco(path: Path, robot: Robot) -> Motion:
