@@ -174,10 +174,7 @@ def _read_beyondmimic(path: Path, robot: Robot) -> Motion:
         raise FileFormatError(f"{path}: joint_pos has shape {pos.shape}; robot {robot.name!r} "
                               f"has {len(names)} joints in its MuJoCo model")
     qpos = np.column_stack([bm.body_pos_w[:, 0], bm.body_quat_w[:, 0], pos])
-    q = np.array([sim.q_from_qpos(x) for x in qpos])
-    nq = tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints))
-    return Motion(t=np.arange(len(q)) / bm.fps, joint_names=robot.joint_names, q=q,
-                  base_nq=7, joint_nq=nq)
+    return _from_qpos(sim, robot, np.arange(len(qpos)) / bm.fps, qpos)
 
 
 def _read_mujoco(path: Path, robot: Robot) -> Motion:
@@ -190,8 +187,14 @@ def _read_mujoco(path: Path, robot: Robot) -> Motion:
     if mm.qpos.ndim != 2 or mm.qpos.shape[1] != sim.mj.nq:
         raise FileFormatError(f"{path}: qpos has shape {mm.qpos.shape}; robot {robot.name!r}'s "
                               f"MuJoCo model has nq = {sim.mj.nq}")
-    q = np.array([sim.q_from_qpos(x) for x in mm.qpos])
-    return Motion(t=np.asarray(mm.time, float), joint_names=robot.joint_names, q=q,
+    return _from_qpos(sim, robot, np.asarray(mm.time, float), mm.qpos)
+
+
+def _from_qpos(sim, robot: Robot, t: np.ndarray, qpos: np.ndarray) -> Motion:
+    """The :class:`Motion` of ``robot`` on times ``t`` ``(N,)`` [s] from MuJoCo ``qpos``
+    ``(N, nq_mj)`` of its model ``sim`` (:func:`gdimitate.sim.build_model`)."""
+    q = np.array([sim.q_from_qpos(x) for x in qpos])
+    return Motion(t=t, joint_names=robot.joint_names, q=q,
                   base_nq={"free": 7, "planar": 3}.get(robot.base, 0),
                   joint_nq=tuple(robot.model.joints[j].nq for j in range(1, robot.model.njoints)))
 
