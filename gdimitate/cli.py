@@ -93,12 +93,14 @@ def _json_file(path: str | None, what: str):
 
 def _robot(spec: str, a: argparse.Namespace):
     """``Robot.load`` of a library name or a .urdf/.osim path with the command's
-    ``--package-dir``/``--contacts``/``--legs``."""
+    ``--package-dir``/``--contacts``/``--legs``/``--massless-joints``."""
     from .robot import Robot
 
+    massless = [j for j in (a.massless_joints or "").split(",") if j.strip()]
     return Robot.load(spec, package_dir=a.package_dir,
                       contacts=_json_file(a.contacts, "--contacts"),
-                      legs=_json_file(a.legs, "--legs"))
+                      legs=_json_file(a.legs, "--legs"),
+                      massless_joints=[j.strip() for j in massless])
 
 
 def _add_robot_args(p: argparse.ArgumentParser, flag: str, default: str | None,
@@ -117,6 +119,9 @@ def _add_robot_args(p: argparse.ArgumentParser, flag: str, default: str | None,
     p.add_argument("--contacts", default=None, metavar="FILE.json",
                    help=f"the {flag[2:]}'s sole rectangles: "
                         '{"left": {"half_length": m, "half_width": m, "frame"?: F, "mu"?: x}, …}')
+    p.add_argument("--massless-joints", default=None, metavar="J[,J…]",
+                   help=f"moving joints of the {flag[2:]} URDF allowed to carry no mass (e.g. "
+                        "a hand's finger joints); a library robot's presets are kept")
 
 
 def _add_demonstration_args(p: argparse.ArgumentParser, positional: str, default_note: str
@@ -731,10 +736,11 @@ def _for_the_command_line(e: GdimitateError) -> str:
                     '"sole": FRAME}, "right": {...}} with the names above; a BVH '
                     "demonstration's legs are named in Python: gdimitate.bvh.read_bvh(path, "
                     "legs=...)")
-    # an option of the Python API only
-    return re.sub(r"or pass massless_joints=(\(.*?\)) if that is intended",
-                  r"or, if that is intended, load it in Python with gdimitate.Robot.from_urdf("
-                  r"path, massless_joints=\1) (the command line has no such option)", text)
+    # massless_joints=('A', 'B') in Python is --massless-joints A,B here
+    return re.sub(r"or pass massless_joints=\((.*?),?\) if that is intended",
+                  lambda m: "or pass --massless-joints " + ",".join(
+                      re.findall(r"'([^']*)'", m.group(1))) + " (with the robot's option) if "
+                  "that is intended", text)
 
 
 def main(argv: list[str] | None = None) -> int:

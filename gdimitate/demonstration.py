@@ -313,6 +313,21 @@ def _recorded_json(p: Path, field: str, text: str) -> object:
     return value
 
 
+def _recorded_names(p: Path, text: str) -> tuple[str, ...]:
+    """The ``robot_massless`` joint names recorded in an ``.npz`` (a JSON list of str):
+    :class:`FileFormatError` naming the file and field otherwise."""
+    from .errors import FileFormatError
+    from .inputs import loads_json
+
+    if not text:
+        return ()
+    value = loads_json(text, f"{p}: robot_massless", FileFormatError)
+    if not (isinstance(value, list) and all(isinstance(j, str) for j in value)):
+        raise FileFormatError(f"{p}: robot_massless must be a JSON list of joint names; got "
+                              f"{text[:80]!r}")
+    return tuple(value)
+
+
 def _npz(p: Path, robot: Robot | None, package_dir: str | Path | None = None
          ) -> Demonstration:
     from .errors import FileFormatError, RobotMismatchError
@@ -346,7 +361,8 @@ def _npz(p: Path, robot: Robot | None, package_dir: str | Path | None = None
             else:
                 robot = Robot.load(rec.source,
                                    package_dir=_recorded_package_dir(p, rec, package_dir),
-                                   legs=legs, contacts=contacts)  # type: ignore[arg-type]
+                                   legs=legs, contacts=contacts,  # type: ignore[arg-type]
+                                   massless_joints=_recorded_names(p, rec.massless))
         if robot.fingerprint != rec.fingerprint:
             raise RobotMismatchError(
                 f"{p} was written for robot {rec.name!r} ({rec.kind} {rec.source}, fingerprint "

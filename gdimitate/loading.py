@@ -68,10 +68,7 @@ def read_urdf(path: str | Path, *, package_dir: str | Path | Sequence[str | Path
     path = path_arg("path", path)
     if floating is not None and not isinstance(floating, bool):
         raise InvalidInputError(f"floating must be True, False or None; got {floating!r:.80}")
-    if isinstance(massless_joints, str | bytes) or not all(
-            isinstance(j, str) for j in massless_joints):
-        raise InvalidInputError("massless_joints must be a list of joint names (str); got "
-                                f"{massless_joints!r:.80}")
+    massless_joints = _joint_names(massless_joints)
     try:
         if not path.is_file():
             raise URDFError(f"URDF file not found: {path}")
@@ -191,7 +188,8 @@ def from_library(cls: type[Robot], name: str) -> Robot:
 
 
 def load(cls: type[Robot], spec: str | Path, *, package_dir: str | Path | None = None,
-         contacts: Contacts | None = None, legs: LegNames | None = None) -> Robot:
+         contacts: Contacts | None = None, legs: LegNames | None = None,
+         massless_joints: Iterable[str] = ()) -> Robot:
     """:meth:`gdimitate.Robot.load` (its docstring): a library name or a ``.urdf``/``.osim``
     path; the arguments kept as ``robot.load_args``."""
     if isinstance(spec, bytes) or not isinstance(spec, str | Path):
@@ -199,32 +197,46 @@ def load(cls: type[Robot], spec: str | Path, *, package_dir: str | Path | None =
                                 f"or Path); got {type(spec).__name__} {spec!r:.80}")
     check_legs(legs)
     check_contacts(contacts)
-    robot = _dispatch(cls, str(spec), package_dir, contacts, legs)
+    massless = _joint_names(massless_joints)
+    robot = _dispatch(cls, str(spec), package_dir, contacts, legs, massless)
     robot.load_args = {"spec": str(spec), "package_dir": package_dir, "legs": legs,
-                       "contacts": contacts}
+                       "contacts": contacts, "massless_joints": massless}
     return robot
 
 
+def _joint_names(names: Iterable[str]) -> tuple[str, ...]:
+    """``massless_joints=`` checked: a list of joint names (not one str) → a tuple."""
+    if isinstance(names, str | bytes) or not all(isinstance(j, str) for j in names):
+        raise InvalidInputError("massless_joints must be a list of joint names (str); got "
+                                f"{names!r:.80}")
+    return tuple(names)
+
+
 def _dispatch(cls: type[Robot], text: str, package_dir: str | Path | None,
-              contacts: Contacts | None, legs: LegNames | None) -> Robot:
+              contacts: Contacts | None, legs: LegNames | None,
+              massless: tuple[str, ...] = ()) -> Robot:
     p = Path(text).expanduser()
     if text in list_robots() and not p.suffix:
-        if legs is None and contacts is None and package_dir is None:
+        if legs is None and contacts is None and package_dir is None and not massless:
             return from_library(cls, text)
         if text in PLANAR_MODELS:
             raise InvalidInputError(f"{text!r} is one of our planar models: it takes no "
-                                    "legs=/contacts=/package_dir=")
+                                    "legs=/contacts=/package_dir=/massless_joints=")
         path, pkg = library_entry(text)
+        presets = MASSLESS_PRESETS.get(text, ())
         return from_urdf(cls, path, legs or LEG_PRESETS.get(text), name=text,
                          package_dir=package_dir or pkg, floating=True, contacts=contacts,
-                         massless_joints=MASSLESS_PRESETS.get(text, ()))
+                         massless_joints=presets + tuple(j for j in massless
+                                                         if j not in presets))
     suffix = p.suffix.lower()
     if suffix == ".urdf":
-        return from_urdf(cls, p, legs, package_dir=package_dir, contacts=contacts)
+        return from_urdf(cls, p, legs, package_dir=package_dir, contacts=contacts,
+                         massless_joints=massless)
     if suffix == ".osim":
-        if legs is not None or contacts is not None:
-            raise InvalidInputError(f"{p}: an OpenSim model brings its own legs and soles; "
-                                    "legs=/contacts= are for URDFs")
+        if legs is not None or contacts is not None or massless:
+            raise InvalidInputError(f"{p}: an OpenSim model brings its own legs and soles and "
+                                    "its bodies' masses; legs=/contacts=/massless_joints= are "
+                                    "for URDFs")
         return from_osim(cls, p)
     if suffix:
         raise InvalidInputError(f"robot {text!r}: a model file must be .urdf or .osim; "

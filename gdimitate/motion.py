@@ -377,7 +377,8 @@ class RobotRecord:
     (``""`` for none); ``legs``/``contacts``: JSON of the ``legs=``/``contacts=`` given to
     :meth:`Robot.load` (``""`` when detected); ``urdf``: the URDF file the model was read
     from (``""`` for in-memory models; for ``.osim``/``.bvh`` robots a converted file that
-    may be temporary)."""
+    may be temporary); ``massless``: JSON list of the ``massless_joints=`` given to
+    :meth:`Robot.load` (``""`` for none; a library robot's presets are not repeated)."""
 
     name: str
     kind: str
@@ -387,6 +388,7 @@ class RobotRecord:
     legs: str = ""
     contacts: str = ""
     urdf: str = ""
+    massless: str = ""
 
     @classmethod
     def of(cls, robot) -> RobotRecord:
@@ -414,13 +416,16 @@ class RobotRecord:
         else:
             kind, source = "memory", ""
         urdf = str(Path(robot.urdf_path).resolve()) if robot.urdf_path else ""
-        return cls(robot.name, kind, source, robot.fingerprint, pkg, legs, contacts, urdf)
+        massless = (json.dumps(list(given["massless_joints"]))
+                    if given.get("massless_joints") else "")
+        return cls(robot.name, kind, source, robot.fingerprint, pkg, legs, contacts, urdf,
+                   massless)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The NPZ entries (``robot_<field>`` → 0-d string array)."""
         return {f"robot_{k}": np.array(getattr(self, k))
                 for k in ("name", "kind", "source", "fingerprint", "package_dir", "legs",
-                          "contacts", "urdf")}
+                          "contacts", "urdf", "massless")}
 
     @classmethod
     def from_npz(cls, path) -> RobotRecord | None:
@@ -433,7 +438,7 @@ class RobotRecord:
                 return None
             rec = cls(**{k: str(z[f"robot_{k}"]) for k in
                          ("name", "kind", "source", "fingerprint", "package_dir", "legs",
-                          "contacts", "urdf") if f"robot_{k}" in z.files})
+                          "contacts", "urdf", "massless") if f"robot_{k}" in z.files})
         if rec.kind not in _RECORD_KINDS:
             raise InvalidInputError(f"{path}: robot_kind {rec.kind!r} is not one of "
                                     f"{_RECORD_KINDS}")

@@ -173,17 +173,20 @@ class Robot:
     @classmethod
     def load(cls, spec: str | Path, *, package_dir: str | Path | None = None,
              contacts: Mapping[str, SoleContact | Mapping] | None = None,
-             legs: LegNames | None = None) -> Robot:
+             legs: LegNames | None = None, massless_joints: Iterable[str] = ()) -> Robot:
         """A robot from a library name (:func:`gdimitate.list_robots`) or a model file path
-        (``.urdf``: :meth:`from_urdf` with ``legs``, ``package_dir`` and ``contacts``;
-        ``.osim``: :meth:`from_osim`, whose legs and soles come from the model).
+        (``.urdf``: :meth:`from_urdf` with ``legs``, ``package_dir``, ``contacts`` and
+        ``massless_joints``; ``.osim``: :meth:`from_osim`, whose legs, soles and masses come
+        from the model). ``massless_joints``: moving joints allowed to carry no mass (on a
+        library robot: added to its presets).
 
         ``contacts``/``legs`` on a library robot override its presets (its URDF is loaded
         with them). Raises :class:`UnknownRobotError` (listing the names) for a name that is
         neither a library robot nor an existing file, :class:`InvalidInputError` for
         ``legs``/``contacts`` on an ``.osim`` or an unknown extension. The arguments are kept
         as ``robot.load_args`` (motion files record them)."""
-        return loading.load(cls, spec, package_dir=package_dir, contacts=contacts, legs=legs)
+        return loading.load(cls, spec, package_dir=package_dir, contacts=contacts, legs=legs,
+                            massless_joints=massless_joints)
 
     @property
     def fingerprint(self) -> str:

@@ -148,16 +148,22 @@ def check_urdf_physics(root: ET.Element, source: object,
         raise URDFError(f"{source}: the robot's total mass is 0 kg")
     allowed = set(massless_joints)
     exempt: set[str] = set()
+    bad: list[tuple[str, str, str]] = []  # (joint, type, link), every one of them
     for lk in order:
         for jname, jtype, c in children.get(lk, ()):
             if lk in exempt or jname in allowed:
                 exempt.add(c)
             elif jtype != "fixed" and below.get(c, 0.0) <= 0:
-                raise URDFError(
-                    f"{source}: link {c!r} hangs on the moving joint {jname!r} ({jtype}) with "
-                    "no mass on it or below it, so the joint moves nothing; give the link a "
-                    "mass and inertia, make the joint fixed, or pass "
-                    f"massless_joints=({jname!r},) if that is intended")
+                bad.append((jname, jtype, c))
+                exempt.add(c)  # the joints below it are covered by naming this one
+    if bad:
+        which = "; ".join(f"link {c!r} on joint {j!r} ({t})" for j, t, c in bad[:20])
+        more = f" and {len(bad) - 20} more" if len(bad) > 20 else ""
+        names = ", ".join(repr(j) for j, _, _ in bad)
+        raise URDFError(
+            f"{source}: {len(bad)} moving joint(s) carry no mass on their link or below it, so "
+            f"they move nothing: {which}{more}; give the links a mass and inertia, make the "
+            f"joints fixed, or pass massless_joints=({names},) if that is intended")
 
 
 def _numbers(el: ET.Element | None, key: str, n: int) -> list[float] | None:

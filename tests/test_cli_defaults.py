@@ -74,12 +74,25 @@ def test_option_files_that_cannot_be_read_say_so(tmp_path, capsys, content):
 
 def test_advice_names_only_what_the_command_line_can_do(tmp_path, capsys):
     """`adapt --imitator romeo.urdf` (Romeo's hand links have no mass) ended "or pass
-    massless_joints=('RHand',)", an option the command line does not have."""
-    from gdimitate.library import library_entry
+    massless_joints=('RHand',)", an option the command line did not have: the message names
+    every such joint at once and the option it suggests exists and loads the robot."""
+    from gdimitate.library import MASSLESS_PRESETS, library_entry
 
     urdf, _ = library_entry("romeo")
     assert main(["adapt", "--imitator", str(urdf), "--method", "copy", "--out",
                  str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "massless" in err and "or pass massless_joints=" not in err
-    assert "gdimitate.Robot.from_urdf(path, massless_joints=(" in err
+    assert "massless_joints=" not in err
+    advice = err.split("--massless-joints ", 1)[1].split()[0]
+    # every massless branch at once: the library's presets for Romeo are exactly those
+    assert set(advice.split(",")) == set(MASSLESS_PRESETS["romeo"])
+    # loaded and adapted: exit 3 is the audit's verdict on the copy (Romeo's knees run past
+    # their limits by 0.04-0.07 rad), not a refused input (2)
+    assert main(["adapt", "--imitator", str(urdf), "--massless-joints", advice,
+                 "--method", "copy", "--out", str(tmp_path / "o")]) == 3
+    assert "position:RKneePitch" in capsys.readouterr().out
+    out = tmp_path / "o" / "imitator_motion.npz"
+    from gdimitate.demonstration import load_demonstration
+
+    again = load_demonstration(out)  # the record brings the option along
+    assert again.robot.load_args["massless_joints"] == tuple(advice.split(","))
