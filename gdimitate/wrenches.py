@@ -27,7 +27,8 @@ from .errors import InvalidInputError, SolverError, UnknownNameError
 from .kinematics import PLANAR_BASE, base_joint_id, base_v_indices, frame_placements
 from .motion import Motion
 
-__all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS", "measured_wrenches"]
+__all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS", "measured_wrenches",
+           "cone_rows"]
 
 METHODS = ("cone", "lstsq")
 GRAVITY = 9.81
@@ -152,7 +153,7 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
     fids = {s: robot.frame_id(contacts[s].frame) for s in sides}
     scale = {s: np.array([weight] * 3 + [weight * contacts[s].half_length] * 3)[comps]
              for s in sides}
-    cones = {s: _cone_rows(contacts[s], planar=robot.base == "planar")[:, comps] * scale[s]
+    cones = {s: cone_rows(contacts[s], planar=robot.base == "planar")[:, comps] * scale[s]
              for s in sides}
     out = {s: np.zeros((T, 6)) for s in sides}
     residual = np.zeros((T, 6))
@@ -191,7 +192,7 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
     return WrenchEstimate(out, residual, net, exact, method, spent)
 
 
-def _cone_rows(c: SoleContact, planar: bool) -> np.ndarray:
+def cone_rows(c: SoleContact, planar: bool) -> np.ndarray:
     """``(16, 6)`` contact wrench cone rows (Caron et al.; square friction pyramids), plus, in
     3-D, 8 rows of the regular octagon inscribed in the friction circle ``‖f_t‖ ≤ μ f_z`` (the
     pyramid alone admits ‖f_t‖ up to √2·μ f_z; the audit checks the circle)."""

@@ -10,7 +10,16 @@ on the output's own numbers — nothing is clipped and no inequality is touched:
   k ≥ 1, Pinocchio's ``difference``) and ``a`` from ``v`` (``a_{k−1} = (v_k − v_{k−1}) /
   h_k``), so that forward differences of ``q`` *are* ``v``;
 - the stance wrenches get the least-norm correction that zeroes the unactuated (base) rows of
-  ``rnea(q, v, a) − Σ J_cᵀ w_c`` (Pinocchio, not the NLP's expressions).
+  ``rnea(q, v, a) − Σ J_cᵀ w_c`` (Pinocchio, not the NLP's expressions). Given the soles'
+  ``contacts``, the correction is the least-norm one that also leaves every row of each
+  sole's wrench cone (:func:`gdimitate.wrenches.cone_rows`: friction, centre of pressure, yaw
+  moment) no worse than ``max(0, its value before)`` — a QP (DAQP) where the plain
+  least-norm correction would push a wrench out of its cone. In double support the base rows
+  leave it the freedom; where they do not (one foot, or the QP infeasible) the plain
+  correction stands and the audit judges it. (A periodic cycle's first knot gets a new
+  acceleration when its seam is closed, :func:`~.periodic.close_seam`: G1's, at 45 knots/s,
+  then put both soles' centres of pressure 7-8 µm past their edges with the plain
+  correction.)
 
 Each correction is of the size of IPOPT's final constraint violation; the audit
 (:func:`gdimitate.audit.audit`) then judges every inequality on the corrected numbers.
@@ -21,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..contact import SoleContact
 from ..robot import SIDES, Robot
 
 __all__ = ["make_consistent"]
@@ -39,11 +49,18 @@ def _rebuild_derivatives(model: pin.Model, t: np.ndarray, q: np.ndarray, v: np.n
 
 def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                       W: dict[str, np.ndarray], stance: dict[str, np.ndarray],
-                      frames: dict[str, str], base_idx: np.ndarray) -> dict[str, np.ndarray]:
+                      frames: dict[str, str], base_idx: np.ndarray,
+                      contacts: dict[str, SoleContact] | None = None
+                      ) -> dict[str, np.ndarray]:
+    from ..wrenches import cone_rows
+
     m, d = robot.model, robot.data
-    comp = [0, 2, 4] if robot.base == "planar" else list(range(6))
+    planar = robot.base == "planar"
+    comp = [0, 2, 4] if planar else list(range(6))
     W = {s: w.copy() for s, w in W.items()}
     fids = {s: m.getFrameId(frames[s]) for s in SIDES}
+    cones = ({s: cone_rows(c, planar)[:, comp] for s, c in contacts.items()}
+             if contacts else None)
     for k in range(len(q)):
         sides = [s for s in SIDES if stance[s][k]]
         if not sides:
@@ -58,14 +75,43 @@ def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
             cols.append(J.T[base_idx])
         A = np.hstack(cols)
         dw = np.linalg.lstsq(A, tau[base_idx], rcond=None)[0]
+        if cones is not None:
+            w0 = [W[s][k, comp] for s in sides]
+            dw = _within_cones(A, tau[base_idx], dw, [cones[s] for s in sides], w0)
         for i, s in enumerate(sides):
             W[s][k, comp] += dw[i * len(comp):(i + 1) * len(comp)]
     return W
 
 
+def _within_cones(A: np.ndarray, b: np.ndarray, dw: np.ndarray, cones: list[np.ndarray],
+                  w0: list[np.ndarray]) -> np.ndarray:
+    """The least-norm ``dw`` with ``A dw = b`` and every cone row ``G_c (w0_c + dw_c)`` at most
+    ``max(0, G_c w0_c)``; ``dw`` (the plain least-norm correction) itself where it already
+    keeps them, or where the QP has no solution."""
+    import daqp
+
+    n = w0[0].size
+    G = np.zeros((sum(c.shape[0] for c in cones), n * len(cones)))
+    before, r = [], 0
+    for i, (c, w) in enumerate(zip(cones, w0, strict=True)):
+        G[r:r + c.shape[0], i * n:(i + 1) * n] = c
+        before.append(c @ w)
+        r += c.shape[0]
+    g0 = np.concatenate(before)
+    room = np.maximum(g0, 0.0) - g0  # G dw ≤ room
+    if np.all(G @ dw <= room):
+        return dw
+    nb, p = A.shape
+    sense = np.r_[np.full(nb, 5), np.zeros(G.shape[0])].astype(np.intc)
+    x, _, flag, _ = daqp.solve(np.eye(p), np.zeros(p), np.vstack([A, G]),
+                               np.r_[b, room], np.r_[b, np.full(G.shape[0], -1e30)], sense)
+    return np.asarray(x) if flag in (1, 2) else dw
+
+
 def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                     W: dict[str, np.ndarray], stance: dict[str, np.ndarray],
-                    frames: dict[str, str], base_idx: np.ndarray
+                    frames: dict[str, str], base_idx: np.ndarray,
+                    contacts: dict[str, SoleContact] | None = None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """The solution with its equality rows exact (see the module docstring).
 
@@ -74,6 +120,8 @@ def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a
         t: knot times ``(T,)`` [s]; q ``(T, nq)``, v ``(T, nv)``, a ``(T, nv)``.
         W: sole-frame wrenches ``{side: (T, 6)}`` [N, N·m]; stance ``{side: (T,) bool}``.
         frames: each side's contact frame name; base_idx: the unactuated rows of ``v``.
+        contacts: the soles (:class:`~gdimitate.contact.SoleContact`): the wrench correction
+            keeps their cones (module docstring); ``None``: the plain least-norm one.
 
     Returns:
         ``(q, v, a, W)``, new arrays.
@@ -83,5 +131,5 @@ def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a
         q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
     v, a = _rebuild_derivatives(robot.model, np.asarray(t, float), q, np.asarray(v, float),
                                 np.asarray(a, float))
-    W = _correct_wrenches(robot, q, v, a, W, stance, frames, np.asarray(base_idx))
+    W = _correct_wrenches(robot, q, v, a, W, stance, frames, np.asarray(base_idx), contacts)
     return q, v, a, W

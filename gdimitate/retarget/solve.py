@@ -745,9 +745,9 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     if periodic:
         from .periodic import close_seam
 
-        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args)
+        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args, contacts=dict(cs))
     else:
-        q, v, a, W = make_consistent(imitator, *args)
+        q, v, a, W = make_consistent(imitator, *args, contacts=dict(cs))
     base = robot_motion(imitator, tg.t, q, tg.stance)
     motion = base.replace(v=v, a=a)
     push_r = None

@@ -1,0 +1,79 @@
+"""The exact-consistency step before a result is reported (gdimitate.retarget.polish): the
+wrench correction zeroes the base rows of Pinocchio's inverse dynamics and, given the soles,
+keeps every wrench inside its cone (checked with the audit's own margins)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from gdimitate.contact import cone_margin
+from gdimitate.kinematics import base_v_indices
+from gdimitate.retarget.polish import make_consistent
+from gdimitate.robot import SIDES, Robot
+
+
+@pytest.fixture(scope="module")
+def g1():
+    return Robot.load("g1")
+
+
+def _base_residual(robot, q, v, a, W, frames, base_idx):
+    m, d = robot.model, robot.data
+    tau = pin.rnea(m, d, q, v, a).copy()
+    pin.computeJointJacobians(m, d, q)
+    pin.updateFramePlacements(m, d)
+    for s in SIDES:
+        tau -= pin.getFrameJacobian(m, d, m.getFrameId(frames[s]), pin.LOCAL).T @ W[s]
+    return tau[base_idx]
+
+
+def _case(robot):
+    """Double support at the neutral pose: the wrenches that hold it still (each centre of
+    pressure 3 cm inside the sole's side edges), then a lateral base acceleration of 1 m/s²
+    (as a closed seam gives a knot a new acceleration). The plain least-norm correction
+    answers with ankle roll moments and puts both centres of pressure 4 cm past the soles'
+    edges; shifting load from one foot to the other meets the same base rows inside them."""
+    nv = robot.model.nv
+    q, v = robot.neutral.copy(), np.zeros(nv)
+    frames = {s: robot.contacts[s].frame for s in SIDES}
+    stance = {s: np.ones(1, bool) for s in SIDES}
+    guess = {s: np.array([[0.0, 0.0, 0.5 * robot.mass * 9.81, 0.0, 0.0, 0.0]]) for s in SIDES}
+    still = make_consistent(robot, np.zeros(1), q[None], v[None], v[None], guess, stance,
+                            frames, base_v_indices(robot))[3]
+    a = np.zeros(nv)
+    a[1] = 1.0  # the free-flyer's lateral acceleration [m/s²]
+    return q, v, a, still, frames
+
+
+def test_the_correction_keeps_the_cones_where_the_base_rows_leave_room(g1):
+    q, v, a, W, frames = _case(g1)
+    base_idx = base_v_indices(g1)
+    stance = {s: np.ones(1, bool) for s in SIDES}
+    for s in SIDES:  # the starting wrenches are inside the cones
+        assert cone_margin(g1.contacts[s], W[s][0])["cop"] > 0.02
+    args = (g1, np.zeros(1), q[None], v[None], a[None], W, stance, frames, base_idx)
+    plain = make_consistent(*args)[3]
+    kept = make_consistent(*args, contacts=dict(g1.contacts))[3]
+    for out in (plain, kept):  # both meet Pinocchio's base rows to round-off
+        r = _base_residual(g1, q, v, a, {s: out[s][0] for s in SIDES}, frames, base_idx)
+        assert np.max(np.abs(r)) < 1e-8 * g1.mass * 9.81
+    # the plain correction leaves a cone (the test's premise); the kept one stays inside all
+    assert min(float(cone_margin(g1.contacts[s], plain[s][0])["cop"]) for s in SIDES) < -0.03
+    for s in SIDES:
+        mg = cone_margin(g1.contacts[s], kept[s][0])
+        assert mg["cop"] >= -1e-9 and mg["friction"] >= -1e-9 and mg["yaw"] >= -1e-9
+        assert mg["normal"] > 0
+
+
+def test_one_foot_has_no_room_and_keeps_the_plain_correction(g1):
+    q, v, a, W, frames = _case(g1)
+    base_idx = base_v_indices(g1)
+    stance = {"left": np.ones(1, bool), "right": np.zeros(1, bool)}
+    W = {s: w.copy() for s, w in W.items()}
+    W["left"] *= 2.0
+    args = (g1, np.zeros(1), q[None], v[None], a[None], W, stance, frames, base_idx)
+    plain = make_consistent(*args)[3]
+    kept = make_consistent(*args, contacts=dict(g1.contacts))[3]
+    np.testing.assert_allclose(kept["left"], plain["left"], atol=1e-9)
