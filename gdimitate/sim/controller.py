@@ -58,12 +58,6 @@ class ControllerGains:
     m·g·ℓ for moments); ``w_acc``: a small ‖a‖² term that keeps the QP strictly convex.
     ``cop_margin`` [-]: the fraction of the sole's half-length and half-width kept between the
     centre of pressure and the sole's edges in the QP's wrench cones (0: the whole sole).
-    ``step`` [-]: foot placement — each swing sole's target moved horizontally by
-    ``step · (ξ − ξ_plan)``, ξ = c + ċ/ω₀ the capture point of the centre of mass c (Pratt
-    et al. 2006), so that a body that drifts steps under itself (0: the plan's footholds);
-    the offset follows its target through a first-order filter of time constant
-    ``step_time`` [s] from 0 at lift-off (no jump of the swing target), and is at most half a
-    leg length.
 
     The centre of mass outweighs the posture thirtyfold: in single support the contact force
     is m·(c̈ − g), so the centre-of-mass task is what sets the push the simulation is judged
@@ -89,13 +83,10 @@ class ControllerGains:
     w_wrench: float = 1e-2
     w_acc: float = 1e-6
     cop_margin: float = 0.0
-    step: float = 0.0
-    step_time: float = 0.1
 
     def __post_init__(self) -> None:
         for k, v in self.__dict__.items():
-            if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0) or (
-                k == "step_time" and v <= 0):
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
                 raise SimulationError(f"ControllerGains.{k} must be a finite number ≥ 0; got "
                                       f"{v!r}")
         if self.cop_margin >= 1:
@@ -201,29 +192,12 @@ class TrackingController:
         self._layouts: dict[tuple[str, ...], _Layout] = {}
         self.select = np.zeros((self.act.size, self.nv))
         self.select[np.arange(self.act.size), self.act] = 1.0
-        self.w0, self.ell = w0, ell
-        self.dt = float(sim.mj.opt.timestep)  # one step() per simulation step
         self.reset()
 
     def reset(self) -> None:
-        """Forget stance anchors, foot-placement offsets and the last torques."""
+        """Forget stance anchors and the last torques."""
         self.anchor: dict[str, pin.SE3 | None] = {s: None for s in SIDES}
-        self.offset = {s: np.zeros(3) for s in SIDES}
         self.tau = np.zeros(self.act.size)
-
-    def _placement(self, s: str, k: _Kinematics, ref: Sample) -> np.ndarray:
-        """The swing sole ``s``'s foot-placement offset ``(3,)`` [m] (``ControllerGains.step``),
-        advanced one step through its filter."""
-        g = self.gains
-        if g.step == 0:
-            return self.offset[s]
-        xi = (k.com - ref.com) + (k.vcom - ref.com_vel) / self.w0
-        target = np.r_[g.step * xi[:2], 0.0]
-        n = float(np.linalg.norm(target))
-        if n > 0.5 * self.ell:
-            target *= 0.5 * self.ell / n
-        self.offset[s] += min(1.0, self.dt / g.step_time) * (target - self.offset[s])
-        return self.offset[s]
 
     def _layout(self, stance: tuple[str, ...]) -> _Layout:
         """The constant parts of the QP for one set of stance feet (cached)."""
@@ -310,7 +284,6 @@ class TrackingController:
         for s in SIDES:
             oMf, v_lwa, v_loc, a_loc, a_cls, J_loc, J_lwa = k.feet[s]
             if ref.stance[s]:
-                self.offset[s] = np.zeros(3)
                 if self.anchor[s] is None:
                     self.anchor[s] = oMf.copy()
                 kp, kd = self.pd["stance"]
@@ -319,7 +292,7 @@ class TrackingController:
             else:
                 self.anchor[s] = None
                 kp, kd = self.pd["swing"]
-                e = np.r_[ref.foot_pos[s] + self._placement(s, k, ref) - oMf.translation,
+                e = np.r_[ref.foot_pos[s] - oMf.translation,
                           pin.log3(ref.foot_rot[s] @ oMf.rotation.T)]
                 task(J_lwa, a_cls, ref.foot_acc[s] + kp * e + kd * (ref.foot_vel[s] - v_lwa),
                      g.w_swing)
