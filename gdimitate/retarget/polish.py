@@ -16,10 +16,13 @@ on the output's own numbers — nothing is clipped and no inequality is touched:
   moment) no worse than ``max(0, its value before)`` — a QP (DAQP) where the plain
   least-norm correction would push a wrench out of its cone. In double support the base rows
   leave it the freedom; where they do not (one foot, or the QP infeasible) the plain
-  correction stands and the audit judges it. (A periodic cycle's first knot gets a new
-  acceleration when its seam is closed, :func:`~.periodic.close_seam`: G1's, at 45 knots/s,
-  then put both soles' centres of pressure 7-8 µm past their edges with the plain
-  correction.)
+  correction stands and the audit judges it. Given ``targets`` (the push directions the
+  solve kept), the push of each stance foot also stays within half the audit's tolerance of
+  its target's cone — or no further off than it was — through 8 rows of the regular octagon
+  inscribed in that cone. (A periodic cycle's first knot gets a new acceleration when its
+  seam is closed, :func:`~.periodic.close_seam`: G1's, at 45 knots/s, then put both soles'
+  centres of pressure 7-8 µm past their edges with the plain correction, and Talos's turned
+  the push of its right foot, just struck and lightly loaded, 4.1 mrad off its target.)
 
 Each correction is of the size of IPOPT's final constraint violation; the audit
 (:func:`gdimitate.audit.audit`) then judges every inequality on the corrected numbers.
@@ -47,12 +50,33 @@ def _rebuild_derivatives(model: pin.Model, t: np.ndarray, q: np.ndarray, v: np.n
     return v, a
 
 
+def _direction_rows(R: np.ndarray, target: np.ndarray, half_angle: float,
+                    comp: list[int]) -> np.ndarray:
+    """``(8, len(comp))`` rows ``G`` with ``G w ≤ 0`` when the push ``−R f`` of a sole wrench
+    ``w`` (sole frame, ``R`` the sole's rotation) lies in the regular octagonal pyramid
+    inscribed in the cone of half-angle ``half_angle`` [rad] about ``target`` ``(3,)``
+    (world, unit)."""
+    u = -R.T @ target  # the direction of the force on the foot, sole frame
+    e1 = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(u, e1)
+    r = np.tan(half_angle) * np.cos(np.pi / 8)
+    G = np.zeros((8, 6))
+    for i, phi in enumerate(np.arange(8) * np.pi / 4):
+        G[i, :3] = np.cos(phi) * e1 + np.sin(phi) * e2 - r * u
+    return G[:, comp]
+
+
 def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                       W: dict[str, np.ndarray], stance: dict[str, np.ndarray],
                       frames: dict[str, str], base_idx: np.ndarray,
-                      contacts: dict[str, SoleContact] | None = None
+                      contacts: dict[str, SoleContact] | None = None,
+                      targets: dict[str, np.ndarray] | None = None, half_angle: float = 0.0
                       ) -> dict[str, np.ndarray]:
+    from ..audit.report import AuditTolerances
     from ..wrenches import cone_rows
+
+    angle = half_angle + 0.5 * AuditTolerances().force_direction
 
     m, d = robot.model, robot.data
     planar = robot.base == "planar"
@@ -77,7 +101,11 @@ def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
         dw = np.linalg.lstsq(A, tau[base_idx], rcond=None)[0]
         if cones is not None:
             w0 = [W[s][k, comp] for s in sides]
-            dw = _within_cones(A, tau[base_idx], dw, [cones[s] for s in sides], w0)
+            rows = [cones[s] if targets is None or not np.all(np.isfinite(targets[s][k]))
+                    else np.vstack([cones[s], _direction_rows(
+                        d.oMf[fids[s]].rotation, targets[s][k], angle, comp)])
+                    for s in sides]
+            dw = _within_cones(A, tau[base_idx], dw, rows, w0)
         for i, s in enumerate(sides):
             W[s][k, comp] += dw[i * len(comp):(i + 1) * len(comp)]
     return W
@@ -111,7 +139,8 @@ def _within_cones(A: np.ndarray, b: np.ndarray, dw: np.ndarray, cones: list[np.n
 def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                     W: dict[str, np.ndarray], stance: dict[str, np.ndarray],
                     frames: dict[str, str], base_idx: np.ndarray,
-                    contacts: dict[str, SoleContact] | None = None
+                    contacts: dict[str, SoleContact] | None = None,
+                    targets: dict[str, np.ndarray] | None = None, half_angle: float = 0.0
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
     """The solution with its equality rows exact (see the module docstring).
 
@@ -122,6 +151,8 @@ def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a
         frames: each side's contact frame name; base_idx: the unactuated rows of ``v``.
         contacts: the soles (:class:`~gdimitate.contact.SoleContact`): the wrench correction
             keeps their cones (module docstring); ``None``: the plain least-norm one.
+        targets: with ``contacts``, the push directions kept ``{side: (T, 3)}`` (world, unit;
+            NaN rows: none) and ``half_angle`` [rad] the cone around them the audit allows.
 
     Returns:
         ``(q, v, a, W)``, new arrays.
@@ -131,5 +162,6 @@ def make_consistent(robot: Robot, t: np.ndarray, q: np.ndarray, v: np.ndarray, a
         q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
     v, a = _rebuild_derivatives(robot.model, np.asarray(t, float), q, np.asarray(v, float),
                                 np.asarray(a, float))
-    W = _correct_wrenches(robot, q, v, a, W, stance, frames, np.asarray(base_idx), contacts)
+    W = _correct_wrenches(robot, q, v, a, W, stance, frames, np.asarray(base_idx), contacts,
+                          targets, half_angle)
     return q, v, a, W

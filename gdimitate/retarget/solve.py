@@ -742,12 +742,14 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     var = c.knot.var
     args = (tg.t, Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T, wrenches_of(c, Z), tg.stance,
             {s: cs[s].frame for s in SIDES}, c.knot.base_idx)
+    target = tg.push if force in ("measured", "dynamics") else None
+    keep = dict(contacts=dict(cs), targets=target, half_angle=copts.cone_half_angle)
     if periodic:
         from .periodic import close_seam
 
-        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args, contacts=dict(cs))
+        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args, **keep)
     else:
-        q, v, a, W = make_consistent(imitator, *args, contacts=dict(cs))
+        q, v, a, W = make_consistent(imitator, *args, **keep)
     base = robot_motion(imitator, tg.t, q, tg.stance)
     motion = base.replace(v=v, a=a)
     push_r = None
@@ -762,7 +764,6 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
                      push_m=tg.push, push_r=push_r)
     from ..audit import audit
 
-    target = tg.push if force in ("measured", "dynamics") else None
     aud = audit(limited_robot(imitator, num.lim), motion, W, cs, target=target,
                 cone_half_angle=copts.cone_half_angle)
     if periodic:
