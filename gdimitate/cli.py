@@ -257,7 +257,8 @@ def _cmd_walk(a: argparse.Namespace) -> int:
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)
         return walk_command(out, _demonstration(a.demonstration, a), _robot(a.imitator, a),
-                            a.steps, a.gain, html=not a.no_html, rate=a.rate)
+                            a.steps, a.gain, html=not a.no_html,
+                            **({} if a.rate is None else {"rate": a.rate}))
 
 
 def _cmd_view(a: argparse.Namespace) -> int:
@@ -559,15 +560,14 @@ def _add_walk(sub) -> None:
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the robot fell, fewer steps "
                                "than asked, or the cycle is not feasible")
     _add_demonstration_args(wk, "demonstration", "the shipped real 3-D walk")
-    _add_robot_args(wk, "--imitator", WALK_IMITATOR, "imitator robot (a robot whose periodic "
-                    "cycle of the shipped walk the audit passes and MuJoCo walks; G1's and "
-                    "Talos's do not yet)")
+    _add_robot_args(wk, "--imitator", WALK_IMITATOR, "imitator robot")
     wk.add_argument("--steps", type=int, default=20, help="steps to walk (default: %(default)s)")
     wk.add_argument("--gain", type=float, default=0.5,
                     help="feedback gain of the ground into the network (0: open loop) "
                          "(default: %(default)s)")
-    wk.add_argument("--rate", type=float, default=30.0,
-                    help="knots per second of the cycle's optimal solve (default: %(default)s)")
+    wk.add_argument("--rate", type=float, default=None,
+                    help="knots per second of the cycle's optimal solve (default: "
+                         "gdimitate.walk.WALK_RATE)")
     wk.add_argument("--no-html", action="store_true", help="skip walk.html")
     wk.add_argument("--out", default="gdimitate-walk", help="output folder (default: %(default)s)")
     wk.set_defaults(func=_cmd_walk)

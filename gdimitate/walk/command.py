@@ -3,21 +3,22 @@ out of :mod:`gdimitate.cli` (which only parses)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..robot import Robot
 from ..verdict import EXIT_NOT_FEASIBLE
+from . import WALK_RATE
 
 __all__ = ["walk_command"]
 
 
 def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html: bool = True,
-                 log=print, rate: float = 30.0) -> int:
+                 log=print, rate: float = WALK_RATE) -> int:
     """Write a walk into ``out`` (``demo``: a loaded demonstration with ``robot``,
     ``motion``, ``forces``, or None for the shipped 3-D walk); exit status 0 when it walked
     every step with a feasible cycle, :data:`~gdimitate.verdict.EXIT_NOT_FEASIBLE` otherwise.
-    ``rate`` [knots/s]: the cycle's knot rate (G1's solve at 30 spends its iteration budget
-    on the current adaptor and fails the audit; at 25 the audit passes)."""
+    ``rate`` [knots/s]: the cycle's knot rate (default :data:`~gdimitate.walk.WALK_RATE`)."""
     from . import periodic_cycle, walk
 
     if demo is None:
@@ -44,6 +45,10 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
         + (f"; FELL at {d['fell_at_s']:.2f} s" if d["fell"] else "")
         + f"; stride frequency {d['frequency_hz']:.4f} Hz (cycle {d['cycle_frequency_hz']:.4f})"
         + (f"; push RMS vs measured per step max {max(rmse):.2f}°" if rmse else ""))
+    planned = math.hypot(*d["stride_m"][:2])
+    log(f"stride {d['simulated_stride_m']:.3f} m per cycle simulated, {planned:.3f} m "
+        f"planned, {d['scaled_stride_m']:.3f} m the demonstrator's scaled to the legs: ratio "
+        f"{d['simulated_stride_ratio']:.2f} (plan {d['plan_stride_ratio']:.2f})")
     log(f"wrote {out}/" + ", ".join(files))
     ok = cycle.feasible and not d["fell"] and d["steps_completed"] >= steps
     if not ok:

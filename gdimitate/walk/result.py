@@ -74,6 +74,31 @@ class WalkResult:
         b, ts = self.bounds, self.step_times()
         return [float((b[i + 1] - b[i]) / (ts[i + 1] - ts[i])) for i in range(len(ts) - 1)]
 
+    def simulated_stride(self) -> float:
+        """[m] the simulated base's horizontal travel along the plan's stride direction per
+        cycle of the network's phase, from the first to the last completed step boundary
+        (NaN before one step is completed)."""
+        ts, b = self.step_times(), self.bounds
+        if len(ts) < 2:
+            return float("nan")
+        tr = self.trace
+        i0, i1 = (int(np.argmax(tr.t >= t)) for t in (ts[0], ts[-1]))
+        d = np.asarray(self.reference.stride[:2], float)
+        if self.robot.base == "free":
+            moved = tr.q[i1, :2] - tr.q[i0, :2]
+            along = float(moved @ d / np.linalg.norm(d)) if np.linalg.norm(d) > 0 else 0.0
+        else:
+            ix = self.robot.idx_q("base_x")
+            along = float(tr.q[i1, ix] - tr.q[i0, ix])
+        return along / float(b[len(ts) - 1] - b[0])
+
+    def scaled_stride(self) -> float:
+        """[m] the demonstrator's stride scaled to the robot's legs (the cycle's gait
+        comparison: its travel over the one-stride clip × the leg-length ratio; NaN for a
+        cycle without one)."""
+        g = self.cycle.gait
+        return float(g.travel_demo) if g is not None else float("nan")
+
     def force_rmse_deg(self) -> list[float]:
         """Per completed step: the RMS force-direction angle [deg] (module docstring); NaN
         for a step without a comparable sample (or without measured forces)."""
@@ -143,6 +168,11 @@ class WalkResult:
             "cycle_feasible": bool(self.cycle.feasible),
             "cycle_period_s": float(self.reference.period),
             "stride_m": [float(x) for x in self.reference.stride],
+            "scaled_stride_m": self.scaled_stride(),
+            "plan_stride_ratio": (float(self.cycle.gait.travel_ratio)
+                                  if self.cycle.gait is not None else float("nan")),
+            "simulated_stride_m": self.simulated_stride(),
+            "simulated_stride_ratio": self.simulated_stride() / self.scaled_stride(),
             "simulated_s": t_end,
         }
 
