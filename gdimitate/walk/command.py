@@ -32,6 +32,10 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
     cycle, forces = periodic_cycle(args[0], args[1], imitator, forces, rate)
     why = "feasible" if cycle.feasible else "NOT feasible: " + ", ".join(cycle.audit.binding[:4])
     log(f"      audit: {why}")
+    from ..verdict import gait_lines
+
+    for line in gait_lines(cycle):  # the cycle's stride against the scaled one; what binds
+        log(f"      {line}")
     if not cycle.feasible:
         log("      the walk follows this cycle as it is: MuJoCo shows whether the robot still "
             "walks it, but the cycle itself breaks the limits above")

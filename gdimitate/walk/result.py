@@ -173,6 +173,8 @@ class WalkResult:
                                   if self.cycle.gait is not None else float("nan")),
             "simulated_stride_m": self.simulated_stride(),
             "simulated_stride_ratio": self.simulated_stride() / self.scaled_stride(),
+            "cycle_gait": (self.cycle.gait.to_dict() if self.cycle.gait is not None
+                           else None),
             "simulated_s": t_end,
         }
 
