@@ -25,7 +25,7 @@ def _axis(robot, joint):
 @pytest.mark.parametrize("name", ["talos", "g1", "icub", "hoap2"])
 def test_planar_preset_signs_follow_the_leg_conventions(robot, name):
     d, i = robot("case1_demonstrator"), robot(name)
-    with pytest.warns(UnmappedJointsWarning) if name != "hoap2" else _nowarn():
+    with _nowarn():  # the planar demonstrator has legs only: the arms have nothing to follow
         bm = body_map(d, i)
     for s in ("left", "right"):
         dl, il = d.legs[s], i.legs[s]
@@ -50,6 +50,38 @@ class _nowarn:
     def __exit__(self, *exc):
         self._c.__exit__(*exc)
         return False
+
+
+def test_preset_warns_only_where_the_demonstrator_has_joints_left_over(robot):
+    """Issue 34: every G1 run warned about its 14 arm joints, which the shipped walk's model
+    (no arms) cannot drive. A preset now warns about an imitator joint only where the
+    demonstrator has a joint the preset left unmapped in the same body region (legs, each
+    side's arm, the middle): G1 and iCub none; Talos its head (the model's lumbar bending and
+    rotation are left over in the middle); every held joint is still listed by held()."""
+    from gdimitate import gait
+
+    human = gait.human_walk_3d()[0]
+    for name, warned in (("g1", None), ("icub", None),
+                         ("talos", {"head_1_joint", "head_2_joint"})):
+        imit = robot(name)
+        import warnings
+
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always", UnmappedJointsWarning)
+            bm = body_map(human, imit)
+        msgs = [str(w.message) for w in got if issubclass(w.category, UnmappedJointsWarning)]
+        if warned is None:
+            assert not msgs, msgs
+        else:
+            assert len(msgs) == 1
+            assert set(msgs[0].rsplit(": ", 1)[1].split(", ")) == warned
+        held = bm.held(imit)
+        mapped = {b for b, _, _ in bm.joints.values()}
+        assert not set(held) & mapped
+        assert len(held) + len(mapped) == len([j for j in imit.joint_names
+                                               if imit.model.joints[
+                                                   imit.model.getJointId(j)].nq == 1])
+    assert len(body_map(human, robot("g1")).held(robot("g1"))) == 14
 
 
 def test_user_maps_dict_and_json(robot, tmp_path):

@@ -226,9 +226,21 @@ class BodyMap:
                                     '{"joints": {...}, "segments": {...}}')
         return cls.from_dict(d, name=p.stem)
 
-    def validate(self, demonstrator: Robot, imitator: Robot) -> BodyMap:
+    def held(self, imitator: Robot) -> list[str]:
+        """The imitator's 1-DoF joints no demonstrator joint drives: held near its rest
+        pose."""
+        mapped = {b for b, _, _ in self.joints.values()}
+        return [j for j in _one_dof(imitator) if j not in mapped]
+
+    def validate(self, demonstrator: Robot, imitator: Robot, preset: bool = False
+                 ) -> BodyMap:
         """Check every name against the robots (:class:`UnknownNameError` lists the valid
-        ones) and warn (:class:`UnmappedJointsWarning`) about imitator joints left unmapped."""
+        ones) and warn (:class:`UnmappedJointsWarning`) about imitator joints left unmapped
+        that the user could map: with a user's map every one; with a preset (``preset``)
+        those in a limb (left leg, right leg, the rest) where the demonstrator has a joint
+        the preset left unmapped — the shipped walk's model has no arms, so G1's 14 arm
+        joints have nothing to follow and are held without a warning (:meth:`held` lists
+        them)."""
         for a, (b, _, _) in self.joints.items():
             for robot, name in ((demonstrator, a), (imitator, b)):
                 if not robot.model.existJointName(name):
@@ -242,16 +254,22 @@ class BodyMap:
                 if not robot.model.existFrame(name):
                     raise UnknownNameError(f"frame of {robot.name}", name,
                                            [f.name for f in robot.model.frames])
-        mapped = {b for b, _, _ in self.joints.values()}
-        act = [j for j in imitator.joint_names
-               if imitator.model.joints[imitator.model.getJointId(j)].nq == 1
-               and not j.startswith("base_")]
-        missing = [j for j in act if j not in mapped]
+        act = _one_dof(imitator)
+        missing = self.held(imitator)
+        if preset:  # only where the demonstrator has a joint left over in the same limb
+            spare = {_limb(demonstrator, j) for j in _one_dof(demonstrator)
+                     if j not in self.joints}
+            missing = [j for j in missing if _limb(imitator, j) in spare]
         if missing:
+            held = len(self.held(imitator))
+            why = ("" if not preset else
+                   f" although the demonstrator has unmapped joints in the same body region "
+                   f"(map them with body_map=; {held} of {len(act)} are held in all, the "
+                   "rest where the demonstrator has nothing to follow)")
             warnings.warn(f"body map {self.name!r}: {len(missing)} of {len(act)} actuated "
-                          f"joints of {imitator.name} have no demonstrator joint and are held "
-                          f"near its rest pose: {', '.join(missing)}", UnmappedJointsWarning,
-                          stacklevel=3)
+                          f"joints of {imitator.name} have no demonstrator joint{why} and are "
+                          f"held near its rest pose: {', '.join(missing)}",
+                          UnmappedJointsWarning, stacklevel=3)
         return self
 
 
@@ -276,7 +294,41 @@ def body_map(demonstrator: Robot, imitator: Robot, user: BodyMap | Mapping | str
             f"no body-map preset pairs {demonstrator.name!r} with {imitator.name!r} (naming "
             f"families {fd!r}, {fi!r}; presets: {', '.join(_FAMILIES)}): pass body_map= as a "
             "dict {'joints': {...}, 'segments': {...}} or a JSON file")
-    return BodyMap(joints, segs, name).validate(demonstrator, imitator)
+    return BodyMap(joints, segs, name).validate(demonstrator, imitator, preset=True)
+
+
+def _one_dof(robot: Robot) -> list[str]:
+    """The robot's 1-DoF joints (not the planar base's)."""
+    m = robot.model
+    return [j for j in robot.joint_names
+            if m.joints[m.getJointId(j)].nq == 1 and not j.startswith("base_")]
+
+
+def _limb(robot: Robot, joint: str) -> str:
+    """The body region of a joint: ``"left"``/``"right"`` for a joint in that leg (its hip
+    joint's subtree); else the branch it hangs on (up its parents to the first joint whose
+    parent has several children or is the base) by where that branch starts at the neutral
+    pose, in the base frame: ``"upper_left"``/``"upper_right"`` more than a tenth of a leg
+    length to a side (an arm), ``"middle"`` otherwise (trunk, head)."""
+    m = robot.model
+    jid = m.getJointId(joint)
+    legs = getattr(robot, "legs", {}) or {}
+    for side, leg in legs.items():
+        if leg.hip and m.existJointName(leg.hip) and jid in m.subtrees[m.getJointId(leg.hip)]:
+            return side
+    base = {m.getJointId(n) for n in robot.joint_names if n.startswith("base_")} | {0, 1} \
+        if robot.base == "free" else {0} | {m.getJointId(n) for n in robot.joint_names
+                                             if n.startswith("base_")}
+    children = np.bincount([m.parents[k] for k in range(1, m.njoints)], minlength=m.njoints)
+    start = jid
+    while m.parents[start] not in base and children[m.parents[start]] < 2:
+        start = m.parents[start]
+    d = robot.data
+    pin.forwardKinematics(m, d, robot.neutral)
+    root = d.oMi[max(base)] if max(base) > 0 else pin.SE3.Identity()
+    y = float(root.actInv(d.oMi[start]).translation[1])
+    length = float(np.mean([leg.length for leg in legs.values()])) if legs else 1.0
+    return "middle" if abs(y) <= 0.1 * length else ("upper_left" if y > 0 else "upper_right")
 
 
 def arms_down(robot: Robot, family: str | None = None) -> np.ndarray:

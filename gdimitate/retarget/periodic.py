@@ -104,16 +104,16 @@ def close_seam(robot: Robot, demonstrator: Robot, demo_q: np.ndarray, t: np.ndar
     ``(T, nq_demo)`` gives the walking direction; ``contacts``, ``targets``, ``half_angle``:
     the soles' cones and the push directions the wrench corrections keep
     (:func:`~.polish.make_consistent`). Returns ``(q, v, a, W)``."""
-    keep = dict(contacts=contacts, targets=targets, half_angle=half_angle)
     q = np.array(q, float)
     q[-1] = shift_by_stride(robot, q[0], q[-1], walking_direction(demonstrator, demo_q))
-    q, v, a, W = make_consistent(robot, t, q, v, a, W, stance, frames, base_idx, **keep)
+    q, v, a, W = make_consistent(robot, t, q, v, a, W, stance, frames, base_idx, contacts,
+                                 targets, half_angle)
     v[0] = v[-1]
     a[0] = (v[1] - v[0]) / (t[1] - t[0])
     one = make_consistent(robot, t[:1], q[:1], v[:1], a[:1], {s: w[:1] for s, w in W.items()},
-                          {s: c[:1] for s, c in stance.items()}, frames, base_idx,
-                          **(keep | dict(targets=None if targets is None else
-                                         {s: x[:1] for s, x in targets.items()})))
+                          {s: c[:1] for s, c in stance.items()}, frames, base_idx, contacts,
+                          None if targets is None else {s: x[:1] for s, x in targets.items()},
+                          half_angle)
     a[-1] = a[0]
     for s in W:
         W[s][0] = one[3][s][0]

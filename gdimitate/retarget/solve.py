@@ -743,13 +743,15 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     args = (tg.t, Z[var["q"]].T, Z[var["v"]].T, Z[var["a"]].T, wrenches_of(c, Z), tg.stance,
             {s: cs[s].frame for s in SIDES}, c.knot.base_idx)
     target = tg.push if force in ("measured", "dynamics") else None
-    keep = dict(contacts=dict(cs), targets=target, half_angle=copts.cone_half_angle)
+    ha = float(copts.cone_half_angle)
     if periodic:
         from .periodic import close_seam
 
-        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args, **keep)
+        q, v, a, W = close_seam(imitator, demonstrator, tg.demo.q, *args, contacts=dict(cs),
+                                targets=target, half_angle=ha)
     else:
-        q, v, a, W = make_consistent(imitator, *args, **keep)
+        q, v, a, W = make_consistent(imitator, *args, contacts=dict(cs), targets=target,
+                                     half_angle=ha)
     base = robot_motion(imitator, tg.t, q, tg.stance)
     motion = base.replace(v=v, a=a)
     push_r = None
