@@ -152,7 +152,9 @@ def test_adapt_entrain_view_default_to_the_demos_walk_and_g1(tmp_path, capsys):
     assert sub["view"].get_default("imitator") == "g1"
     assert sub["entrain"].get_default("robot") == "g1"
     assert sub["demo"].get_default("imitator") == "g1"
-    assert sub["walk"].get_default("imitator") == "hoap2"  # a cycle that is feasible and walks
+    # walk's default is the story's robot again: G1's periodic cycle at walk.WALK_RATE is
+    # audit-feasible and walks 20 steps (tests/test_walk.py); HOAP-2's stride was 0.27 scaled.
+    assert sub["walk"].get_default("imitator") == "g1"
     robot, stride, forces = default_demonstration()
     c = stride.contact["right"]
     assert c[0] and c[-1] and not c[-2]  # heel strike to heel strike
