@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import signal
 import sys
@@ -226,7 +227,7 @@ def _force_goal(given: str | None, method: str, forces) -> str:
 
 
 def _cmd_adapt(a: argparse.Namespace) -> int:
-    from .verdict import gait_lines, solver_record, verdict
+    from .verdict import push_errors, report_lines, solver_record, verdict
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
@@ -239,16 +240,32 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
         report = {**result.report.to_dict(), "verdict": v.to_dict(),
                   "audit": result.audit.to_dict() if result.audit is not None else None,
                   "solver": solver_record(result.solver),
-                  "gait": result.gait.to_dict() if result.gait is not None else None}
+                  "gait": result.gait.to_dict() if result.gait is not None else None,
+                  "push_direction_error": {s: {"rad": e, "knot": k, "measure": m} for s, (
+                      e, k, m) in push_errors(result).items()}}
+        text = json.dumps(report, indent=2, default=str)
         with atomic_write(out / "report.json") as tmp:
-            tmp.write_text(json.dumps(report, indent=2, default=str))
-    r = result.report
+            tmp.write_text(text)
     print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json")
-    for line in v.lines() + gait_lines(result):
+    written = json.loads(text)  # the console prints the file's numbers
+    for line in report_lines(written) + _error_lines(written):
         print(f"  {line}")
-    print(f"  force-direction error max {r.force_direction_error_max:.3g} rad, joint-limit "
-          f"violation max {r.joint_limit_violation_max:.3g} rad")
     return v.exit_status
+
+
+def _error_lines(report: dict) -> list[str]:
+    """adapt's last line, from report.json's numbers: the largest push-direction error
+    (:func:`gdimitate.verdict.push_errors`: the audit's angle where it measured the push, else
+    the report's sagittal one) with its side and knot, and the largest position-limit
+    excursion."""
+    push = report["push_direction_error"]
+    worst = max(push, key=lambda s: push[s]["rad"], default=None)
+    said = "push-direction error: none measured" if worst is None else (
+        f"push-direction error max {push[worst]['rad']:.3g} rad "
+        f"({math.degrees(push[worst]['rad']):.1f}°, {worst}, knot {push[worst]['knot']}, "
+        f"{push[worst]['measure']})")
+    return [f"{said}; joint-limit violation max {report['joint_limit_violation_max_rad']:.3g} "
+            "rad"]
 
 
 def _cmd_walk(a: argparse.Namespace) -> int:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["EXIT_NOT_FEASIBLE", "Verdict", "solver_record", "verdict", "gait_lines",
-           "limits_at_bound"]
+           "limits_at_bound", "push_errors", "report_lines", "written_gait_lines"]
 
 #: Exit status of a command whose result was written but is not feasible, or whose goal (an
 #: optimiser row, a replay check, a simulation that fell) is unmet.
@@ -30,7 +30,8 @@ class Verdict:
     failed, most violated first (the audit's ``binding``; for the kinematic methods the
     unreachable frames and violated limits); ``unmet``: ``(name, violation, knot)`` of each
     goal the optimiser's least-infeasible fallback leaves unmet (violation in the row's own
-    scaled units); ``solver``: the solver's record (:func:`solver_record`) or None;
+    scaled units; a push direction's in radians, :func:`push_errors`); ``solver``: the
+    solver's record (:func:`solver_record`) or None;
     ``reasons``: each failed check as the judge measured it, ``"name value unit > bound at
     knot k"`` (the audit's numbers: what the console prints as the reason)."""
 
@@ -71,6 +72,14 @@ class Verdict:
             out.append(f"result written, but {why}: exit status {EXIT_NOT_FEASIBLE}")
         return out
 
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], solver: dict[str, Any] | None) -> Verdict:
+        """The verdict written by :meth:`to_dict`, with the solver's record written beside it
+        (a report's ``solver``): what a console renders from a written report."""
+        return cls(bool(d["feasible"]), d["judge"], tuple(d["failed"]),
+                   tuple((u["name"], _num(u["violation"]), int(u["knot"])) for u in d["unmet"]),
+                   solver, tuple(d.get("reasons", ())))
+
     def unmet_texts(self) -> list[str]:
         """Each unmet goal as every output prints it: ``"name off by v unit at knot k"``."""
         return [f"{n} off by {v:.3g}{_unit(n, v)} at knot {k}" for n, v, k in self.unmet]
@@ -81,6 +90,38 @@ class Verdict:
         return {"feasible": self.feasible, "ok": self.ok, "judge": self.judge,
                 "failed": list(self.failed), "reasons": list(self.reasons),
                 "unmet": [{"name": n, "violation": v, "knot": k} for n, v, k in self.unmet]}
+
+
+def push_errors(result: Any) -> dict[str, tuple[float, int, str]]:
+    """Each foot's largest push-direction error, the one definition every output prints:
+    ``{side: (angle [rad], knot, measure)}`` — the audit's (``measure`` ``"audit"``: the angle
+    between the push of the output's wrenches and its target, :class:`~gdimitate.audit.report.
+    ForceDirectionAudit`) where it measured one (the measured and dynamics models), else the
+    adaptation report's (``"sagittal"``: the force model's sagittal angle, imitator −
+    demonstrator, :attr:`~gdimitate.result.AdaptationReport.force_direction_error`); a side
+    with neither is left out."""
+    out: dict[str, tuple[float, int, str]] = {}
+    aud = getattr(result, "audit", None)
+    for s, fd in (aud.force_direction_error.items() if aud is not None else ()):
+        if fd is not None and fd.knots > 0 and np.isfinite(fd.error_max):
+            out[s] = (float(fd.error_max), int(fd.knot), "audit")
+    rep = getattr(result, "report", None)
+    for s, e in (rep.force_direction_error.items() if rep is not None else ()):
+        a = np.abs(np.asarray(e, dtype=float))
+        if s not in out and np.isfinite(a).any():
+            k = int(np.nanargmax(a))
+            out[s] = (float(a[k]), k, "sagittal")
+    return out
+
+
+def _measured(name: str, violation: float, knot: int,
+              push: dict[str, tuple[float, int, str]]) -> tuple[str, float, int]:
+    """An unmet solver row as said: a push direction by :func:`push_errors`' angle and knot,
+    any other row by its own scaled violation."""
+    head, _, side = name.partition(": ")
+    if head == "force direction" and side in push:
+        return name, push[side][0], push[side][1]
+    return name, float(violation), int(knot)
 
 
 def _as_check(row: str) -> str:
@@ -127,9 +168,14 @@ def verdict(result: Any) -> Verdict:
     method, Eq. (1)'s reachability and the position limits for the kinematic ones; plus the
     solver's unmet goals that the judge does not measure itself. A goal the audit checks (the
     push direction against its target, ``force_direction:<side>``) is judged by the audit's
-    value and bound alone: the solver's scaled row violation is not a second number for it."""
+    value and bound alone: the solver's scaled row violation is not a second number for it.
+    An unmet push direction the audit does not check (the segment and com models) is said by
+    the output's own angle (:func:`push_errors`), not by the solver's row (the sine of that
+    angle, or a force component over m·g)."""
     solver = solver_record(getattr(result, "solver", None))
-    unmet = tuple((u["name"], u["violation"], u["knot"]) for u in (solver or {}).get("unmet", ()))
+    push = push_errors(result)
+    unmet = tuple(_measured(u["name"], u["violation"], u["knot"], push)
+                  for u in (solver or {}).get("unmet", ()))
     aud = getattr(result, "audit", None)
     if aud is not None:
         checked = {c.name for c in aud.checks}
@@ -177,3 +223,46 @@ def gait_lines(result: Any) -> list[str]:
         out.append("limits at their bound: " + (", ".join(lim[:6]) + (
             f" (and {len(lim) - 6} more)" if len(lim) > 6 else "") if lim else "none"))
     return out
+
+
+def _num(x: Any) -> float:
+    """A number of a written report (``None``: NaN or infinite in the run) as a float."""
+    return float("nan") if x is None else float(x)
+
+
+def written_gait_lines(report: dict[str, Any]) -> list[str]:
+    """:func:`gait_lines` rendered from a written report's ``gait``
+    (:meth:`gdimitate.footsteps.GaitComparison.to_dict`) and ``audit`` (its joints)."""
+    from types import SimpleNamespace
+
+    from .footsteps import GaitComparison, Step
+
+    g = report.get("gait")
+    if g is None:
+        return []
+
+    def steps(rows) -> tuple[Step, ...]:
+        return tuple(Step(r["side"], -1, _num(r["t_s"]), _num(r["length_m"]),
+                          _num(r["width_m"]), _num(r["stride_m"]), _num(r["duration_s"]))
+                     for r in rows)
+
+    gait = GaitComparison(
+        scaling=g["scaling"], ratio=_num(g["leg_ratio"]), time_scale=_num(g["time_scale"]),
+        demo=steps(g["steps_demo_scaled"]), imitator=steps(g["steps"]),
+        travel_demo=_num(g["travel_demo_scaled_m"]), travel=_num(g["travel_m"]),
+        duration_demo=_num(g["duration_demo_scaled_s"]), duration=_num(g["duration_s"]))
+    aud = report.get("audit")
+    joints = [SimpleNamespace(name=j["name"], torque_ratio=_num(j["torque_ratio"]),
+                              velocity_ratio=_num(j["velocity_ratio"]),
+                              position_margin=_num(j["position_margin"]))
+              for j in (aud or {}).get("joints", ())]
+    return gait_lines(SimpleNamespace(gait=gait, audit=None if aud is None else
+                                      SimpleNamespace(joints=joints)))
+
+
+def report_lines(report: dict[str, Any]) -> list[str]:
+    """The verdict's and the gait's console lines rendered from a written report (its
+    ``verdict``, ``solver``, ``gait`` and ``audit``): what ``gdimitate adapt`` prints, each
+    number as the file holds it."""
+    v = Verdict.from_dict(report["verdict"], report.get("solver"))
+    return v.lines() + written_gait_lines(report)
