@@ -2,7 +2,7 @@
 variants of it, onto several robots, judged by the audit and the gait's travel ratio.
 
 Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu]
-[--variants asis,turn90,turn180,turn-137,rate30,rate60,rate240,trim,noise]
+[--variants asis,turn90,turn180,turn-137,rate30,rate60,rate240,trim,mirror,noise]
 [--scaling geometric|froude] [--simulate] [--baseline-rev REV] [--baseline-robots g1]``.
 
 Clips: ``stride`` — one right stride of the shipped 3-D OpenSim walk (measured forces, the
@@ -11,7 +11,8 @@ push goal ``measured``); ``whole`` — the whole 3.5-s clip; ``cmu`` — the shi
 clip's motion (and forces) before the adaptor sees it: ``asis``; ``turnD`` — turned by D
 degrees about the vertical through its first base position; ``rateR`` — resampled to R Hz
 (linear interpolation, quaternions renormalised, contacts of the nearest frame); ``trim`` —
-0.3 s cut from each end (it starts and ends mid-stride); ``noise`` — 5 mm on the base
+0.3 s cut from each end (it starts and ends mid-stride); ``mirror`` — mirrored left to
+right (``gdimitate.mirror``: the walk led by the other foot); ``noise`` — 5 mm on the base
 position and 0.01 rad on every joint angle, white, seed 0 (mocap noise; the contacts as
 recorded). Each case runs in its own Python process with its own timer (CPU seconds of the
 adaptation, derivatives already compiled). The travel ratio is computed here from the
@@ -99,6 +100,10 @@ _CHILD = textwrap.dedent("""
     elif variant == "trim":
         n = int(round(0.3 / np.median(np.diff(demo.t))))
         demo, fs = cut(demo, fs, n, demo.T - n)
+    elif variant == "mirror":
+        from gdimitate.mirror import mirror_forces, mirror_motion
+        demo = mirror_motion(h, demo)
+        fs = None if fs is None else mirror_forces(fs)
     elif variant == "noise":
         rng = np.random.default_rng(0)
         q = demo.q.copy()
@@ -163,7 +168,7 @@ def main() -> None:
     ap.add_argument("--robots", default="g1,talos,icub,romeo")
     ap.add_argument("--clips", default="stride,whole,cmu")
     ap.add_argument("--variants", default="asis,turn90,turn180,turn-137,rate30,rate60,"
-                                          "rate240,trim,noise")
+                                          "rate240,trim,mirror,noise")
     ap.add_argument("--baseline-rev", default=None,
                     help="a git revision run the same way on --baseline-robots")
     ap.add_argument("--baseline-robots", default="g1")

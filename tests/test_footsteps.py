@@ -119,6 +119,33 @@ def test_the_adapted_stride_covers_the_scaled_distance(walk, robot):
     assert all(s in SIDES for s in (x.side for x in g.imitator))
 
 
+@pytest.mark.slow
+def test_a_clip_cut_mid_stride_covers_the_scaled_distance(walk, robot):
+    """The stride cut 0.3 s at each end — it starts and ends in single support, with one
+    double support between — → G1: audit-feasible and travelling 0.8–1.25 of the
+    demonstrator's distance × r. With the steps cost alone (which acts in double support
+    only) it travelled 0.36: the body started slow and ended 0.2 m behind its stance foot;
+    the body-over-feet cost (retarget/parts/over_feet.py) carries it."""
+    from gdimitate.contact import ContactForces, FootForces
+
+    h, m, f = walk
+    stride, fs = gd.gait.one_stride(m, f)
+    n = int(round(0.3 / np.median(np.diff(stride.t))))
+    cut = slice(n, stride.T - n)
+    clip = stride.replace(t=stride.t[cut], q=stride.q[cut], v=None, a=None,
+                          contact={s: np.asarray(c)[cut] for s, c in stride.contact.items()})
+    forces = ContactForces(fs.t[cut], {s: FootForces(v.force[cut], v.cop[cut], v.torque[cut],
+                                                     v.contact[cut])
+                                       for s, v in fs.feet.items()}, fs.source)
+    assert all(clip.contact[s][0] != clip.contact[s][-1] for s in SIDES)  # single support
+    r = gd.adapt(clip, h, robot("g1"), force="measured", forces=forces, verbose=False)
+    assert r.audit.feasible
+    own = np.hypot(*(r.motion.q[-1, :2] - r.motion.q[0, :2]))
+    demo = np.hypot(*(clip.q[-1, :2] - clip.q[0, :2]))
+    assert r.gait.travel_ratio == pytest.approx(own / (demo * r.gait.ratio), rel=1e-12)
+    assert 0.8 <= r.gait.travel_ratio <= 1.25
+
+
 def test_unknown_gait_scaling_is_refused(walk, robot):
     """A scaling that is not one of SCALINGS is named with the valid ones, before any work;
     Froude scaling needs the trajectory mode."""

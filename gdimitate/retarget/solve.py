@@ -28,7 +28,7 @@ from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
 from .knot import Flags
 from .params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
-from .parts import Bound, ForceDirection, Steps, default_parts, liftoff_knots
+from .parts import Bound, ForceDirection, OverFeet, Steps, default_parts, liftoff_knots
 from .parts.body import body_parts
 from .polish import make_consistent
 from .stopping import MU_TOL, PLATEAU, Plateau
@@ -624,7 +624,8 @@ def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, pa
     """The :class:`~.problem.Formulation` of an imitator under a force model, contact options
     and body map (``parts``: a list of parts instead of :func:`~.parts.default_parts`, the
     robot's :func:`~.parts.body.body_parts` and, for a free-flying imitator, the gait's
-    :class:`~.parts.Steps`; ``periodic``: with the :class:`~.parts.periodic.PeriodicSeam`)."""
+    :class:`~.parts.Steps` and :class:`~.parts.OverFeet`; ``periodic``: with the
+    :class:`~.parts.periodic.PeriodicSeam`)."""
     flags = Flags(goal="force" if force in ("measured", "dynamics") else force,
                   cone=copts.cone_half_angle > 0, segments=len(bmap.segments))
     q_index = tuple(int(imitator.idx_q(j)) for j in act_names)
@@ -632,7 +633,7 @@ def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, pa
         parts = (default_parts(tuple(bmap.segments.values()), q_index)
                  + body_parts(imitator, act_names))
         if imitator.base == "free":  # the gait in 3-D; the planar corner is the paper's
-            parts = parts + (Steps(),)
+            parts = parts + (Steps(), OverFeet())
     if periodic:
         from .parts.periodic import PeriodicSeam
 

@@ -15,6 +15,7 @@ from .force import ForceDirection
 from .height import Height
 from .integration import Integration
 from .joints import Joints
+from .over_feet import OverFeet
 from .placement import Placement
 from .quaternion import QuaternionNorm
 from .segments import Segments
@@ -29,7 +30,7 @@ from .wrench import WrenchRegularisation
 __all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Bound", "Spec", "per_side_labels",
            "default_parts", "BaseDynamics", "TorqueLimits", "FlatContact", "ContactHold",
            "WrenchCone", "SwingClearance", "ForceDirection", "Integration", "QuaternionNorm",
-           "Height", "Placement", "Shank", "Thigh", "Foot", "Segments", "Joints",
+           "Height", "OverFeet", "Placement", "Shank", "Thigh", "Foot", "Segments", "Joints",
            "Smoothness", "Steps", "WrenchRegularisation", "liftoff_knots", "velocity_knots"]
 
 

@@ -51,5 +51,10 @@ class Steps(Cost):
     def residual(self, k):
         L = float(np.mean([k.leg[s].length for s in SIDES]))
         e = (k.sole_p["left"][:2] - k.sole_p["right"][:2]) / L - k.P("steps")
-        # e / (1 + (e/δ)²)^¼: e for |e| ≪ δ, its square grows like δ·|e| beyond δ
-        return k.P("steps_on")[0] * e / (1 + (e / DELTA) ** 2) ** 0.25
+        return k.P("steps_on")[0] * bounded(e)
+
+
+def bounded(e):
+    """``e / (1 + (e/δ)²)^¼`` (δ = :data:`DELTA`): ``e`` for ``|e| ≪ δ``, its square grows
+    like ``δ·|e|`` beyond δ, so that a weight's pull on ``e`` stays below ``1.1·w·δ``."""
+    return e / (1 + (e / DELTA) ** 2) ** 0.25

@@ -1,0 +1,65 @@
+"""Gait cost: the body carried over its feet as the demonstrator carries it (docs/design.md
+§13). At every knot with a stance foot, the horizontal place of the hips' midpoint relative to
+the stance soles (their mean in double support), along the demonstrator's facing there, over
+the imitator's leg length, minus the same of the demonstrator relative to its footprints
+(:func:`gdimitate.footsteps.footprints`) over its leg length (parameters ``over_feet`` ``(1,)``
+the target, ``over_feet_dir`` ``(2,)`` the facing, ``over_feet_w`` ``(2,)`` the left and
+right soles' shares, ``over_feet_on`` ``(1,)``; weight ``over_feet``).
+
+:class:`~.steps.Steps` asks where the feet land relative to each other; this part asks where
+the body is over them, so that a clip that begins or ends in single support travels the
+scaled distance too (a stride trimmed 0.3 s at each end — one double support — travelled 0.36
+of it on G1 with the steps cost alone: the body started slow and ended 0.2 m behind its
+stance foot). Along the facing only: across it the imitator's own hip width decides. The
+residual enters bounded like the steps' (:func:`~.steps.bounded`), so that the push direction
+stays first."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...footsteps import footprints
+from ...heading import facing_yaw
+from ...kinematics import frame_paths
+from ...robot import SIDES
+from .base import Cost
+from .steps import bounded
+
+
+@dataclass(frozen=True)
+class OverFeet(Cost):
+    name: str = "over_feet"
+    weight: str = "over_feet"
+
+    def params(self, k):
+        return {"over_feet": 1, "over_feet_dir": 2, "over_feet_w": 2, "over_feet_on": 1}
+
+    def values(self, ctx):
+        tg, d = ctx.tg, ctx.demonstrator
+        L = float(np.mean([d.legs[s].length for s in SIDES]))
+        place = {s: np.full((tg.T, 2), np.nan) for s in SIDES}
+        for f in footprints(d, tg.demo, tg.stance):
+            place[f.side][f.start:f.stop] = f.xy
+        w = np.column_stack([np.isfinite(place[s][:, 0]) for s in SIDES]).astype(float)
+        n = w.sum(axis=1)
+        on = n > 0
+        w[on] /= n[on, None]
+        feet = sum(np.nan_to_num(place[s]) * w[:, [i]] for i, s in enumerate(SIDES))
+        hips = frame_paths(d, tg.demo.q, [d.legs[s].hip for s in SIDES])
+        mid = np.mean([hips[d.legs[s].hip][:, :2] for s in SIDES], axis=0)
+        yaw = (facing_yaw(tg.demo.q, d.base_rotation) if d.base == "free"
+               else np.zeros(tg.T))
+        e = np.column_stack([np.cos(yaw), np.sin(yaw)])
+        target = np.einsum("ij,ij->i", mid - feet, e) / L
+        return {"over_feet": np.where(on, target, 0.0)[:, None], "over_feet_dir": e,
+                "over_feet_w": w, "over_feet_on": on.astype(float)[:, None]}
+
+    def residual(self, k):
+        L = float(np.mean([k.leg[s].length for s in SIDES]))
+        w = k.P("over_feet_w")
+        mid = (k.hip["left"][:2] + k.hip["right"][:2]) / 2
+        feet = w[0] * k.sole_p["left"][:2] + w[1] * k.sole_p["right"][:2]
+        e = (k.P("over_feet_dir").T @ (mid - feet)) / L - k.P("over_feet")
+        return k.P("over_feet_on")[0] * bounded(e)
