@@ -6,6 +6,7 @@ import sys
 
 import numpy as np
 import pytest
+from printed import flat, numbers
 
 from gdimitate.cli import main
 from gdimitate.planar import eq1
@@ -34,6 +35,7 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     again = audit(g1, motion, read_wrenches(tmp_path / "imitator_motion.npz"))
     assert again.feasible == s["feasible"] is True, again.binding
     assert max(j.torque_ratio for j in again.joints if np.isfinite(j.torque_ratio)) <= 1.001
+    _demo_prints_its_summary(printed, s, tmp_path, again)
     assert not s["simulation"]["fell"] and s["simulation"]["slip_max_m"] <= 0.02
     assert s["joint_copy_simulation"]["fell"]  # the negative control
     from gdimitate.viz import network_references
@@ -47,6 +49,35 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
 
     res = SelfAdjustResult.from_dict(json.loads((tmp_path / "oscillator_params.json").read_text()))
     assert res.frequency == pytest.approx(s["cpg"]["learned_frequency_hz"])
+
+
+def _demo_prints_its_summary(printed: str, s: dict, out, again) -> None:
+    """Every number of the table `gdimitate demo` printed is summary.json's, formatted as
+    printed (the table is the one rendered from the file), and its audit figures — the
+    verdict, the worst |torque|/limit, each foot's smallest normal force — are those of the
+    audit recomputed from the written motion and wrenches (``again``); the CPG's frequency is
+    the written network's."""
+    from gdimitate.apps.demo import summary_rows, summary_table
+    from gdimitate.oscillator import SelfAdjustResult
+
+    table = summary_table(s, out)
+    assert table in printed
+    assert numbers(printed.split("[7/7] done.")[1]) == numbers(table)
+    rows = {k.strip(): v for k, v in summary_rows(s, out) if k}
+    worst = max(j.torque_ratio for j in again.joints if np.isfinite(j.torque_ratio))
+    assert rows["worst |torque|/limit"] == f"{worst:.2f}"
+    assert rows["min normal force [N]"] == ", ".join(
+        f"{side} {f.normal.value:.0f}" for side, f in again.feet.items())
+    assert rows["verdict"].startswith(f"audit (Pinocchio): "
+                                      f"{'feasible' if again.feasible else 'NOT feasible'}")
+    sol = s["solver"]
+    assert (f"solver: {sol['status']}, {sol['iterations']} iterations, {sol['time_s']:.1f} s"
+            in table)
+    net = SelfAdjustResult.from_dict(json.loads((out / "oscillator_params.json").read_text()))
+    assert rows["CPG frequency"].startswith(f"{net.frequency:.3f} Hz")
+    sim = s["simulation"]
+    assert f"slip {100 * sim['slip_max_m']:.1f} cm" in rows["simulation, plan"]
+    assert rows["elapsed"] == f"{s['elapsed_s']:.1f} s"
 
 
 def _renders_in_chromium(page, png) -> None:
@@ -129,7 +160,8 @@ def test_entrain_command(tmp_path, capsys):
     assert rep["robot"] == "hoap2" and 0.75 < rep["learned_frequency_hz"] < 0.87
     m = Motion.from_npz(tmp_path / "replay_motion.npz")
     assert m.t[-1] == pytest.approx(3.0, abs=0.02)
-    assert "left_knee" in capsys.readouterr().out
+    _entrain_prints_its_report(capsys.readouterr().out, tmp_path, Motion.from_npz(
+        tmp_path / "in.npz").T, m.t[-1])
     # the free-running replay stays in the taught range: the knee's span of the adapted walk
     # (Eq. (1), the input asked for above), ±10 % of that span
     taught = gd.adapt(walk, human, hoap2, "analytic").motion.column("left_knee")
@@ -143,6 +175,41 @@ def test_entrain_command(tmp_path, capsys):
     assert load_demonstration(tmp_path / "replay_motion.npz").robot.name == "hoap2"
 
 
+def _entrain_prints_its_report(printed: str, out, frames: int, replay_s: float) -> None:
+    """Every number `gdimitate entrain` printed is report.json's, formatted as printed, and the
+    replay check's numbers are those recomputed here from the written network
+    (oscillator_params.json): the frequency learned, each signal's nRMSE, teacher fit,
+    free-running frequency and amplitude ratio, the worst of them and the tolerances."""
+    from gdimitate.cpg import (
+        CHECK_STRIDES,
+        REPLAY_AMPLITUDE_TOL,
+        REPLAY_FREQUENCY_TOL,
+        replay_check,
+    )
+    from gdimitate.oscillator import SelfAdjustResult
+
+    rep = json.loads((out / "report.json").read_text())
+    chk = rep["replay_check"]
+    lines = [f"({frames} frames) and replaying {replay_s:.2f} s free",
+             f"learned frequency {rep['learned_frequency_hz']:.4f} Hz"]
+    for j, r in rep["per_joint"].items():
+        c = chk["signals"][j]
+        lines.append(f"{j} nRMSE entrained {r['nrmse_entrained'] * 100:5.2f} % teacher fit "
+                     f"{r['teacher_fit_nrmse'] * 100:5.2f} % free-running frequency "
+                     f"{c['frequency_hz']:.3f} Hz amplitude ratio {c['amplitude_ratio']:.2f}")
+    (fn, fe), (an, ar) = chk["worst_frequency"], chk["worst_amplitude"]
+    lines.append(f"({CHECK_STRIDES} strides): learned {chk['learned_frequency_hz']:.3f} Hz for "
+                 f"a {chk['target_frequency_hz']:.3f} Hz stride; off by at most {100 * fe:.1f} "
+                 f"% ({fn}); amplitude ratio {ar:.2f} ({an}) (tolerances "
+                 f"{100 * REPLAY_FREQUENCY_TOL:g} %, {100 * REPLAY_AMPLITUDE_TOL:g} %)")
+    assert numbers(printed.replace(str(out), "OUT")) == numbers("\n".join(lines))
+    assert ("passed" if chk["passed"] else "FAILED") in printed.splitlines()[-1]
+    again = replay_check(SelfAdjustResult.from_dict(
+        json.loads((out / "oscillator_params.json").read_text())))
+    assert again.learned_frequency_hz == rep["learned_frequency_hz"]
+    assert flat(again.to_dict()) == pytest.approx(flat(chk), rel=1e-9, abs=1e-12)
+
+
 def test_view_html_command(tmp_path):
     page = tmp_path / "case1.html"
     assert main(["view", "--example", "case-I", "--method", "analytic", "--html", str(page)]
@@ -153,6 +220,39 @@ def test_view_html_command(tmp_path):
     assert len(text) > 100_000 and not network_references(text)
     assert main(["view", "--example", "case-I", "--method", "analytic", "--html",
                  str(tmp_path / "no" / "x.html")]) == 2
+
+
+def test_view_prints_the_numbers_adapt_reports(tmp_path, capsys):
+    """One number, one definition (issue 34): `gdimitate view` of the shipped sagittal walk
+    copied onto HOAP-2 prints the verdict `gdimitate adapt` of the same walk writes in
+    report.json, number for number (each knee's excursion past its limit, as printed), and
+    those numbers are the ones recomputed here from the written motion and HOAP-2's position
+    limits in Pinocchio's model."""
+    import gdimitate as gd
+    from gdimitate.gait import human_walk_path
+
+    sag = human_walk_path()
+    assert main(["adapt", str(sag), "--grf", str(sag.parent / "walk_gait1018_subject01_grf.mot"),
+                 "--imitator", "hoap2", "--out", str(tmp_path / "a"), "--method", "copy"]) == 3
+    capsys.readouterr()
+    status = main(["view", "--example", "human-walk", "--method", "copy", "--html",
+                   str(tmp_path / "v.html")])
+    printed = capsys.readouterr().out
+    rep = json.loads((tmp_path / "a" / "report.json").read_text())
+    assert status == 3 and not rep["verdict"]["feasible"]
+    excess = sorted(rep["joint_limit_violation_rad"].items(), key=lambda kv: -kv[1])
+    expected = [f"{rep['verdict']['judge']}: NOT feasible; failed: " + "; ".join(
+        f"position:{j} exceeded by {v:.3g} rad" for j, v in excess), "exit status 3"]
+    assert numbers(printed.replace(str(tmp_path), "OUT")) == numbers("\n".join(expected))
+    assert expected[0] in printed
+    hoap2 = gd.Robot.from_library("hoap2")
+    motion = gd.Motion.from_npz(tmp_path / "a" / "imitator_motion.npz")
+    m = hoap2.model
+    for j, v in excess:
+        q, i = motion.column(j), hoap2.idx_q(j)
+        own = max(float(np.max(q - m.upperPositionLimit[i])),
+                  float(np.max(m.lowerPositionLimit[i] - q)))
+        assert own == pytest.approx(v, rel=1e-9)
 
 
 def test_simulate_command(tmp_path, capsys):

@@ -24,7 +24,8 @@ if TYPE_CHECKING:  # the command line reads DEFAULT_IMITATOR without loading Pin
     from ..robot import Robot
     from ..types import AdaptMethod
 
-__all__ = ["DEFAULT_IMITATOR", "WALK_IMITATOR", "default_demonstration", "run_demo"]
+__all__ = ["DEFAULT_IMITATOR", "WALK_IMITATOR", "default_demonstration", "run_demo",
+           "summary_table"]
 
 #: Knots per second of the demo's optimal solve (the library default is 50 Hz; 30 Hz keeps
 #: the demo under two minutes on two cores).
@@ -139,10 +140,11 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
         "html": html,
     }
     summary["elapsed_s"] = time.perf_counter() - t0
+    text = json.dumps(summary, indent=2, default=_json)
     with atomic_write(out / "summary.json") as tmp:
-        tmp.write_text(json.dumps(summary, indent=2, default=_json))
+        tmp.write_text(text)
     log("[7/7] done.\n")
-    log(_table(_rows(summary, adapted, plan_sim, copy_sim, cpg, out)))
+    log(summary_table(json.loads(text), out))  # the console prints the file's numbers
     return summary
 
 
@@ -193,38 +195,55 @@ def _json(x: object) -> object:
     return str(x)
 
 
-def _rows(summary, adapted, plan_sim, copy_sim, cpg, out) -> list[tuple[str, str]]:
-    aud = adapted.audit
+def summary_table(summary: dict[str, Any], out: str | Path) -> str:
+    """The table ``gdimitate demo`` prints, rendered from its ``summary.json`` alone
+    (``summary``: the file's content, ``out`` the output folder as named to the user): every
+    number on the console is the file's, formatted here once (issue 34: one number, one
+    definition); ``docs/make_readme_output.py`` renders the README's copy with it."""
+    return _table(summary_rows(summary, out))
 
-    def simline(s) -> str:
-        m = s.metrics
-        fd = m.force_vs_demo or {}
-        rm = "/".join(f"{fd[k].rmse_sagittal_deg:.1f}" for k in ("left", "right") if k in fd)
-        fell = f"FELL at {m.fall_time:.2f} s" if m.fell else "walked the stride"
-        return f"{fell}; slip {100 * m.slip_max:.1f} cm; push RMSE L/R {rm} deg"
 
-    rows = [("demonstration", f"{summary['frames']} frames, {summary['duration_s']:.2f} s "
+def _num(x: Any) -> float:
+    """A number of summary.json (``None``: NaN or infinite in the run) as a float."""
+    return float("nan") if x is None else float(x)
+
+
+def _simline(m: dict[str, Any]) -> str:
+    """A simulation's line from its metrics (:meth:`gdimitate.sim.SimMetrics.to_dict`)."""
+    fd = m.get("force_vs_demo") or {}
+    rm = "/".join(f"{_num(fd[k]['rmse_sagittal_deg']):.1f}" for k in ("left", "right")
+                  if k in fd)
+    fell = f"FELL at {_num(m['fall_time_s']):.2f} s" if m["fell"] else "walked the stride"
+    return f"{fell}; slip {100 * _num(m['slip_max_m']):.1f} cm; push RMSE L/R {rm} deg"
+
+
+def summary_rows(summary: dict[str, Any], out: str | Path) -> list[tuple[str, str]]:
+    """``(label, value)`` rows of :func:`summary_table`."""
+    from ..verdict import Verdict, written_gait_lines
+
+    aud = summary.get("audit")
+    rows = [("demonstration", f"{summary['frames']} frames, {_num(summary['duration_s']):.2f} s "
                               "(one stride of the 3-D walk)"),
-            ("imitator", f"{summary['imitator']} ({adapted.motion.T} knots, {summary['method']})")]
-    from ..verdict import gait_lines, verdict
-
-    lines = verdict(adapted).lines()
+            ("imitator", f"{summary['imitator']} ({summary['knots']} knots, "
+                         f"{summary['method']})")]
+    lines = Verdict.from_dict(summary["verdict"], summary["solver"]).lines()
     rows.append(("verdict", lines[0]))
     rows += [("", line) for line in lines[1:]]
     if aud is not None:
-        worst_tau = max((j.torque_ratio for j in aud.joints if np.isfinite(j.torque_ratio)),
-                        default=float("nan"))
+        ratios = [_num(j["torque_ratio"]) for j in aud["joints"]]
+        worst_tau = max((r for r in ratios if np.isfinite(r)), default=float("nan"))
         rows += [("  worst |torque|/limit", f"{worst_tau:.2f}"),
                  ("  min normal force [N]", ", ".join(
-                     f"{s} {f.normal.value:.0f}" for s, f in aud.feet.items()))]
-    g = gait_lines(adapted)
+                     f"{s} {_num(f['normal']['value']):.0f}" for s, f in aud["feet"].items()))]
+    g = written_gait_lines(summary)
     if g:
         rows += [("gait", g[0].removeprefix("gait "))] + [("", line) for line in g[1:]]
-    rows.append(("simulation, plan", simline(plan_sim)))
-    if copy_sim is not None:
-        rows.append(("simulation, joint copy", simline(copy_sim)))
-    rows += [("CPG frequency", f"{cpg.result.frequency:.3f} Hz, tracking nRMSE max "
-                               f"{100 * summary['cpg']['nrmse_entrained_max']:.1f} %"),
+    rows.append(("simulation, plan", _simline(summary["simulation"])))
+    if summary.get("joint_copy_simulation") is not None:
+        rows.append(("simulation, joint copy", _simline(summary["joint_copy_simulation"])))
+    cpg = summary["cpg"]
+    rows += [("CPG frequency", f"{_num(cpg['learned_frequency_hz']):.3f} Hz, tracking nRMSE "
+                               f"max {100 * _num(cpg['nrmse_entrained_max']):.1f} %"),
              ("output", f"{out}/ (demo.html, summary.json, imitator_motion.npz/.csv, *.png)"),
-             ("elapsed", f"{summary['elapsed_s']:.1f} s")]
+             ("elapsed", f"{_num(summary['elapsed_s']):.1f} s")]
     return rows
