@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from printed import numbers
 
 from gdimitate.errors import InvalidInputError, PlanError
 from gdimitate.robot import SIDES
@@ -175,6 +176,7 @@ def test_cli_walk_writes_its_files(tmp_path, capsys):
     assert per_cycle == pytest.approx(d["simulated_stride_m"], rel=0.05)
     # the console prints the report's numbers
     assert "steps completed 20/20" in said and f"max {max(rmse):.2f}°" in said
+    _walk_prints_its_report(said, d, out)
     assert f"ratio {d['simulated_stride_ratio']:.2f} (plan {d['plan_stride_ratio']:.2f})" in said
     assert "result written, but" not in said
     assert "the walk follows this cycle as it is" not in said
@@ -182,3 +184,32 @@ def test_cli_walk_writes_its_files(tmp_path, capsys):
     for f in ("walk_trajectory.npz", "walk_phase_portraits.png", "walk_frequency.png",
               "walk_force_directions.png"):
         assert (out / f).is_file()
+
+
+def _walk_prints_its_report(said: str, d: dict, out) -> None:
+    """Every number `gdimitate walk` printed is walk.json's, formatted as printed: the cycle's
+    gait and the limits at their bound (rendered from ``cycle_gait`` and ``cycle_audit``), the
+    steps, frequencies, push error and strides."""
+    import math
+
+    from gdimitate.verdict import written_gait_lines
+
+    aud = d["cycle_audit"]
+    assert aud["feasible"] == d["cycle_feasible"]
+    lines = said.splitlines()
+    cycle = lines[lines.index("      audit: " + ("feasible" if aud["feasible"] else
+                                              "NOT feasible: " + ", ".join(aud["binding"][:4])))
+                  + 1:]
+    gait = written_gait_lines({"gait": d["cycle_gait"], "audit": aud})
+    assert [x.strip() for x in cycle[:len(gait)]] == gait
+    rmse = [x for x in d["per_step_force_direction_rmse_deg"] if x == x]
+    expected = [*gait, f"[2/3] {d['steps_requested']} steps, gain {d['feedback_gain']:g}",
+                "[3/3]", f"{d['steps_completed']}/{d['steps_requested']}"
+                + (f" {d['fell_at_s']:.2f} s" if d["fell"] else "")
+                + f" {d['frequency_hz']:.4f} Hz ({d['cycle_frequency_hz']:.4f})"
+                + (f" {max(rmse):.2f}°" if rmse else ""),
+                f"{d['simulated_stride_m']:.3f} m, {math.hypot(*d['stride_m'][:2]):.3f} m, "
+                f"{d['scaled_stride_m']:.3f} m: {d['simulated_stride_ratio']:.2f} "
+                f"({d['plan_stride_ratio']:.2f})"]
+    tail = "\n".join(cycle).replace(str(out), "OUT")
+    assert numbers(tail.split("result written")[0]) == numbers("\n".join(expected))

@@ -175,6 +175,9 @@ class WalkResult:
             "simulated_stride_ratio": self.simulated_stride() / self.scaled_stride(),
             "cycle_gait": (self.cycle.gait.to_dict() if self.cycle.gait is not None
                            else None),
+            # the cycle's audit: its verdict and the limits at their bound the console prints
+            "cycle_audit": (self.cycle.audit.to_dict() if self.cycle.audit is not None
+                            else None),
             "simulated_s": t_end,
         }
 
