@@ -27,6 +27,7 @@ from .errors import InvalidInputError
 from .motion import Motion
 
 __all__ = ["MIN_TRAVEL", "walk_heading", "facing_yaw", "yaw_matrix", "turn_motion",
+           "turn_configurations",
            "turn_forces", "turn_points", "on_clock", "forces_on_clock"]
 
 MIN_TRAVEL = 0.1
@@ -85,12 +86,19 @@ def turn_motion(motion: Motion, yaw: float, about: np.ndarray | None = None) -> 
         raise InvalidInputError(
             f"only a free-flyer base turns about the vertical; this motion's base has "
             f"{motion.base_nq} columns (planar models walk along +x)")
-    q = np.array(motion.q, float)
-    q[:, :3] = turn_points(q[:, :3], yaw, about)
+    return motion.replace(q=turn_configurations(motion.q, yaw, about))
+
+
+def turn_configurations(q: np.ndarray, yaw: float, about: np.ndarray | None = None
+                        ) -> np.ndarray:
+    """Free-flyer configurations ``q`` ``(..., nq)`` turned like :func:`turn_motion`."""
+    q = np.array(q, float)
+    flat = q.reshape(-1, q.shape[-1])
+    flat[:, :3] = turn_points(flat[:, :3], yaw, about)
     Q = pin.Quaternion(yaw_matrix(yaw))
-    for i in range(len(q)):
-        q[i, 3:7] = (Q * pin.Quaternion(q[i, 3:7])).coeffs()
-    return motion.replace(q=q)
+    for i in range(len(flat)):
+        flat[i, 3:7] = (Q * pin.Quaternion(flat[i, 3:7])).coeffs()
+    return flat.reshape(q.shape)
 
 
 def turn_forces(forces: ContactForces, yaw: float, about: np.ndarray | None = None

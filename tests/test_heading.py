@@ -131,3 +131,29 @@ def test_the_adaptor_does_not_care_which_way_the_subject_walked(walk, robot):
         d = r.motion.q[-1, :2] - r.motion.q[0, :2]
         assert _wrap(np.arctan2(d[1], d[0]) - walk_heading(h, stride) - yaw) == \
             pytest.approx(0, abs=np.radians(5))
+
+
+@pytest.mark.slow
+def test_a_stream_does_not_care_which_way_the_subject_walked(walk, robot):
+    """The streaming adaptor (per frame, measured push) on one stride → G1, as recorded and
+    turned by 90° and −137°: the same frames up to that turn (joints within 1e-9 rad, the
+    base within 1e-9 m) and the same per-frame verdicts. Before the stream was adapted in
+    its first frame's heading, the 90° turn changed the joints by up to 0.82 rad and a 180°
+    turn moved the base by 0.41 m."""
+    h, m, f = walk
+    stride, fs = gd.gait.one_stride(m, f)
+    g1 = robot("g1")
+    ref = gd.adapt(stride, h, g1, force="measured", forces=fs, mode="per_frame",
+                   verbose=False)
+    about = stride.q[0, :2]
+    for yaw in (np.pi / 2, np.radians(-137)):
+        r = gd.adapt(turn_motion(stride, yaw, about), h, g1, force="measured",
+                     forces=turn_forces(fs, yaw, about), mode="per_frame", verbose=False)
+        back = r.motion.q.copy()
+        back[:, :3] = turn_points(back[:, :3], -yaw, about)
+        back[:, 3:7] = _turned_back(r.motion.q, yaw)[:, 3:7]
+        np.testing.assert_allclose(back[:, 7:], ref.motion.q[:, 7:], atol=1e-9)
+        np.testing.assert_allclose(back[:, :3], ref.motion.q[:, :3], atol=1e-9)
+        sign = np.sign(np.einsum("ij,ij->i", back[:, 3:7], ref.motion.q[:, 3:7]))[:, None]
+        np.testing.assert_allclose(sign * back[:, 3:7], ref.motion.q[:, 3:7], atol=1e-9)
+        np.testing.assert_array_equal(r.frame_feasible, ref.frame_feasible)

@@ -26,7 +26,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .. import contact, footsteps, heading, kinematics, selfcollision, symbolic
+from .. import contact, footsteps, kinematics, selfcollision, symbolic
 from .. import robot as robot_module
 from ..robot import Robot
 from ..symbolic import SymbolicModel
@@ -272,7 +272,7 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
 # wrench cone the cone part evaluates (contact.wrench_cone_rows); every module these import
 # from gdimitate is listed (tests/test_retarget_codegen.py checks it)
 SOURCE_MODULES = (parts_module, knot_module, symbolic, codegen, contact, robot_module,
-                  selfcollision, bodymap, kinematics, footsteps, heading, sys.modules[__name__])
+                  selfcollision, bodymap, kinematics, footsteps, sys.modules[__name__])
 _SOURCE = codegen.source_digest(*SOURCE_MODULES)
 
 

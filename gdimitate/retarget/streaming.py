@@ -31,6 +31,7 @@ import pinocchio as pin
 
 from ..contact import ContactForces, SoleContact
 from ..errors import GdimitateWarning, InvalidInputError, UnknownNameError
+from ..heading import facing_yaw, turn_configurations, yaw_matrix
 from ..kinematics import robot_motion
 from ..motion import Motion
 from ..result import AdaptedMotion, compare
@@ -132,6 +133,7 @@ class StreamingAdaptor:
         self._lift: dict[str, float] = {}
         self._a_prev = np.zeros(self.imitator.model.nv)
         self._n = 0
+        self._frame: tuple[float, np.ndarray] = (0.0, np.zeros(2))
 
     # ------------------------------------------------------------------ one frame
     def step(self, q_demo: np.ndarray, contact: dict[str, bool], dt: float | None = None,
@@ -142,12 +144,34 @@ class StreamingAdaptor:
         ``{side: (3,)}`` [N] the measured ground force on each foot (``force="measured"``);
         ``v_demo`` ``(nv_demo,)`` [rad/s, m/s]: the demonstrator's velocity, read at the first
         frame only — the robot then starts moving with it (scaled) instead of at rest (a walk
-        joined mid-stride cannot be caught from a standstill within a step)."""
+        joined mid-stride cannot be caught from a standstill within a step).
+
+        Nothing assumes a heading: the stream is adapted in the frame of its first
+        configuration — the world turned about the vertical through the first base position
+        by the base's facing yaw there (:func:`~gdimitate.heading.facing_yaw`) — and each
+        ``q`` turned back, so a stream turned about the vertical gives the same motion up to
+        that turn (velocities, accelerations and sole wrenches are in local frames)."""
         d = self.demonstrator
         q_demo = np.asarray(q_demo, dtype=float)
         if q_demo.shape != (d.model.nq,):
             raise InvalidInputError(f"q_demo must have shape ({d.model.nq},) for {d.name}; "
                                     f"got {q_demo.shape}")
+        if not self._hist["t"]:
+            self._frame = stream_frame(d, q_demo)
+        yaw, about = self._frame
+        if yaw:
+            q_demo = turn_configurations(q_demo, -yaw, about)
+            R = yaw_matrix(-yaw)
+            forces = None if forces is None else {s: R @ np.asarray(f, float)
+                                                  for s, f in forces.items()}
+        r = self._step(q_demo, contact, dt, forces, v_demo)
+        if yaw and self.imitator.base == "free":  # a planar imitator walks in its x–z plane
+            r = r._replace(q=turn_configurations(r.q, yaw, about))
+        return r
+
+    def _step(self, q_demo: np.ndarray, contact: dict[str, bool], dt: float | None,
+              forces: dict[str, np.ndarray] | None, v_demo: np.ndarray | None) -> FrameResult:
+        """:meth:`step` in the stream's frame."""
         if set(contact) != set(SIDES):
             raise InvalidInputError(f"contact must give 'left' and 'right'; got {list(contact)}")
         if self.force == "measured" and forces is None:
@@ -297,6 +321,16 @@ class StreamingAdaptor:
         rep = audit(self._audit_robot, mo, Wd, self.contacts,
                     cone_half_angle=self.contact.cone_half_angle)
         return bool(rep.knot_feasible[j - i])
+
+
+def stream_frame(demonstrator: Robot, q0: np.ndarray) -> tuple[float, np.ndarray]:
+    """``(yaw [rad], about (2,) [m])``: the frame a stream is adapted in
+    (:meth:`StreamingAdaptor.step`), from its first configuration ``q0``; ``(0, 0)`` for a
+    demonstrator without a free-flyer base."""
+    if demonstrator.base != "free":
+        return 0.0, np.zeros(2)
+    yaw = float(facing_yaw(q0[None, :], demonstrator.base_rotation)[0])
+    return yaw, np.array(q0[:2], float)
 
 
 def _body_map(demonstrator: Robot, imitator: Robot, given) -> BodyMap:

@@ -1,6 +1,7 @@
 """Gait cost: the body carried over its feet as the demonstrator carries it (docs/design.md
 §13). At every knot with a stance foot, the horizontal place of the hips' midpoint relative to
-the stance soles (their mean in double support), along the demonstrator's facing there, over
+the stance soles (their mean in double support), along the demonstrator's facing there (the
+horizontal normal of the line from its right hip to its left), over
 the imitator's leg length, minus the same of the demonstrator relative to its footprints
 (:func:`gdimitate.footsteps.footprints`) over its leg length (parameters ``over_feet`` ``(1,)``
 the target, ``over_feet_dir`` ``(2,)`` the facing, ``over_feet_w`` ``(2,)`` the left and
@@ -21,7 +22,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...footsteps import footprints
-from ...heading import facing_yaw
 from ...kinematics import frame_paths
 from ...robot import SIDES
 from .base import Cost
@@ -48,10 +48,10 @@ class OverFeet(Cost):
         w[on] /= n[on, None]
         feet = sum(np.nan_to_num(place[s]) * w[:, [i]] for i, s in enumerate(SIDES))
         hips = frame_paths(d, tg.demo.q, [d.legs[s].hip for s in SIDES])
-        mid = np.mean([hips[d.legs[s].hip][:, :2] for s in SIDES], axis=0)
-        yaw = (facing_yaw(tg.demo.q, d.base_rotation) if d.base == "free"
-               else np.zeros(tg.T))
-        e = np.column_stack([np.cos(yaw), np.sin(yaw)])
+        left, right = (hips[d.legs[s].hip][:, :2] for s in SIDES)
+        mid, across = (left + right) / 2, left - right
+        e = np.column_stack([across[:, 1], -across[:, 0]])  # across turned by −90°: forward
+        e /= np.linalg.norm(e, axis=1, keepdims=True)
         target = np.einsum("ij,ij->i", mid - feet, e) / L
         return {"over_feet": np.where(on, target, 0.0)[:, None], "over_feet_dir": e,
                 "over_feet_w": w, "over_feet_on": on.astype(float)[:, None]}
