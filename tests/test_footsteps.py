@@ -99,14 +99,12 @@ def test_gait_comparison_of_the_demonstrator_with_itself(walk):
 
 
 @pytest.mark.slow
-def test_the_adapted_stride_covers_the_scaled_distance(walk, robot):
+def test_the_adapted_stride_covers_the_scaled_distance(g1_stride, robot):
     """One stride of the shipped walk → G1 with the defaults (measured push): audit-feasible
     and travelling 0.8–1.25 of the demonstrator's distance × G1's leg ratio (0.725), its
     step 0.8–1.25 of the scaled step. Before the steps cost: 0.37."""
-    h, m, f = walk
-    stride, fs = gd.gait.one_stride(m, f)
+    h, stride, fs, r = g1_stride
     g1 = robot("g1")
-    r = gd.adapt(stride, h, g1, force="measured", forces=fs, verbose=False)
     assert r.audit.feasible
     g = r.gait
     assert g.ratio == pytest.approx(leg_ratio(h, g1))
