@@ -91,6 +91,12 @@ def mirror_map(robot: Robot) -> MirrorMap:
     if robot.base == "planar":
         raise InvalidInputError("a planar model walks in its sagittal plane: it has no "
                                 "left-right mirror image to walk")
+    m = robot.model
+    multi = [m.names[j] for j in range(1, m.njoints)
+             if m.joints[j].nv != 1 and m.joints[j].shortname() != "JointModelFreeFlyer"]
+    if multi:
+        raise InvalidInputError(f"{robot.name}: mirroring handles one-axis joints and the free "
+                                f"flyer; {multi[:3]} move about several axes")
     tw = _twists(robot)
     names = tuple(tw)
     cols, src, sign = [], [], []
