@@ -231,7 +231,7 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
-        _, _, _, result = _adapted(a, a.demonstration)
+        demonstrator, demo, _, result = _adapted(a, a.demonstration)
         v = verdict(result)
         with atomic_write(out / "imitator_joints.csv") as tmp:
             result.save(tmp, "csv")
@@ -246,7 +246,10 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
         text = json.dumps(report, indent=2, default=str)
         with atomic_write(out / "report.json") as tmp:
             tmp.write_text(text)
-    print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json")
+        from .plots import plot_gait
+
+        plot_gait(demonstrator, demo, result, out / "gait.png")
+    print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json, gait.png")
     written = json.loads(text)  # the console prints the file's numbers
     for line in report_lines(written) + _error_lines(written):
         print(f"  {line}")

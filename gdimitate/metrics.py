@@ -12,6 +12,7 @@ import numpy as np
 
 from .contact import ContactForces
 from .errors import InvalidInputError, UnknownNameError
+from .heading import walk_heading
 from .kinematics import frame_paths, frame_rotations, joint_paths
 from .motion import Motion
 from .robot import PLANAR_BASE, SIDES, Robot
@@ -68,9 +69,13 @@ def foot_heights(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
 
 
 def foot_distance(robot: Robot, motion: Motion) -> np.ndarray:
-    """Horizontal (x) distance between the ankles, left minus right ``(T,)`` (signed)."""
+    """Horizontal distance between the ankles along the walk, left minus right ``(T,)`` [m]
+    (signed): along the motion's heading (:func:`gdimitate.heading.walk_heading`, the
+    direction of its base's travel; +x for planar models), so that a walk along any
+    direction of the lab gives the same curve."""
     a = ankle_paths(robot, motion)
-    return a["left"][:, 0] - a["right"][:, 0]
+    psi = walk_heading(robot, motion)
+    return (a["left"][:, :2] - a["right"][:, :2]) @ np.array([np.cos(psi), np.sin(psi)])
 
 
 def com_path(robot: Robot, motion: Motion) -> np.ndarray:

@@ -53,11 +53,24 @@ def plot_heights(tracks: list[Track], title: str = "", path: Path | None = None)
         ax[2].plot(m.t, metrics.foot_distance(r, m) / L, ls, label=label)
     ax[0].set_ylabel("hip height / L")
     ax[1].set_ylabel("sole height / L\n(left dark, right light)")
-    ax[2].set_ylabel("ankle x: left − right / L")
+    ax[2].set_ylabel("ankles along the walk:\nleft − right / L")
     ax[2].set_xlabel("time [s]")
     ax[0].legend(fontsize=8)
     ax[0].set_title(title)
     return _save(fig, path)
+
+
+def plot_gait(demonstrator: Robot, demo: Motion, adapted, path: Path | None = None):
+    """The paper's Fig. 4 for an adaptation (``adapted``: an
+    :class:`~gdimitate.adapt.AdaptedMotion` of ``demo``): :func:`plot_heights` of the
+    demonstrator and the imitator, each over its own leg length — the demonstrator scaled to
+    the imitator's legs — titled with the travel ratio (docs/design.md §13)."""
+    g = adapted.gait
+    kept = f" — travel ratio {g.travel_ratio:.2f}" if g is not None else ""
+    name = adapted.robot.name
+    return plot_heights([(f"{demonstrator.name} (demonstrator)", demonstrator, demo),
+                         (name, adapted.robot, adapted.motion)],
+                        f"{demonstrator.name} → {name}, each over its leg length{kept}", path)
 
 
 def plot_angles(tracks: list[Track], title: str = "", path: Path | None = None):

@@ -28,7 +28,7 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["imitator"] == "g1" and s["method"] == "optimal" and s["frames"] > 60
     for f in ("imitator_motion.npz", "imitator_motion.csv", "force_directions.png",
-              "simulation.png", "cpg_replay_joints.csv", "oscillator_params.json"):
+              "gait.png", "simulation.png", "cpg_replay_joints.csv", "oscillator_params.json"):
         assert (tmp_path / f).stat().st_size > 0
     g1 = Robot.from_library("g1")
     motion = Motion.from_npz(tmp_path / "imitator_motion.npz")

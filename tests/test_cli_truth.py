@@ -53,6 +53,7 @@ def test_adapt_of_the_sagittal_walk_to_hoap2_says_which_goal_is_unmet(tmp_path, 
                    "--out", str(out)])
     printed = capsys.readouterr().out
     rep = json.loads((out / "report.json").read_text())
+    assert (out / "gait.png").stat().st_size > 0  # the paper's Fig. 4: demonstrator vs imitator
     solver, verdict = rep["solver"], rep["verdict"]
     assert {"status", "iterations", "time_s", "elastic", "unmet"} <= set(solver)
     assert rep["audit"]["feasible"] == verdict["feasible"]
@@ -78,7 +79,7 @@ def test_adapt_of_the_sagittal_walk_to_hoap2_says_which_goal_is_unmet(tmp_path, 
     worst = max(push.values(), key=lambda p: p["rad"])
     assert worst["rad"] == pytest.approx(rep["force_direction_error_max_rad"], rel=1e-12)
     # every line after "wrote" is rendered from report.json: each printed number is the file's
-    said = printed.split("report.json\n", 1)[1].splitlines()
+    said = printed.split("report.json, gait.png\n", 1)[1].splitlines()
     assert said == [f"  {line}" for line in report_lines(rep) + _error_lines(rep)]
     if not rep["gait"]["kept"]:  # the limits at their bound are the recomputed audit's
         lim = limits_at_bound(again)

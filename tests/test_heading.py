@@ -71,6 +71,25 @@ def test_heading_of_a_walk_and_of_a_turn_on_the_spot(walk):
         walk_heading(h, still) + 1.0, abs=1e-9)
 
 
+def test_foot_distance_is_measured_along_the_walk(walk):
+    """The feet's distance of the paper's Fig. 4 is along the walk's heading: the shipped walk
+    turned by −137° gives the same curve (1e-9 m), which is the ankles' horizontal
+    difference projected on the direction of the pelvis's travel (Pinocchio's ankle frames)."""
+    from gdimitate.metrics import foot_distance
+
+    h, m, _ = walk
+    turned = turn_motion(m, np.radians(-137), m.q[0, :2])
+    d = foot_distance(h, m)
+    np.testing.assert_allclose(foot_distance(h, turned), d, atol=1e-9)
+    legs = [h.legs[s].ankle for s in SIDES]
+    p = frame_placements(h, turned.q, legs)
+    travel = turned.q[-1, :2] - turned.q[0, :2]
+    e = travel / np.linalg.norm(travel)
+    diff = p[legs[0]].translation[:, :2] - p[legs[1]].translation[:, :2]
+    np.testing.assert_allclose(diff @ e, d, atol=1e-9)
+    assert np.ptp(d) > 0.8  # the feet pass each other: ±0.4–0.7 m on this walk
+
+
 def test_clock_scaling_keeps_the_path_and_scales_durations(walk):
     """Froude's clock: the same configurations at times t0 + s·(t − t0), velocities ÷ s."""
     h, m, f = walk

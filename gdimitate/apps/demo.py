@@ -151,9 +151,10 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
 def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot, adapted,
                  plan_sim, cpg) -> None:
     """The adapted motion (NPZ, CSV), the oscillator parameters and replay, the push
-    directions (demonstrator measured vs plan) and the simulation's summary plot."""
+    directions (demonstrator measured vs plan), the gait (demonstrator scaled vs imitator) and
+    the simulation's summary plot."""
     from ..metrics import force_direction
-    from ..plots import plot_force_directions
+    from ..plots import plot_force_directions, plot_gait
     from ..safety import atomic_write
     from ..sim import plots as sim_plots
 
@@ -172,6 +173,7 @@ def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot
     plot_force_directions(demo.t, dirs, demo.contact, f"push on the ground → {imit.name}",
                           out / "force_directions.png",
                           times={f"{imit.name} plan": adapted.motion.t})
+    plot_gait(demo_robot, demo, adapted, out / "gait.png")
     sim_plots.plot_summary(plan_sim, out / "simulation.png")
 
 
