@@ -4,6 +4,8 @@ q, v, a and wrenches) and by Pinocchio's own integration."""
 
 from __future__ import annotations
 
+import gc
+import os
 import warnings
 
 import numpy as np
@@ -12,7 +14,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.audit import audit
-from gdimitate.errors import InvalidInputError
+from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.kinematics import robot_motion
 
 SIDES = ("left", "right")
@@ -28,15 +30,17 @@ def walk():
     return human, demo, forces, talos
 
 
-def _stream(walk, n: int, audit_each: bool = False, robot=None):
+def _stream(walk, n: int, audit=False, robot=None, results: list | None = None):
+    """Stream the walk's first ``n`` frames; ``(adaptor, motion, wrenches, verdicts)`` — the
+    verdicts of every frame (``sa.verdicts()`` after ``final()``; ``[]`` with audit=False);
+    ``results`` collects each step's :class:`FrameResult`."""
     human, demo, forces, talos = walk
     talos = talos if robot is None else robot
-    sa = gd.retarget.StreamingAdaptor(human, talos, "measured", dt=demo.dt, audit=audit_each)
+    sa = gd.retarget.StreamingAdaptor(human, talos, "measured", dt=demo.dt, audit=audit)
     v0 = pin.difference(human.model, demo.q[0], demo.q[1]) / (demo.t[1] - demo.t[0])
     nq, nv = talos.model.nq, talos.model.nv
     q, v, a = np.zeros((n, nq)), np.zeros((n, nv)), np.zeros((n, nv))
     W = {s: np.zeros((n, 6)) for s in SIDES}
-    flags = []
     for k in range(n):
         f = {s: np.array([np.interp(demo.t[k], forces.t, forces[s].force[:, i])
                           for i in range(3)]) for s in SIDES}
@@ -44,15 +48,17 @@ def _stream(walk, n: int, audit_each: bool = False, robot=None):
         r = sa.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, forces=f,
                     v_demo=v0 if k == 0 else None)
         q[k], v[k] = r.q, r.v
+        if results is not None:
+            results.append(r)
         if k:
             a[k - 1] = r.previous_a
             for s in SIDES:
                 W[s][k - 1] = r.previous_wrenches[s]
-            flags.append(r.previous_feasible)
-    a[-1], wl, last = sa.final()
-    flags.append(last)
+    a[-1], wl, _ = sa.final()
     for s in SIDES:
         W[s][-1] = wl[s]
+    flags = list(sa.verdicts(timeout=60)) if audit else []
+    sa.close()
     c = {s: np.asarray(demo.contact[s][:n], bool) for s in SIDES}
     motion = robot_motion(talos, demo.t[:n], q, c).replace(v=v, a=a)
     return sa, motion, W, flags
@@ -81,12 +87,27 @@ def test_frames_follow_the_integration_rule_exactly(walk):
         np.testing.assert_allclose(motion.q[k + 1], q_next, atol=1e-12)
 
 
-def test_per_frame_flags_agree_with_the_whole_motion_audit(walk):
-    """``FrameResult.previous_feasible`` (each frame audited on the frames since its stances
-    began) equals the audit of the assembled motion, knot by knot."""
-    sa, motion, W, flags = _stream(walk, 20, audit_each=True)
-    rep = audit(sa._audit_robot, motion, W, sa.contacts)
-    np.testing.assert_array_equal(np.array(flags, bool), rep.knot_feasible)
+def test_worker_verdicts_are_the_inline_ones_frame_by_frame(walk):
+    """The default judge (a worker process, fed each committed frame, auditing in batches)
+    delivers every frame's verdict once, in frame order, each at a later step than the
+    frame's own (``FrameResult.verdicts``), and they are the verdicts judged in ``step``
+    itself, frame by frame (``audit="inline"``: the previous frame's, in
+    ``previous_feasible``), on the walk's first step (single support, a touch-down, double
+    support, a lift-off). ``previous_feasible`` is the previous frame's verdict whenever it is
+    not None."""
+    res_w: list = []
+    res_i: list = []
+    _, _, _, worker = _stream(walk, FRAMES, audit=True, results=res_w)
+    _, _, _, inline = _stream(walk, FRAMES, audit="inline", results=res_i)
+    assert len(worker) == FRAMES
+    assert worker == inline
+    delivered = [(k, j, ok) for k, r in enumerate(res_w) for j, ok in r.verdicts]
+    assert [j for _, j, _ in delivered] == list(range(len(delivered)))
+    assert all(k > j and ok == worker[j] for k, j, ok in delivered)
+    assert [r.verdicts for r in res_i[1:]] == [((k, inline[k]),) for k in range(FRAMES - 1)]
+    for res, ver in ((res_w, worker), (res_i, inline)):
+        assert all(r.previous_feasible in (None, ver[k - 1]) for k, r in enumerate(res) if k)
+    assert [r.previous_feasible for r in res_i[1:]] == inline[:-1]
 
 
 def test_bad_demonstrator_velocity_is_refused(walk):
@@ -101,10 +122,13 @@ def test_bad_demonstrator_velocity_is_refused(walk):
 def test_the_whole_walk_streams_at_least_95_percent_feasible(walk):
     """Issue 17's goal for the streaming mode, on the shipped 3-D walk → Talos with the
     measured forces: at least 95 % of the frames pass the audit (the assembled motion, knot by
-    knot, as ``adapt(..., mode="per_frame").frame_feasible`` reports)."""
+    knot, as ``adapt(..., mode="per_frame").frame_feasible`` reports) — and the verdicts the
+    stream delivered itself (the default: a worker process judging each committed frame) are
+    that audit's, frame for frame."""
     human, demo, forces, talos = walk
-    sa, motion, W, _ = _stream(walk, demo.T)
+    sa, motion, W, flags = _stream(walk, demo.T, audit=True)
     rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    np.testing.assert_array_equal(np.array(flags, bool), rep.knot_feasible)
     assert rep.knot_feasible.mean() >= 0.95, (int(rep.knot_feasible.sum()), rep.binding)
 
 
@@ -126,6 +150,67 @@ def test_the_whole_walk_streams_into_g1_and_icub_at_least_97_percent_feasible(wa
     rep = audit(sa._audit_robot, motion, W, sa.contacts)
     assert rep.knot_feasible.mean() >= 0.97, (int(rep.knot_feasible.sum()), rep.binding)
     assert rep.base_residual.value <= 1e-6
+
+
+def _gone(pid: int) -> bool:
+    """Whether process ``pid`` is neither running nor a zombie (reaped)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def test_the_verdict_worker_stops_with_close_with_blocks_and_garbage_collection(walk):
+    """The worker process is reaped by ``close()`` (idempotent; the verdicts delivered stay
+    readable, later frames are not judged), at the end of a ``with`` block and when the
+    adaptor is garbage-collected: no process is left, not even a zombie."""
+    human, demo, _, talos = walk
+    c0 = {s: bool(demo.contact[s][0]) for s in SIDES}
+
+    def adaptor():
+        return gd.retarget.StreamingAdaptor(human, talos, "segment", dt=demo.dt)
+
+    sa = adaptor()
+    pid = sa._judge.pid
+    assert not _gone(pid)
+    for k in range(3):
+        sa.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES})
+    assert len(sa.verdicts(timeout=60)) == 2
+    sa.close()
+    sa.close()
+    assert _gone(pid)
+    sa.step(demo.q[3], c0)
+    assert len(sa.verdicts()) == 2
+    with adaptor() as sb:
+        pid = sb._judge.pid
+        sb.step(demo.q[0], c0)
+    assert _gone(pid)
+    sc = adaptor()
+    pid = sc._judge.pid
+    del sc
+    gc.collect()
+    assert _gone(pid)
+
+
+def test_a_failing_verdict_worker_says_so(walk):
+    """A worker that fails (here: fed a malformed frame) raises VerdictWorkerError with its
+    traceback, and is reaped; bad ``audit=`` values and ``verdicts()`` without a judge are
+    refused."""
+    from gdimitate.retarget.verdict_worker import VerdictWorker, VerdictWorkerError
+
+    human, demo, _, talos = walk
+    w = VerdictWorker(talos, talos.contacts, 0.0)
+    w.add(("not a frame",))
+    w.add(("nor this",))
+    with pytest.raises(VerdictWorkerError, match="ValueError"):
+        w.collect(wait=True, timeout=60)
+    assert _gone(w.pid)
+    with pytest.raises(UnknownNameError, match="audit mode"):
+        gd.retarget.StreamingAdaptor(human, talos, "segment", audit="later")
+    sa = gd.retarget.StreamingAdaptor(human, talos, "segment", audit=False)
+    with pytest.raises(InvalidInputError, match="audit=False"):
+        sa.verdicts()
 
 
 def test_bounded_step_holds_a_joint_at_its_limit_and_lets_the_others_take_its_share():

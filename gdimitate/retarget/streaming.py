@@ -11,10 +11,13 @@ No frame waits for later ones (no latency beyond that one frame): the swing feet
 and wait, still and flat, for the demonstration's touch-down (:mod:`.frameref`). The first
 frame is the robot at rest in the demonstrator's first pose (:func:`.frameref.initial_pose`).
 
-Each frame's feasibility flag is the audit's (:func:`gdimitate.audit.audit`), recomputed
-from the output, never read from the QP: per frame in :meth:`StreamingAdaptor.step` (on the
-frames since the current stances began; ``audit=False`` keeps it off the hot path), and for
-the whole motion, knot by knot, in :func:`adapt_per_frame`. Force models: ``segment``,
+Each frame's feasibility flag is the audit's knot verdict (:func:`gdimitate.audit.audit`),
+recomputed from the output, never read from the QP: by :class:`StreamingAdaptor` frame by
+frame (:func:`.verdict_worker.knot_verdicts`, its one definition: on the frames it reads, the
+same verdict as the audit of the whole assembled motion), by default in a worker process that
+delivers frame k's verdict a few frames later without slowing the next frame
+(``FrameResult.verdicts``, :meth:`StreamingAdaptor.verdicts`); for the whole motion, knot by
+knot, in :func:`adapt_per_frame`. Force models: ``segment``,
 ``com`` and ``measured`` (the demonstrator's measured force of the frame, ``step(...,
 forces=...)``); the goal — the robot's contact force along the demonstrator's — is a soft
 task; ``dynamics`` needs the demonstrator's future accelerations.
@@ -44,12 +47,14 @@ from .knot import base_dofs
 from .params import Contact, Limits, Weights
 from .receding import FrameQP
 from .threads import single_thread
+from .verdict_worker import InlineVerdicts, VerdictWorker, can_fork, knot_verdicts
 
 __all__ = ["StreamingAdaptor", "FrameResult", "adapt_per_frame", "STREAMING_FORCE_MODELS"]
 
 STREAMING_FORCE_MODELS = ("segment", "com", "measured")
-#: how many frames a per-frame audit in :meth:`StreamingAdaptor.step` looks back at most
-AUDIT_WINDOW = 120
+#: who judges each frame (:class:`StreamingAdaptor`'s ``audit``): a worker process, the
+#: caller's thread (on the hot path), nobody
+AUDIT_MODES = ("worker", "inline", "off")
 #: a step that would make any velocity component larger than this [rad/s, m/s] is not taken
 #: (the robot coasts: the audit fails those frames)
 MAX_SPEED = 100.0
@@ -59,10 +64,14 @@ _STATUS = {1: "QP", 2: "QP, relaxed", -99: "coasting"}
 class FrameResult(NamedTuple):
     """One :meth:`StreamingAdaptor.step`: the new frame's ``q`` ``(nq,)`` and ``v`` ``(nv,)``;
     the previous frame, now final (``None`` at the first step): its ``a`` ``(nv,)``,
-    ``wrenches`` ``{side: (6,)}`` [N, N·m, sole frames] and ``feasible`` (the audit's verdict;
-    ``None`` with ``audit=False``); the step's ``status`` (``"QP"``: every hard row held;
-    ``"QP, relaxed"``: some could not; ``"rest pose"`` at the first frame), ``iterations``
-    and ``time_s`` [s]."""
+    ``wrenches`` ``{side: (6,)}`` [N, N·m, sole frames] and ``feasible`` (its verdict if it
+    is known at this step: with ``audit="inline"``; ``None`` with the worker, which delivers
+    it a few frames later in ``verdicts``, and with ``audit=False``); the step's ``status``
+    (``"QP"``: every hard row held; ``"QP, relaxed"``: some could not; ``"rest pose"`` at
+    the first frame), ``iterations`` and ``time_s`` [s] (the frame's solve, the verdict's
+    bookkeeping left out); ``verdicts`` ``((frame, feasible), ...)``: the verdicts (the
+    audit's knot verdict; frames counted from 0 since the last
+    :meth:`~StreamingAdaptor.reset`) delivered since the previous step, in frame order."""
 
     q: np.ndarray
     v: np.ndarray
@@ -72,6 +81,7 @@ class FrameResult(NamedTuple):
     status: str
     iterations: int
     time_s: float
+    verdicts: tuple[tuple[int, bool], ...] = ()
 
 
 class StreamingAdaptor:
@@ -82,17 +92,23 @@ class StreamingAdaptor:
     (the per-frame QP has its own task weights, :class:`~.receding.Gains`); ``limits``,
     ``contact``: as for :func:`~.solve.adapt_optimal` (the ``"all"`` contact rule only);
     ``contacts``: sole overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``:
-    unused (no NLP runs; a non-default ``weights`` or any ``ipopt`` warns); ``audit``: audit
-    each frame in :meth:`step`
-    (``FrameResult.previous_feasible``; False keeps the audit off the hot path: audit the
-    assembled motion afterwards, as :func:`adapt_per_frame` does).
+    unused (no NLP runs; a non-default ``weights`` or any ``ipopt`` warns); ``audit``: who
+    judges each frame (:data:`AUDIT_MODES`) — ``True``/``"worker"``: a worker process forked
+    at construction (:class:`~.verdict_worker.VerdictWorker`; ``"inline"`` where the platform
+    cannot fork), fed each committed frame, whose verdicts arrive in later steps'
+    ``FrameResult.verdicts`` and in :meth:`verdicts`; ``"inline"``: in :meth:`step` itself
+    (the previous frame's, ``FrameResult.previous_feasible``: ~20 ms a frame on Talos);
+    ``False``/``"off"``: none (audit the assembled motion afterwards, as
+    :func:`adapt_per_frame` does). Both judges run :func:`.verdict_worker.knot_verdicts` and
+    give the same verdicts. :meth:`close` (or a ``with`` block) stops the worker; so do
+    garbage collection and the interpreter's exit.
     """
 
     def __init__(self, demonstrator: Robot, imitator: Robot, force: str = "segment", *,
                  weights: Weights | None = None, limits: Limits | None = None,
                  contact: Contact | None = None, contacts: dict | None = None,
                  body_map: BodyMap | dict | str | None = None, dt: float = 1 / 60,
-                 ipopt: dict | None = None, audit: bool = True):
+                 ipopt: dict | None = None, audit: bool | str = True):
         if force not in STREAMING_FORCE_MODELS:
             raise UnknownNameError("streaming force model", force, STREAMING_FORCE_MODELS)
         if not (np.isfinite(dt) and dt > 0):
@@ -109,7 +125,8 @@ class StreamingAdaptor:
                 "the per-frame mode ignores weights= and ipopt= (its QP has its own task "
                 "weights, gdimitate.retarget.receding.Gains; no NLP runs): use "
                 "mode='trajectory' for them"), stacklevel=2)
-        self.audit = bool(audit)
+        self.audit_mode = _audit_mode(audit)
+        self.audit = self.audit_mode != "off"
         self.contacts: dict[str, SoleContact] = resolve_contacts(imitator, self.contact,
                                                                  contacts)
         bm = body_map if isinstance(body_map, BodyMap) else None
@@ -122,7 +139,13 @@ class StreamingAdaptor:
         self._qp = FrameQP(self._audit_robot, self.contacts, base, self._act,
                            self.contact.f_min, self.contact.cop_margin)
         self._fid = {s: imitator.model.getFrameId(self.contacts[s].frame) for s in SIDES}
+        self._judge: InlineVerdicts | VerdictWorker | None = None
         self.reset()
+        judge_args = (self._audit_robot, self.contacts, self.contact.cone_half_angle)
+        if self.audit_mode == "worker":
+            self._judge = VerdictWorker(*judge_args)
+        elif self.audit_mode == "inline":
+            self._judge = InlineVerdicts(*judge_args)
 
     def reset(self) -> None:
         """Forget the previous frames."""
@@ -134,6 +157,10 @@ class StreamingAdaptor:
         self._a_prev = np.zeros(self.imitator.model.nv)
         self._n = 0
         self._frame: tuple[float, np.ndarray] = (0.0, np.zeros(2))
+        self._verdicts: list[bool] = []  # frames 0, 1, ... judged so far
+        self._last_verdict: tuple[int, bool] | None = None  # final()'s, of the last frame
+        if self._judge is not None:
+            self._judge.reset()
 
     # ------------------------------------------------------------------ one frame
     def step(self, q_demo: np.ndarray, contact: dict[str, bool], dt: float | None = None,
@@ -194,10 +221,10 @@ class StreamingAdaptor:
             a, W, flag = np.zeros_like(a), {s: np.zeros(6) for s in SIDES}, -99
         q, v = self._commit(t, flags, a, W)
         elapsed = time.perf_counter() - t0
-        ok = self._audit_last() if self.audit else None
+        new, ok = self._judged()
         self._n += 1
         return FrameResult(q.copy(), v.copy(), a.copy(), {s: W[s].copy() for s in SIDES}, ok,
-                           _STATUS.get(flag, f"QP failed ({flag})"), 1, elapsed)
+                           _STATUS.get(flag, f"QP failed ({flag})"), 1, elapsed, new)
 
     def _first(self, t: float, flags: dict, t0: float, v_demo) -> FrameResult:
         f0 = self._ref.frames[0]
@@ -233,10 +260,11 @@ class StreamingAdaptor:
         H = self._hist
         for k, x in (("t", t), ("q", q), ("v", v0), ("c", flags)):
             H[k].append(x)
+        elapsed = time.perf_counter() - t0
+        new, _ = self._judged()
         self._n += 1
         return FrameResult(q.copy(), v0.copy(), None, None, None,
-                           "moving start" if moving else "rest pose", 0,
-                           time.perf_counter() - t0)
+                           "moving start" if moving else "rest pose", 0, elapsed, new)
 
     def _solve(self, j: int, nxt: dict) -> tuple[np.ndarray, dict, int]:
         """Knot ``j``'s QP (the next knot's stance flags ``nxt``)."""
@@ -279,8 +307,9 @@ class StreamingAdaptor:
 
     def final(self) -> tuple[np.ndarray, dict, bool | None]:
         """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
-        QP (call after the last :meth:`step`); ``feasible`` None without the per-frame
-        audit."""
+        QP (call after the last :meth:`step`); ``feasible``: its verdict (judged here, on the
+        frames it reads: :func:`.verdict_worker.knot_verdicts`), None with ``audit=False``;
+        :meth:`verdicts` then includes it."""
         H = self._hist
         j = len(H["t"]) - 1
         if j < 0:
@@ -289,38 +318,69 @@ class StreamingAdaptor:
             a, W, _ = self._solve(j, H["c"][j])
         ok = None
         if self.audit:
-            ok = self._audit_knots(j, a, W)
+            ok = knot_verdicts(self._audit_robot, self.contacts, self.contact.cone_half_angle,
+                               H, j, j, tail=(a, W))[0]
+            self._last_verdict = (j, ok)
         return a, W, ok
 
-    # ------------------------------------------------------------------ the audit
-    def _audit_last(self) -> bool:
-        j = len(self._hist["t"]) - 2
-        return self._audit_knots(j, None, None)
-
-    def _audit_knots(self, j: int, a_last, W_last) -> bool:
-        """The audit's verdict on knot ``j``, on the frames since the stances at ``j`` began
-        (at most :data:`AUDIT_WINDOW` back) and up to the next one, whose acceleration is
-        taken as knot j's (no look-ahead in ``velocity_consistency``'s allowance)."""
-        from ..audit import audit
-
+    # ------------------------------------------------------------------ the verdicts
+    def _judged(self) -> tuple[tuple[tuple[int, bool], ...], bool | None]:
+        """Hand the judge the frame just committed; ``(verdicts delivered since the last
+        step, the previous frame's verdict or None)``."""
+        if self._judge is None:
+            return (), None
         H = self._hist
-        c = H["c"]
-        i = j
-        while i > 0 and j - i < AUDIT_WINDOW and any(c[i - 1][s] and c[j][s] for s in SIDES):
-            i -= 1
-        stop = min(j + 2, len(H["t"]))
-        a = list(H["a"][i:stop]) if a_last is None else list(H["a"][i:j]) + [a_last]
-        W = list(H["w"][i:stop]) if W_last is None else list(H["w"][i:j]) + [W_last]
-        while len(a) < stop - i:
-            a.append(a[-1])
-            W.append(W[-1])
-        flags = {s: np.array([x[s] for x in c[i:stop]]) for s in SIDES}
-        mo = robot_motion(self.imitator, np.array(H["t"][i:stop]), np.array(H["q"][i:stop]),
-                          flags).replace(v=np.array(H["v"][i:stop]), a=np.array(a))
-        Wd = {s: np.array([w[s] for w in W]) for s in SIDES}
-        rep = audit(self._audit_robot, mo, Wd, self.contacts,
-                    cone_half_angle=self.contact.cone_half_angle)
-        return bool(rep.knot_feasible[j - i])
+        k = len(H["t"]) - 1
+        prev = (H["a"][-1], H["w"][-1]) if k else (None, None)
+        self._judge.add((H["t"][k], H["q"][k], H["v"][k], H["c"][k], *prev))
+        new = tuple(self._judge.collect())
+        self._verdicts.extend(ok for _, ok in new)
+        return new, (self._verdicts[k - 1] if 0 < k <= len(self._verdicts) else None)
+
+    def verdicts(self, wait: bool = True, timeout: float | None = None) -> np.ndarray:
+        """``(K,)`` bool: the verdicts of frames ``0..K−1`` delivered so far (each the
+        audit's knot verdict). ``wait``: first wait for every frame's — all but the newest,
+        whose verdict needs the next frame (or :meth:`final`, after which it is included) —
+        at most ``timeout`` [s] (None: no limit; :class:`~.verdict_worker.VerdictWorkerError`
+        when it passes or the worker failed). After :meth:`close`: those delivered before.
+        Raises :class:`~gdimitate.errors.InvalidInputError` with ``audit=False``."""
+        if not self.audit:
+            raise InvalidInputError("no verdicts: this StreamingAdaptor was made with "
+                                    "audit=False")
+        if self._judge is not None:
+            self._verdicts.extend(ok for _, ok in self._judge.collect(wait, timeout))
+        out = list(self._verdicts)
+        last = self._last_verdict
+        if last is not None and last[0] == len(out) == len(self._hist["t"]) - 1:
+            out.append(last[1])
+        return np.array(out, bool)
+
+    def close(self) -> None:
+        """Stop the verdict worker, keeping the verdicts delivered so far (:meth:`verdicts`);
+        later steps are not judged. Idempotent; ``with StreamingAdaptor(...) as sa:`` calls
+        it at the block's end."""
+        if self._judge is not None:
+            judge, self._judge = self._judge, None
+            try:
+                self._verdicts.extend(ok for _, ok in judge.collect())
+            finally:
+                judge.close()
+
+    def __enter__(self) -> StreamingAdaptor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _audit_mode(audit: bool | str) -> str:
+    """``audit=`` as one of :data:`AUDIT_MODES` (True: ``"worker"``, or ``"inline"`` where
+    the platform cannot fork; False: ``"off"``)."""
+    if isinstance(audit, (bool, np.bool_)):
+        return ("worker" if can_fork() else "inline") if audit else "off"
+    if audit not in AUDIT_MODES:
+        raise UnknownNameError("audit mode", audit, AUDIT_MODES)
+    return str(audit)
 
 
 def stream_frame(demonstrator: Robot, q0: np.ndarray) -> tuple[float, np.ndarray]:
