@@ -1,27 +1,37 @@
-"""Streaming adaptor: frames per second and audited feasibility (issue 17).
+"""Streaming adaptor: frames per second and the per-frame verdict (issues 17 and 35).
 
 Run: ``python benchmarks/streaming.py [--robots talos,g1,icub,romeo] [--frames 200]
-[--force measured] [--baseline-rev ff13e49] [--baseline-frames 200]`` (``--robot talos`` is
-``--robots talos``).
+[--force measured] [--start 0] [--no-v-demo] [--repeats 1] [--baseline-rev ff13e49]
+[--baseline-frames 200]`` (``--robot talos`` is ``--robots talos``).
 
 The shipped real 3-D walk (with its measured forces) is streamed frame by frame into
-``gdimitate.retarget.StreamingAdaptor`` for each of ``--robots``, one process per robot and
-revision, one after the other (the machine is shared: nothing runs in parallel). Frames per
-second are counted after a warm-up (the first five frames), in wall-clock and in CPU time
-(``time.process_time``: the machine is shared); every frame is then judged by
-:func:`gdimitate.audit.audit` on the assembled motion (knot by knot, the same verdict
-``adapt(..., mode="per_frame").frame_feasible`` reports), and the checks that fail most often
-are listed with the number of frames each fails. Where the adaptor's ``step`` takes
-``v_demo`` (the demonstrator's velocity at the first frame), it is given, as
-``adapt(..., mode="per_frame")`` does.
+``gdimitate.retarget.StreamingAdaptor`` for each of ``--robots``, joining at ``--start``
+seconds, twice per repeat: with the default constructor (``StreamingAdaptor(human, robot,
+force, dt=...)``: each frame's verdict judged by a worker process while the frames go on) and
+with ``audit=False`` (no verdict), one process per case, one after the other (the machine is
+shared: nothing runs in parallel but the verdict worker itself). Frames per second are counted
+after a warm-up (the first five frames), in wall-clock and in the streaming process's CPU time
+(``time.process_time``; the worker's is not in it). With the verdict on: the share of frames
+feasible by the stream's own verdicts (``FrameResult.verdicts`` and, after ``final()``,
+``sa.verdicts()``), whether they are the audit of the assembled motion frame for frame, the
+delay of each verdict (frames between a frame's step and the step that delivered its verdict:
+median and largest) and how long ``sa.verdicts()`` waited after the last frame for the ones
+still on their way. Every frame is also judged by :func:`gdimitate.audit.audit` on the
+assembled motion (knot by knot, the verdict ``adapt(..., mode="per_frame").frame_feasible``
+reports), and the checks that fail most often are listed with the number of frames each fails.
+Where the adaptor's ``step`` takes ``v_demo`` (the demonstrator's velocity at the first frame),
+it is given, as ``adapt(..., mode="per_frame")`` does, unless ``--no-v-demo`` (a live stream
+has none). With ``--repeats N`` each case runs N times (interleaved) and the table shows the
+medians of frames per second and of the verdicts' wait.
 
 The same-run baseline is the streaming of ``--baseline-rev`` (a git revision of this
-repository, extracted with ``git archive`` into a temporary folder and run in its own process)
-for the same robots over ``--baseline-frames`` frames: by default ``ff13e49``, the inverse-
-dynamics QP before its references were made robot-relative (G1 19/205, iCub 0/205 frames
-feasible); ``edd0e2f`` is the tree before the inverse-dynamics QP (a Gauss–Newton QP of the
-two-knot window per frame), ``7b16d65`` the one before issue 17 (an IPOPT solve per frame). The
-machine's load average is printed with the table.
+repository, extracted with ``git archive`` into a temporary folder and run in its own process,
+``audit=False`` where it has the parameter) for the same robots over ``--baseline-frames``
+frames: by default ``ff13e49``, the inverse-dynamics QP before its references were made
+robot-relative (G1 19/205, iCub 0/205 frames feasible); ``edd0e2f`` is the tree before the
+inverse-dynamics QP (a Gauss–Newton QP of the two-knot window per frame), ``7b16d65`` the one
+before issue 17 (an IPOPT solve per frame); ``''`` for none. The machine's load average is
+printed with the table.
 """
 
 from __future__ import annotations
@@ -29,6 +39,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -46,16 +57,18 @@ _CHILD = textwrap.dedent("""
     import gdimitate as gd
     from gdimitate.audit import audit
     from gdimitate.kinematics import robot_motion
-    name, frames, force, warm = sys.argv[1], int(sys.argv[2]), sys.argv[3], 5
+    name, frames, force, mode, start, use_v = sys.argv[1:7]
+    frames, start, use_v, warm = int(frames), float(start), use_v == "1", 5
     h, m, f = gd.gait.human_walk_3d()
     robot = gd.Robot.from_library(name)
-    kw = {"audit": False} if "audit" in inspect.signature(
+    kw = {"audit": False} if mode == "off" and "audit" in inspect.signature(
         gd.retarget.StreamingAdaptor).parameters else {}
-    moving = "v_demo" in inspect.signature(gd.retarget.StreamingAdaptor.step).parameters
+    moving = use_v and "v_demo" in inspect.signature(gd.retarget.StreamingAdaptor.step).parameters
     import pinocchio as pin
-    v0 = pin.difference(h.model, m.q[0], m.q[1]) / (m.t[1] - m.t[0])
+    k0 = int(np.searchsorted(m.t, m.t[0] + start - 1e-9))
+    v0 = pin.difference(h.model, m.q[k0], m.q[k0 + 1]) / (m.t[k0 + 1] - m.t[k0])
     sa = gd.retarget.StreamingAdaptor(h, robot, force, dt=m.dt, **kw)
-    T = min(frames + warm, m.T)
+    T = min(frames + warm, m.T - k0)
     sides = ("left", "right")
     q, v = np.zeros((T, robot.model.nq)), np.zeros((T, robot.model.nv))
     a, W = np.zeros((T, robot.model.nv)), {s: np.zeros((T, 6)) for s in sides}
@@ -64,55 +77,92 @@ _CHILD = textwrap.dedent("""
             return None
         return {s: np.array([np.interp(m.t[k], f.t, f[s].force[:, i]) for i in range(3)])
                 for s in sides}
-    statuses = []
-    for k in range(T):
-        if k == warm:
+    statuses, lag = [], []
+    for i in range(T):
+        if i == warm:
             t0, c0 = time.perf_counter(), time.process_time()
-        extra = {"v_demo": v0} if moving and k == 0 else {}
+        k = k0 + i
+        extra = {"v_demo": v0} if moving and i == 0 else {}
         r = sa.step(m.q[k], {s: bool(m.contact[s][k]) for s in sides}, forces=fk(k), **extra)
-        q[k], v[k] = r.q, r.v
+        q[i], v[i] = r.q, r.v
         statuses.append(r.status)
-        if k:
-            a[k - 1] = r.previous_a
+        lag += [i - j for j, _ in getattr(r, "verdicts", ())]
+        if i:
+            a[i - 1] = r.previous_a
             for s in sides:
-                W[s][k - 1] = r.previous_wrenches[s]
+                W[s][i - 1] = r.previous_wrenches[s]
     elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
     a[-1], wl, _ = sa.final()
     for s in sides:
         W[s][-1] = wl[s]
-    c = {s: np.asarray(m.contact[s][:T], bool) for s in sides}
-    motion = robot_motion(robot, m.t[:T], q, c).replace(v=v, a=a)
+    t1 = time.perf_counter()
+    own = sa.verdicts(timeout=600) if mode == "default" else None
+    wait = time.perf_counter() - t1
+    if hasattr(sa, "close"):
+        sa.close()
+    c = {s: np.asarray(m.contact[s][k0:k0 + T], bool) for s in sides}
+    motion = robot_motion(robot, m.t[k0:k0 + T], q, c).replace(v=v, a=a)
     rep = audit(sa._audit_robot, motion, W, sa.contacts)
     ok = np.asarray(rep.knot_feasible, bool)
     fails = {c.name: int((~k).sum()) for c, k in zip(rep.checks, rep.knot_checks) if (~k).any()}
     top = sorted(fails.items(), key=lambda x: -x[1])[:4]
-    print("RESULT " + json.dumps({
-        "frames_per_s": (T - warm) / elapsed, "cpu_frames_per_s": (T - warm) / cpu,
-        "frames": T, "feasible": int(ok.sum()),
-        "binding": [f"{n} ({c})" for n, c in top],
-        "statuses": {s: statuses.count(s) for s in set(statuses)}}))
+    out = {"frames_per_s": (T - warm) / elapsed, "cpu_frames_per_s": (T - warm) / cpu,
+           "frames": T, "feasible": int(ok.sum()),
+           "binding": [f"{n} ({c})" for n, c in top],
+           "statuses": {s: statuses.count(s) for s in set(statuses)}}
+    if own is not None:
+        out.update(own_feasible=int(own.sum()), own_frames=int(own.size),
+                   agrees=bool(own.size == T and np.array_equal(own, ok)),
+                   lag_median=float(np.median(lag)) if lag else None,
+                   lag_max=int(max(lag)) if lag else None, in_stream=len(lag), wait_s=wait)
+    print("RESULT " + json.dumps(out))
 """)
 
 
-def run(root: Path, robot: str, frames: int, force: str) -> dict:
+def run(root: Path, robot: str, frames: int, force: str, mode: str = "off", start: float = 0.0,
+        v_demo: bool = True) -> dict:
+    """One case in its own process: ``mode`` "default" (the default constructor: verdict on)
+    or "off" (``audit=False``), joining ``start`` [s] into the walk."""
     env = {**os.environ, "PYTHONPATH": str(root)}
-    p = subprocess.run([sys.executable, "-c", _CHILD, robot, str(frames), force],
-                       capture_output=True, text=True, env=env, cwd=tempfile.gettempdir())
+    args = [robot, str(frames), force, mode, str(start), "1" if v_demo else "0"]
+    p = subprocess.run([sys.executable, "-c", _CHILD, *args], capture_output=True, text=True,
+                       env=env, cwd=tempfile.gettempdir())
     for line in p.stdout.splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[7:])
     return {"error": (p.stderr or p.stdout)[-400:]}
 
 
+def median_of(runs: list[dict]) -> dict:
+    """The first run's result with the medians of its timings over ``runs`` (all cases that
+    did not fail); ``fps_runs``: each run's frames/s."""
+    ok = [r for r in runs if "error" not in r]
+    if not ok:
+        return runs[0]
+    out = dict(ok[0])
+    for key in ("frames_per_s", "cpu_frames_per_s", "wait_s"):
+        if key in out:
+            out[key] = statistics.median(r[key] for r in ok)
+    out["fps_runs"] = [round(r["frames_per_s"]) for r in ok]
+    return out
+
 
 def row(label: str, r: dict) -> str:
     if "error" in r:
-        return f"| {label} | error: {r['error']!r} | | | |"
+        return f"| {label} | error: {r['error']!r} | | | | | | |"
     pct = 100 * r["feasible"] / r["frames"]
     cpu = r.get("cpu_frames_per_s", float("nan"))
-    return (f"| {label} | {r['frames_per_s']:.1f} ({cpu:.0f} of CPU) | "
-            f"{r['feasible']}/{r['frames']} "
-            f"({pct:.0f} %) | {', '.join(r['binding'])} | {r['statuses']} |")
+    runs = f" {r['fps_runs']}" if len(r.get("fps_runs", ())) > 1 else ""
+    own = agree = delay = "—"
+    if "own_feasible" in r:
+        own = (f"{r['own_feasible']}/{r['own_frames']} "
+               f"({100 * r['own_feasible'] / max(r['own_frames'], 1):.0f} %)")
+        agree = "yes" if r["agrees"] else "**no**"
+        delay = (f"{r['lag_median']:g} / {r['lag_max']} ({r['in_stream']} in the stream); "
+                 f"{r['wait_s']:.2f} s" if r["in_stream"] else f"—; {r['wait_s']:.2f} s")
+    return (f"| {label} | {r['frames_per_s']:.0f} ({cpu:.0f} of CPU){runs} | {own} | {agree} "
+            f"| {delay} | {r['feasible']}/{r['frames']} ({pct:.0f} %) | "
+            f"{', '.join(r['binding'])} | {r['statuses']} |")
 
 
 def main() -> None:
@@ -122,23 +172,41 @@ def main() -> None:
     ap.add_argument("--robot", default=None, help="one robot (the same as --robots NAME)")
     ap.add_argument("--frames", type=int, default=200)
     ap.add_argument("--force", default="measured")
+    ap.add_argument("--start", type=float, default=0.0,
+                    help="join the walk this many seconds in")
+    ap.add_argument("--no-v-demo", action="store_true",
+                    help="give no demonstrator velocity at the first frame (a live stream)")
+    ap.add_argument("--repeats", type=int, default=1,
+                    help="runs of each case (interleaved); the table shows the medians")
     ap.add_argument("--baseline-rev", default="ff13e49",
                     help="git revision streamed as the same-run baseline ('' for none)")
     ap.add_argument("--baseline-frames", type=int, default=200)
     a = ap.parse_args()
     robots = [a.robot] if a.robot else [r.strip() for r in a.robots.split(",") if r.strip()]
-    rows = [f"streaming the shipped 3-D walk (force={a.force}); goal ≥ 200 frames/s after "
-            "warm-up, ≥ 95 % of frames audited feasible", "",
-            "| robot | streaming | frames/s wall (of CPU time) | audited feasible frames "
+    rows = [f"streaming the shipped 3-D walk (force={a.force}), joining {a.start:g} s in, "
+            f"{'without' if a.no_v_demo else 'with'} the demonstrator's velocity; "
+            f"{a.repeats} run(s) per case, medians", "",
+            "| robot | streaming | frames/s wall (of CPU time) | feasible by its own verdict "
+            "| = audit of the assembled motion | verdict delay: median / largest [frames]; "
+            "wait after the last frame | audited feasible frames (assembled motion) "
             "| checks failed most (frames) | frame solves |",
-            "|---|---|---|---|---|---|"]
+            "|---|---|---|---|---|---|---|---|---|"]
+    cases = [(robot, mode) for robot in robots for mode in ("default", "off")]
+    got: dict = {c: [] for c in cases}
+    for _ in range(max(a.repeats, 1)):
+        for robot, mode in cases:
+            got[robot, mode].append(run(ROOT, robot, a.frames, a.force, mode, a.start,
+                                        not a.no_v_demo))
     with tempfile.TemporaryDirectory() as tmp:
         base = checkout(a.baseline_rev, tmp) if a.baseline_rev else None
         for robot in robots:
-            rows.append(row(f"{robot} | this tree", run(ROOT, robot, a.frames, a.force)))
+            rows.append(row(f"{robot} | this tree, default (verdict on)",
+                            median_of(got[robot, "default"])))
+            rows.append(row(f"{robot} | this tree, audit=False", median_of(got[robot, "off"])))
             if base is not None:
-                rows.append(row(f"{robot} | baseline {a.baseline_rev}",
-                                run(base, robot, a.baseline_frames, a.force)))
+                rows.append(row(f"{robot} | baseline {a.baseline_rev}, audit=False",
+                                run(base, robot, a.baseline_frames, a.force, "off", a.start,
+                                    not a.no_v_demo)))
     rows.append("")
     rows.append(f"load average (1, 5, 15 min): {os.getloadavg()}, {os.cpu_count()} CPUs")
     print("\n".join(rows))
