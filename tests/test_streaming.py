@@ -110,6 +110,45 @@ def test_worker_verdicts_are_the_inline_ones_frame_by_frame(walk):
     assert [r.previous_feasible for r in res_i[1:]] == inline[:-1]
 
 
+def test_verdicts_in_batches_and_one_by_one_are_the_whole_motion_audits_knot_by_knot(walk):
+    """The one definition (``verdict_worker.knot_verdicts``: each knot audited on the frames
+    its checks read) in batches (the worker process) and frame by frame (inline) gives every
+    knot the verdict the audit of the whole motion gives it — on frames that fail: the walk's
+    first 40 frames with the base pushed 0.1 mm further along x each frame from frame 5 on,
+    so that each stance sole drifts from where its stance began and fails ``slip`` (1 mm)
+    some ten frames into the stance, and only then (the velocity stays within
+    ``velocity_consistency``'s tolerance, the dynamics do not change): measured, frames 16–39
+    but 18 fail (the left sole in stance from frame 0, the right from 8). A window that left
+    out the frame a stance began would pass them."""
+    from gdimitate.retarget.verdict_worker import InlineVerdicts, VerdictWorker, knot_verdicts
+
+    n = 40
+    sa, motion, W, _ = _stream(walk, n)
+    H = {k: list(x) for k, x in sa._hist.items()}
+    for k in range(n):
+        H["q"][k] = H["q"][k].copy()
+        H["q"][k][0] += 1e-4 * max(k - 5, 0)
+    tail = (motion.a[-1], {s: W[s][-1] for s in SIDES})
+    rep = audit(sa._audit_robot, motion.replace(q=np.array(H["q"])), W, sa.contacts)
+    whole = rep.knot_feasible
+    assert whole.any() and not whole.all()
+    assert {b.split(":")[0] for b in rep.binding} == {"slip"}
+    args = (sa._audit_robot, sa.contacts, 0.0)
+    got = {}
+    for judge in (VerdictWorker(*args), InlineVerdicts(*args)):
+        for k in range(n):
+            judge.add((H["t"][k], H["q"][k], H["v"][k], H["c"][k],
+                       *((H["a"][k - 1], H["w"][k - 1]) if k else (None, None))))
+        pairs = judge.collect(wait=True, timeout=60)
+        judge.close()
+        assert [j for j, _ in pairs] == list(range(n - 1))
+        got[type(judge).__name__] = [ok for _, ok in pairs]
+    last = knot_verdicts(*args, {**H, "a": H["a"][:n - 1], "w": H["w"][:n - 1]}, n - 1, n - 1,
+                         tail=tail)
+    for name, ver in got.items():
+        np.testing.assert_array_equal(np.array(ver + last, bool), whole, err_msg=name)
+
+
 def test_bad_demonstrator_velocity_is_refused(walk):
     human, demo, forces, talos = walk
     sa = gd.retarget.StreamingAdaptor(human, talos, "segment", dt=demo.dt, audit=False)
