@@ -218,48 +218,40 @@ def test_literal_aliases_match_the_values_checked_at_run_time():
 
 
 # ------------------------------------------------------------------ scenario code (apps/)
-#: the scenario modules that moved into gdimitate/apps/ and their old import paths, kept as
-#: deprecated aliases (the same module object, a DeprecationWarning on import)
-MOVED = {"gdimitate.demo": "gdimitate.apps.demo", "gdimitate.paper": "gdimitate.apps.paper",
-         "gdimitate.cases": "gdimitate.apps.cases",
-         "gdimitate.examples": "gdimitate.apps.examples",
-         "gdimitate.baselines": "gdimitate.apps.baselines",
-         "gdimitate.sim.scenarios": "gdimitate.apps.scenarios"}
+#: old import paths of modules that moved (scenario code into gdimitate/apps/, the planar
+#: corner into gdimitate/planar/ and kinematics, the README picture's ``python -m
+#: gdimitate.viz`` into apps.viewer_picture): removed, not aliased — one home per module
+REMOVED_PATHS = ("gdimitate.demo", "gdimitate.paper", "gdimitate.cases", "gdimitate.examples",
+                 "gdimitate.baselines", "gdimitate.sim.scenarios", "gdimitate.viz.__main__",
+                 "gdimitate.analytic", "gdimitate.sagittal", "gdimitate.walking")
 
 
 def test_scenario_code_is_imported_only_by_the_command_line():
     """``gdimitate.apps`` (scenario code, not API) is imported inside the package only by the
-    CLI, by itself, by the deprecated aliases of its old paths (``python -m gdimitate.viz``
-    included) and by ``gdimitate/__init__`` (the documented name ``paper_case``, lazily)."""
+    CLI, by itself and by ``gdimitate/__init__`` (the documented name ``paper_case``,
+    lazily)."""
     graph = gdimitate_graph()
-    allowed = {"gdimitate", "gdimitate.cli", "gdimitate.viz.__main__", *MOVED}
+    allowed = {"gdimitate", "gdimitate.cli"}
     users = {m: sorted(t for t in deps if t == "gdimitate.apps" or
                        t.startswith("gdimitate.apps."))
              for m, deps in graph.items()
              if m not in allowed and not m.startswith("gdimitate.apps")}
     users = {m: t for m, t in users.items() if t}
     assert not users, f"library modules importing scenario code: {users}"
-    assert {f"gdimitate{m}" for m in gdimitate._LAZY_NAMES.values()} & set(MOVED.values()) \
-        == {"gdimitate.apps.cases"}
-    apps = __import__("importlib").import_module("gdimitate.apps")
+    assert {f"gdimitate{m}" for m in gdimitate._LAZY_NAMES.values()
+            if m.startswith(".apps")} == {"gdimitate.apps.cases"}
+    import importlib
+
+    apps = importlib.import_module("gdimitate.apps")
     assert "not api" in apps.__doc__.lower()
+    assert gdimitate.paper_case is importlib.import_module("gdimitate.apps.cases").paper_case
 
 
-def test_old_scenario_paths_warn_and_are_the_moved_modules():
-    code = textwrap.dedent(f"""
-        import importlib, warnings
-        moved = {MOVED!r}
-        for old, new in moved.items():
-            with warnings.catch_warnings(record=True) as w:
-                warnings.simplefilter("always")
-                mod = importlib.import_module(old)
-            assert mod is importlib.import_module(new), (old, mod)
-            assert any(issubclass(x.category, DeprecationWarning) and new in str(x.message)
-                       for x in w), (old, [str(x.message) for x in w])
-        import gdimitate as gd
-        assert gd.paper_case is importlib.import_module("gdimitate.apps.cases").paper_case
-    """)
-    subprocess.run([sys.executable, "-c", code], check=True)
+def test_no_alias_of_a_moved_module_remains():
+    """A module that moved has one home: its old path is gone, not a deprecated alias."""
+    graph = gdimitate_graph()
+    left = [m for m in REMOVED_PATHS if m in graph]
+    assert not left, f"old module paths still in gdimitate/: {left}"
 
 
 # ------------------------------------------------------------------ floors
@@ -277,10 +269,6 @@ FLOORS: tuple[frozenset[str], ...] = (
     frozenset({"audit", "metrics", "wrenches", "selfcollision", "cpg", "export", "sim"}),
 )
 
-#: deprecated aliases of moved modules: they import their new place, wherever it is
-DEPRECATED_ALIASES = frozenset({*MOVED, "gdimitate.viz.__main__", "gdimitate.analytic",
-                                "gdimitate.sagittal", "gdimitate.walking"})
-
 #: imports up the floors left for now, each with why (the coordinator empties this)
 UPWARD_ALLOWED = {
     ("gdimitate.audit.periodic", "gdimitate.retarget.periodic"):
@@ -292,14 +280,6 @@ UPWARD_ALLOWED = {
 }
 
 
-def test_no_module_imports_a_deprecated_alias():
-    """The old paths are for users: inside the package every import names the new place."""
-    graph = gdimitate_graph()
-    users = {m: sorted(deps & DEPRECATED_ALIASES) for m, deps in graph.items()
-             if m not in DEPRECATED_ALIASES and deps & DEPRECATED_ALIASES}
-    assert not users, f"modules importing deprecated aliases: {users}"
-
-
 def _floor(module: str) -> int:
     unit = module.split(".")[1] if "." in module else ""
     return next((i for i, f in enumerate(FLOORS) if unit in f), len(FLOORS))
@@ -307,11 +287,11 @@ def _floor(module: str) -> int:
 
 def test_imports_run_down_the_floors():
     """docs/design.md §8: cli/apps -> batch/walk -> adapt -> retarget -> planar -> result ->
-    audit/metrics/sim -> robot ... -> errors. ``gdimitate/__init__`` (lazy public names) and
-    the deprecated aliases are exempt; the allowed exceptions are printed."""
+    audit/metrics/sim -> robot ... -> errors. ``gdimitate/__init__`` (lazy public names) is
+    exempt; the allowed exceptions are printed."""
     graph = gdimitate_graph()
     up = sorted((m, d) for m, deps in graph.items() if m != "gdimitate"
-                and m not in DEPRECATED_ALIASES for d in deps if _floor(d) < _floor(m))
+                for d in deps if _floor(d) < _floor(m))
     print("imports up the floors allowed for now:")
     for (m, d), why in UPWARD_ALLOWED.items():
         print(f"  {m} -> {d}: {why}")

@@ -101,32 +101,6 @@ def test_eq1_bad_lengths(lengths):
 
 
 # ---------------------------------------------------------------------- the planar corner
-@pytest.mark.parametrize("old, new, names", [
-    ("gdimitate.sagittal", "gdimitate.planar.sagittal",
-     ["leg_angles", "compose_q", "ground_base", "torso_angle"]),
-    ("gdimitate.sagittal", "gdimitate.kinematics",
-     ["frame_paths", "joint_paths", "kinematic_contact", "robot_motion"]),
-    ("gdimitate.analytic", "gdimitate.planar.analytic", ["adapt_planar", "check_pair"]),
-    ("gdimitate.walking", "gdimitate.planar.walking",
-     ["GaitSpec", "HUMAN_GAIT", "ROBOT_GAIT", "walking_motion"]),
-])
-def test_old_planar_paths_warn_and_re_export(old, new, names):
-    """The modules that moved into gdimitate/planar/ (and kinematics) keep their old import
-    paths: a DeprecationWarning naming the new place, and the very same objects."""
-    import subprocess
-    import sys
-
-    code = (f"import warnings, importlib\n"
-            f"with warnings.catch_warnings(record=True) as w:\n"
-            f"    warnings.simplefilter('always')\n"
-            f"    old = importlib.import_module({old!r})\n"
-            f"new = importlib.import_module({new!r})\n"
-            f"assert any(issubclass(x.category, DeprecationWarning) and 'deprecated' in "
-            f"str(x.message) for x in w), [str(x.message) for x in w]\n"
-            f"assert all(getattr(old, n) is getattr(new, n) for n in {names!r})\n")
-    subprocess.run([sys.executable, "-c", code], check=True)
-
-
 def test_leg_signs_moved_to_the_planar_package():
     """``Leg.signs``/``offsets`` warn and return :func:`gdimitate.planar.sagittal_leg`'s,
     which for our planar model follow from its URDF: joints about −y (a positive angle moves

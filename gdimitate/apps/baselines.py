@@ -11,9 +11,9 @@ output:
   (the map's signs come from the joint axes at the two neutral poses), the others stay at the
   imitator's neutral pose; the base turns as the demonstrator's pelvis turns (relative to the
   neutral poses) and is placed by the same rule as the planar copy
-  (:func:`gdimitate.sagittal.ground_base`): the lowest stance sole on z = 0, the *anchor* foot
-  (the stance foot down longest) staying where it landed in x and y. No joint limit is
-  enforced (the audit reports them).
+  (:func:`gdimitate.planar.sagittal.ground_base`): the lowest stance sole on z = 0, the
+  *anchor* foot (the stance foot down longest) staying where it landed in x and y. No joint
+  limit is enforced (the audit reports them).
 - :func:`diff_ik` — a per-frame kinematic retargeter of the kind today's humanoid tools use
   (differential inverse kinematics on scaled keypoints with joint limits, built on Pink,
   S. Caron et al., https://github.com/stephane-caron/pink): per frame, frame tasks on the
@@ -192,9 +192,9 @@ def _anchor_offsets(rel: dict[str, np.ndarray], contact: Mapping[str, np.ndarray
 def anchor_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray]) -> np.ndarray:
     """``q`` ``(T, nq)`` of a free-flyer with its base translation replaced so the motion walks
     on z = 0 without the anchor foot slipping — the 3-D form of
-    :func:`gdimitate.sagittal.ground_base`: the lowest stance sole (contact frame origin) on
-    z = 0 (interpolated through flight); in x and y the anchor foot (the stance foot down
-    longest) stays where it landed, and when it lifts off the other stance foot becomes the
+    :func:`gdimitate.planar.sagittal.ground_base`: the lowest stance sole (contact frame
+    origin) on z = 0 (interpolated through flight); in x and y the anchor foot (the stance foot
+    down longest) stays where it landed, and when it lifts off the other stance foot becomes the
     anchor where it stands (a second stance foot may slide: the audit and the simulation
     measure it). The base starts at x = y = 0. Returns a new array."""
     q = np.array(q, dtype=float)

@@ -142,8 +142,8 @@ def sway_plan(robot: Robot, duration: float, amplitude: float, period: float,
 
 def kinematic_walk_plan(robot: Robot, spec=None) -> Plan:
     """A joint-angle walk from :func:`gdimitate.walking_motion` (``spec`` a
-    :class:`~gdimitate.walking.GaitSpec`, default ``ROBOT_GAIT``) with finite-difference v, a
-    and :func:`split_wrenches` — a negative control (module docstring)."""
+    :class:`~gdimitate.planar.walking.GaitSpec`, default ``ROBOT_GAIT``) with finite-difference
+    v, a and :func:`split_wrenches` — a negative control (module docstring)."""
     from ..planar.walking import ROBOT_GAIT, walking_motion
 
     mo = walking_motion(robot, spec or ROBOT_GAIT)

@@ -1,5 +1,5 @@
 """``python -m gdimitate.apps.viewer_picture screenshot PNG`` — render the README picture of the
-viewer (a figure script: scenario code, not API; ``python -m gdimitate.viz`` still runs it).
+viewer (a figure script: scenario code, not API).
 
 Builds a Talos (example-robot-data) walking next to a Unitree G1 that performs the adapted
 walk, exports the scene as self-contained HTML, and screenshots it in headless Chromium.
