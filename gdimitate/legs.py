@@ -24,19 +24,13 @@ from __future__ import annotations
 
 import json
 import re
-import warnings
-import weakref
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from .errors import GdimitateError, LegDetectionError, UnknownNameError
+from .errors import LegDetectionError, UnknownNameError
 from .types import SIDES
-
-if TYPE_CHECKING:
-    from .planar.sagittal import SagittalLeg
 
 __all__ = ["LEG_PRESETS", "Leg", "SIDES", "legs_example", "measure_leg", "measure_orientation",
            "resolve_leg_names", "side_of", "sole_from_geometry"]
@@ -69,9 +63,9 @@ class Leg:
     ``segments`` [m], the same two segments' 3-D lengths (rigid: constant over any motion);
     ``foot`` [m], the ankle's height above the sole.
 
-    ``signs`` and ``offsets`` — the paper's planar angle = sign·q + offset of the hip, knee and
-    ankle — are deprecated here: :func:`gdimitate.planar.sagittal_leg` measures them, and only
-    for legs whose joints turn about the lateral axis.
+    The paper's planar measurements (the hip's, knee's and ankle's planar angle = sign·q +
+    offset) are not a leg's: :func:`gdimitate.planar.sagittal_leg` measures them, and only for
+    legs whose joints turn about the lateral axis.
     """
 
     side: str
@@ -83,34 +77,13 @@ class Leg:
     shank: float
     foot: float
     segments: tuple[float, float] = (0.0, 0.0)
-    owner: Any = field(default=None, repr=False, compare=False)  # weakref to the Robot
 
     @property
     def length(self) -> float:
         """Thigh + shank [m] (x–z extents, see the class docstring)."""
         return self.thigh + self.shank
 
-    def _sagittal(self, name: str) -> SagittalLeg:
-        warnings.warn(f"Leg.{name} is deprecated: use gdimitate.planar.sagittal_leg(robot, "
-                      f"{self.side!r}).{name} (the planar measurements moved to "
-                      "gdimitate.planar)", DeprecationWarning, stacklevel=3)
-        robot = self.owner() if self.owner is not None else None
-        if robot is None:
-            raise GdimitateError(f"Leg.{name}: the leg's robot is gone; measure it with "
-                                 "gdimitate.planar.sagittal_leg(robot, side)")
-        from .planar.sagittal import sagittal_leg
 
-        return sagittal_leg(robot, self.side)
-
-    @property
-    def signs(self) -> tuple[float, float, float]:
-        """Deprecated: :attr:`gdimitate.planar.SagittalLeg.signs`."""
-        return self._sagittal("signs").signs
-
-    @property
-    def offsets(self) -> tuple[float, float, float]:
-        """Deprecated: :attr:`gdimitate.planar.SagittalLeg.offsets`."""
-        return self._sagittal("offsets").offsets
 _ROLE_PATTERNS = {
     "hip": r"hip|hfe",
     "knee": r"knee|kfe",
@@ -400,5 +373,4 @@ def measure_leg(robot, side: str, names: dict[str, str | None]) -> Leg:
         shank=float(np.hypot(*(ankle - knee)[[0, 2]])),
         foot=float(ankle[2] - sole[2]),
         segments=(float(np.linalg.norm(knee - hip)), float(np.linalg.norm(ankle - knee))),
-        owner=weakref.ref(robot),
     )

@@ -275,8 +275,6 @@ UPWARD_ALLOWED = {
         "the periodic audit shifts q by one stride with the adaptor's helper",
     ("gdimitate.audit.periodic", "gdimitate.retarget.parts.periodic"):
         "the periodic audit reads the walking direction with the adaptor's helper",
-    ("gdimitate.legs", "gdimitate.planar.sagittal"):
-        "Leg.signs/offsets, deprecated, delegate to planar.sagittal_leg",
 }
 
 

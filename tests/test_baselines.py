@@ -27,7 +27,7 @@ from gdimitate.apps.baselines import (
 )
 from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
-from gdimitate.planar.sagittal import leg_angles
+from gdimitate.planar.sagittal import leg_angles, sagittal_leg
 
 SIDES = ("left", "right")
 
@@ -87,7 +87,7 @@ def test_copy_keeps_the_sagittal_angles(walk, name, copies):
         # hip (absolute: the torso's pitch, copied with the pelvis rotation, included), knee
         # and ankle: equal up to the constant offsets of the two leg models
         for i in range(3):
-            off = robot.legs[s].offsets[i] - robot_m.legs[s].offsets[i]
+            off = sagittal_leg(robot, s).offsets[i] - sagittal_leg(robot_m, s).offsets[i]
             np.testing.assert_allclose(a_copy[s][:, i] - a_demo[s][:, i], off, atol=1e-9)
 
 

@@ -101,10 +101,10 @@ def test_eq1_bad_lengths(lengths):
 
 
 # ---------------------------------------------------------------------- the planar corner
-def test_leg_signs_moved_to_the_planar_package():
-    """``Leg.signs``/``offsets`` warn and return :func:`gdimitate.planar.sagittal_leg`'s,
-    which for our planar model follow from its URDF: joints about −y (a positive angle moves
-    the distal end forward: sign +1) and legs hanging straight down (offsets 0)."""
+def test_planar_signs_and_offsets_are_sagittal_leg_s():
+    """The planar signs and offsets are :func:`gdimitate.planar.sagittal_leg`'s (a ``Leg`` has
+    none), which for our planar model follow from its URDF: joints about −y (a positive angle
+    moves the distal end forward: sign +1) and legs hanging straight down (offsets 0)."""
     import gdimitate as gd
     from gdimitate.planar import sagittal_leg
 
@@ -113,8 +113,5 @@ def test_leg_signs_moved_to_the_planar_package():
         sag = sagittal_leg(r, s)
         assert sag.signs == (1.0, 1.0, 1.0) and sag.offsets == (0.0, 0.0, 0.0)
         assert (sag.thigh, sag.shank) == (r.legs[s].thigh, r.legs[s].shank)
-        with pytest.warns(DeprecationWarning, match="sagittal_leg"):
-            assert r.legs[s].signs == sag.signs
-        with pytest.warns(DeprecationWarning, match="sagittal_leg"):
-            assert r.legs[s].offsets == sag.offsets
+        assert not hasattr(r.legs[s], "signs") and not hasattr(r.legs[s], "offsets")
         assert sagittal_leg(r, s) is sag  # measured once per robot

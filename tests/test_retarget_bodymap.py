@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 
 from gdimitate.errors import InvalidInputError, UnknownNameError
+from gdimitate.planar import sagittal_leg
 from gdimitate.retarget import BodyMap, UnmappedJointsWarning, body_map
 
 
@@ -29,12 +30,13 @@ def test_planar_preset_signs_follow_the_leg_conventions(robot, name):
         bm = body_map(d, i)
     for s in ("left", "right"):
         dl, il = d.legs[s], i.legs[s]
+        dsag, isag = sagittal_leg(d, s), sagittal_leg(i, s)
         for k, (dj, ij) in enumerate(zip((dl.hip, dl.knee, dl.ankle), (il.hip, il.knee,
                                                                           il.ankle))):
             target, scale, offset = bm.joints[dj]
             assert target == ij and offset == 0.0
             # the planar angle sign·q is the same physical angle on both robots
-            assert scale == dl.signs[k] * il.signs[k]
+            assert scale == dsag.signs[k] * isag.signs[k]
             a, b = _axis(d, dj), _axis(i, ij)
             assert np.sign(a @ b) == scale
 
