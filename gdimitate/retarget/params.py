@@ -68,7 +68,7 @@ class Weights:
     - ``steps`` [100]: in double support, the left sole's horizontal place relative to the
       right's / leg length − the demonstrator's footprints' (:mod:`.parts.steps`): its steps,
       and so its distance, scaled to the imitator's legs;
-    - ``over_feet`` [100]: at every stance knot, the hips' midpoint relative to the stance
+    - ``over_feet`` [30]: at every stance knot, the hips' midpoint relative to the stance
       soles along the demonstrator's facing / leg length − the demonstrator's
       (:mod:`.parts.over_feet`): the body carried over the feet, so that a clip that starts or
       ends in single support travels the scaled distance too;
@@ -93,7 +93,7 @@ class Weights:
     thigh: float = 0.0
     placement: float = 0.1
     steps: float = 100.0
-    over_feet: float = 100.0
+    over_feet: float = 30.0
     foot: float = 1.0
     torso: float = 1.0
     joints: float = 0.1
