@@ -113,7 +113,7 @@ def test_a_mirrored_stride_is_adapted_like_the_stride(g1_stride, robot):
     within 0.05 of each other, the mirrored one landing with the other foot first. (The two
     solutions are not each other's mirror image to 1e-4 rad: the problem is, to 3.5 mrad in
     G1's unmapped shoulder targets, but IPOPT's path from mirrored starts reaches different
-    local optima, up to 0.69 rad apart in G1's right knee; docs/design.md §13.)"""
+    local optima, up to 0.24 rad apart in G1's knees; docs/design.md §13.)"""
     h, stride, fs, a = g1_stride
     g1 = robot("g1")
     b = gd.adapt(mirror_motion(h, stride), h, g1, force="measured", forces=mirror_forces(fs),
