@@ -21,12 +21,11 @@ Talos, most of it the self-collision distances), while the caller goes on — th
 frame k arrives a few frames later (``StreamingAdaptor.step``'s ``FrameResult.verdicts``)
 without slowing frame k + 1 (a thread would hold the interpreter's lock; the worker runs at
 :data:`WORKER_NICE`). Forked, it inherits the limited robot, its convex collision hulls and
-the soles: a :class:`~gdimitate.Robot` does not pickle (its legs hold a weak reference, coal's
-hulls have no serialisation, and Talos's meshes alone made 350 MB and 25 s to pickle and load
-back); only the frames go through the pipe. It ends when the caller closes (or loses) the
-pipe, and :meth:`VerdictWorker.close` ends and reaps it (so do garbage collection and the
-interpreter's exit): no process is left behind, no file written. Platforms without ``fork``
-judge inline.
+the soles, where pickling them would not do (coal's hulls have no serialisation, and Talos's
+meshes alone made 350 MB and 25 s to pickle and load back); only the frames go through the
+pipe. It ends when the caller closes (or loses) the pipe, and :meth:`VerdictWorker.close`
+ends and reaps it (so do garbage collection and the interpreter's exit): no process is left
+behind, no file written. Platforms without ``fork`` judge inline.
 """
 
 from __future__ import annotations
