@@ -93,10 +93,12 @@ def mirror_map(robot: Robot) -> MirrorMap:
                                 "left-right mirror image to walk")
     m = robot.model
     multi = [m.names[j] for j in range(1, m.njoints)
-             if m.joints[j].nv != 1 and m.joints[j].shortname() != "JointModelFreeFlyer"]
+             if (m.joints[j].nv, m.joints[j].nq) != (1, 1)
+             and m.joints[j].shortname() != "JointModelFreeFlyer"]
     if multi:
-        raise InvalidInputError(f"{robot.name}: mirroring handles one-axis joints and the free "
-                                f"flyer; {multi[:3]} move about several axes")
+        raise InvalidInputError(f"{robot.name}: mirroring handles one-angle joints and the "
+                                f"free flyer; {multi[:3]} are not (several axes, or an "
+                                f"unbounded joint's cos/sin)")
     tw = _twists(robot)
     names = tuple(tw)
     cols, src, sign = [], [], []
