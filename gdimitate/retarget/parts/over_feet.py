@@ -21,11 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...footsteps import footprints
 from ...kinematics import frame_paths
 from ...robot import SIDES
 from .base import Cost
-from .steps import bounded
+from .steps import bounded, footprint_places
 
 
 @dataclass(frozen=True)
@@ -38,10 +37,7 @@ class OverFeet(Cost):
 
     def values(self, ctx):
         tg, d = ctx.tg, ctx.demonstrator
-        L = float(np.mean([d.legs[s].length for s in SIDES]))
-        place = {s: np.full((tg.T, 2), np.nan) for s in SIDES}
-        for f in footprints(d, tg.demo, tg.stance):
-            place[f.side][f.start:f.stop] = f.xy
+        L, place = footprint_places(ctx)
         w = np.column_stack([np.isfinite(place[s][:, 0]) for s in SIDES]).astype(float)
         n = w.sum(axis=1)
         on = n > 0

@@ -39,11 +39,7 @@ class Steps(Cost):
         return {"steps": 2, "steps_on": 1}
 
     def values(self, ctx):
-        tg, d = ctx.tg, ctx.demonstrator
-        L = float(np.mean([d.legs[s].length for s in SIDES]))
-        place = {s: np.full((tg.T, 2), np.nan) for s in SIDES}
-        for f in footprints(d, tg.demo, tg.stance):
-            place[f.side][f.start:f.stop] = f.xy
+        L, place = footprint_places(ctx)
         rel = (place["left"] - place["right"]) / L
         on = np.all(np.isfinite(rel), axis=1)
         return {"steps": np.where(on[:, None], rel, 0.0), "steps_on": on.astype(float)}
@@ -52,6 +48,18 @@ class Steps(Cost):
         L = float(np.mean([k.leg[s].length for s in SIDES]))
         e = (k.sole_p["left"][:2] - k.sole_p["right"][:2]) / L - k.P("steps")
         return k.P("steps_on")[0] * bounded(e)
+
+
+def footprint_places(ctx) -> tuple[float, dict[str, np.ndarray]]:
+    """``(L, {side: (T, 2)})``: the demonstrator's mean leg length [m] and, per knot, the
+    horizontal place [m] of each foot's current footprint (NaN where the foot is not in the
+    imitator's stance) — what the gait parts compare the imitator's soles with."""
+    tg, d = ctx.tg, ctx.demonstrator
+    L = float(np.mean([d.legs[s].length for s in SIDES]))
+    place = {s: np.full((tg.T, 2), np.nan) for s in SIDES}
+    for f in footprints(d, tg.demo, tg.stance):
+        place[f.side][f.start:f.stop] = f.xy
+    return L, place
 
 
 def bounded(e):
