@@ -309,7 +309,7 @@ def test_fuzz_adapt(seed, T, method, force, imitator, options):
                        "--out", str(out)])
         assert rc in (0, 2, 3)  # 3 (issue 22): written, but not feasible
         if rc in (0, 3):
-            assert {p.name for p in out.iterdir()} == {"imitator_joints.csv",
+            assert {p.name for p in out.iterdir()} == {"imitator_joints.csv", "gait.png",
                                                         "imitator_motion.npz", "report.json"}
 
 

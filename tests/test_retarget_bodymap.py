@@ -272,13 +272,13 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
 
 @pytest.mark.slow
 def test_g1_holds_its_arms_under_an_armless_demonstrator():
-    """Issue 20, done when, on the shipped subject01 walk (gait2354: no arms): one stride on
-    G1 at 30 knots/s (10 until the steps cost made G1 walk the scaled stride, 2.3 times as
-    far: at 10 knots/s the one-step scheme's stance-foot velocity, 2.2e-3 m/s, then exceeds
-    the audit's 1e-3; 20 until the body-over-feet cost carried the body further: at 20 the
-    left stance's velocity exceeds it again) — G1's 14 arm and wrist joints (unmapped) stay within HOLD_RANGE of their
-    rest pose (the neutral one with the shoulders rolled out of the torso's margin; a weak
-    posture cost let them sweep 1.9–2.5 rad), and the audit, its self-collision check
+    """Issue 20, done when, on the shipped subject01 walk (gait2354: no arms): one stride on G1
+    at 30 knots/s (10 until the steps cost made G1 walk the scaled stride, 2.3 times as far: at
+    10 knots/s the one-step scheme's stance-foot velocity, 2.2e-3 m/s, then exceeds the audit's
+    1e-3; 20 until the body-over-feet cost carried the body further: at 20 the left stance's
+    velocity exceeds it again) — G1's 14 arm and wrist joints (unmapped) stay within HOLD_RANGE
+    of their rest pose (the neutral one with the shoulders rolled out of the torso's margin; a
+    weak posture cost let them sweep 1.9–2.5 rad), and the audit, its self-collision check
     included, finds the plan feasible."""
     import warnings
 

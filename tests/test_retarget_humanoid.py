@@ -68,14 +68,16 @@ def _check(robot, r, target):
 # Talos and iCub are left out for the suite's time (their derivatives alone compile for ~110
 # and ~280 s on two cores, for these tests only); benchmarks/adaptor.py and
 # benchmarks/corpus.py adapt them (and Romeo) on every clip
+# 30 knots/s: at 20 the body-over-feet cost carries G1's body far enough that the one-step
+# scheme's stance-foot velocity exceeds the audit's 1e-3 m/s (docs/design.md §13)
 @pytest.mark.parametrize("name", ["g1"])
 def test_real_walk_to_humanoid(walk, name):
     h, demo, fs = walk
     robot = gd.Robot.from_library(name)
-    r = gd.adapt(demo, h, robot, method="optimal", force="measured", forces=fs, rate=20,
+    r = gd.adapt(demo, h, robot, method="optimal", force="measured", forces=fs, rate=30,
                  verbose=False)
     target = {s: d.vector for s, d in force_direction(
-        h, resample(h, demo, 20).replace(contact=r.motion.contact), "measured",
+        h, resample(h, demo, 30).replace(contact=r.motion.contact), "measured",
         forces=fs).items()}
     if r.audit.feasible:
         _check(robot, r, target)
