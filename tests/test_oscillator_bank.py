@@ -200,3 +200,32 @@ def test_bad_shapes_and_values_raise():
         MatsuokaParams(tau_r=np.ones(3), tau_a=np.ones(2))
     with pytest.raises(OscillatorError, match="record"):
         bank.simulate(t, record="x")
+
+
+def test_a_first_numba_compile_is_announced(tmp_path, capsys, monkeypatch):
+    """A fresh install's first run compiled the oscillator kernels for 1–2 min in silence. A
+    real cache=True numba function in a new module: before its first call there is no cache
+    index on disk, so the call is announced (once); after it, the index exists and a fresh
+    dispatcher of the same function is not announced."""
+    import importlib.util
+
+    from gdimitate.oscillator import _kernel
+
+    src = tmp_path / "fresh_kernel.py"
+    src.write_text("import numba\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n")
+
+    def load():
+        spec = importlib.util.spec_from_file_location("fresh_kernel", src)
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod.twice
+
+    f = load()
+    assert _kernel.first_compile(f)
+    monkeypatch.setattr(_kernel, "_ANNOUNCED", False)
+    _kernel.announce_first_compile(f)
+    _kernel.announce_first_compile(f)
+    assert capsys.readouterr().err.count("compiling the oscillator network's kernels") == 1
+    assert f(21) == 42  # compiles and writes numba's cache next to the module
+    assert not _kernel.first_compile(f)  # compiled in this process
+    assert not _kernel.first_compile(load())  # a fresh dispatcher finds the cache on disk

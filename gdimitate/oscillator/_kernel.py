@@ -9,6 +9,8 @@ steps of a chunk); chunks run in parallel threads.
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -23,7 +25,8 @@ except ImportError:  # pragma: no cover
 
 CHUNK = 256
 
-__all__ = ["HAVE_NUMBA", "rk4_numba", "rk4_uncoupled_numba", "CHUNK"]
+__all__ = ["HAVE_NUMBA", "rk4_numba", "rk4_uncoupled_numba", "CHUNK", "first_compile",
+           "announce_first_compile"]
 
 
 def _deriv(sxe, sxf, sve, svf, gv, has_g, P, W, l0, m, n, ye, yf, dxe, dxf, dve, dvf):
@@ -270,3 +273,30 @@ if HAVE_NUMBA:
     rk4_uncoupled_numba = numba.njit(cache=True, parallel=True, fastmath=True)(_rk4_uncoupled)
 else:  # pragma: no cover
     rk4_numba = rk4_uncoupled_numba = None
+
+
+def first_compile(dispatcher: Any) -> bool:
+    """Whether calling numba ``dispatcher`` now compiles it for the first time on this machine:
+    nothing compiled or loaded in this process, and no on-disk cache index for it (numba's
+    ``cache=True`` files). False where numba's cache layout cannot be read."""
+    if dispatcher is None or getattr(dispatcher, "signatures", None):
+        return False
+    try:
+        index = dispatcher._cache._cache_file._index_path
+    except AttributeError:
+        return False
+    return not os.path.exists(index)
+
+
+_ANNOUNCED = False
+
+
+def announce_first_compile(dispatcher: Any) -> None:
+    """Say once per process, on stderr, that numba is compiling the oscillator network's
+    kernels (a fresh install's first run spends 1–2 min on 2 cores there, silent before)."""
+    global _ANNOUNCED
+    if not _ANNOUNCED and first_compile(dispatcher):
+        print("gdimitate: compiling the oscillator network's kernels with numba, once for this "
+              "install (about 1-2 min on 2 cores; later runs load them) …", file=sys.stderr,
+              flush=True)
+        _ANNOUNCED = True

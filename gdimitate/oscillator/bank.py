@@ -161,6 +161,7 @@ def _rk4_compiled(t, g, p, W, x0, rec_all):
     XE, XF, VE, VF = (np.empty(rec) for _ in range(4))
     final = np.empty((4, n, B))
     tc = np.ascontiguousarray(t)
+    _kernel.announce_first_compile(_kernel.rk4_numba if coupled else _kernel.rk4_uncoupled_numba)
     if coupled:
         _kernel.rk4_numba(
             tc, gk, has_g, P, np.ascontiguousarray(W), xs, rec_all, Y, XE, XF, VE, VF, final
