@@ -1,9 +1,15 @@
-"""Issue 34: the README runs as written. Every ```python block of README.md runs, in order,
-in one interpreter (later blocks use what earlier ones defined, as a reader following the
-page would), in a private working folder; a block that begins with ``# placeholder`` (it needs
-the reader's own files) is skipped, and the test names the skipped blocks so that none is
-skipped by accident. The README's API block once opened ``subject.osim`` and ``clip.bvh``,
-files that do not exist, and its gait-lab block a C3D that did not ship."""
+"""Issue 34: the README runs as written; issue 38: so does every page of the documentation.
+Every ```python block of README.md and of docs/**/*.md runs, page by page, each page's blocks
+in order in one namespace of their own (later blocks use what earlier ones defined, as a
+reader following the page would; a page never sees another page's names or files), in a
+private working folder per page; a block that begins with ``# placeholder`` (it needs the
+reader's own files) is skipped, and the test names the skipped blocks so that none is skipped
+by accident. The README's API block once opened ``subject.osim`` and ``clip.bvh``, files that
+do not exist, and its gait-lab block a C3D that did not ship.
+
+All pages run in one interpreter (one subprocess, each page in a fresh namespace and folder),
+so the engines are imported and each robot's compiled problem loaded once for all pages: the
+test's wall time is that of the blocks, not of one interpreter start per page."""
 
 from __future__ import annotations
 
@@ -17,15 +23,31 @@ from pathlib import Path
 
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-#: The blocks skipped as placeholders, by the section they are in.
-PLACEHOLDERS = {"From your own robot"}
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+#: The blocks skipped as placeholders: (page, the section they are in).
+PLACEHOLDERS = {
+    ("docs/guide/your-robot.md", "Your own robot"),
+    ("docs/batch.md", "Batches: a folder of demonstrations, on one machine or a cluster"),
+}
+#: Files some pages write (in their own folder) that the test checks were written.
+WRITTEN = {
+    "README.md": {"g1_walk.csv"},
+    "docs/guide/gait-lab.md": {"subject01_walk1.c3d", "g1_walk.pkl"},
+    "docs/guide/viewing.md": {"walk.html"},
+}
 
 
-def _blocks() -> list[tuple[str, str]]:
-    """``(section, code)`` of every python block, in order."""
+def pages() -> list[Path]:
+    """README.md and every markdown page under docs/, in a fixed order."""
+    return [README] + sorted((ROOT / "docs").rglob("*.md"))
+
+
+def _blocks(page: Path) -> list[tuple[str, str]]:
+    """``(section, code)`` of every python block of ``page``, in order; the section is the
+    last heading of level 1 or 2 above the block."""
     section, out = "", []
-    for m in re.finditer(r"^## ([^\n]+)$|^```python\n(.*?)^```", README.read_text(),
+    for m in re.finditer(r"^##? ([^\n]+)$|^```python\n(.*?)^```", page.read_text(),
                          re.MULTILINE | re.DOTALL):
         if m.group(1):
             section = m.group(1).strip()
@@ -34,28 +56,66 @@ def _blocks() -> list[tuple[str, str]]:
     return out
 
 
+def _rel(page: Path) -> str:
+    return page.relative_to(ROOT).as_posix()
+
+
+def _placeholder(code: str) -> bool:
+    return code.lstrip().startswith("# placeholder")
+
+
 def test_the_placeholders_are_the_ones_named():
-    skipped = {s for s, code in _blocks() if code.lstrip().startswith("# placeholder")}
+    skipped = {(_rel(p), s) for p in pages() for s, code in _blocks(p) if _placeholder(code)}
     assert skipped == PLACEHOLDERS
-    assert len(_blocks()) > len(skipped)
+    assert sum(len(_blocks(p)) for p in pages()) > len(skipped)
+    for page in WRITTEN:  # the pages whose outputs are checked have blocks that run
+        assert any(not _placeholder(c) for _, c in _blocks(ROOT / page)), page
+
+
+#: Runs each page's code in a fresh namespace and folder; prints what each page took.
+DRIVER = """\
+import os, sys, time, traceback
+import matplotlib
+matplotlib.use("Agg")
+root = os.getcwd()
+for page, folder, code in PAGES:
+    os.makedirs(folder)
+    os.chdir(folder)
+    t0 = time.perf_counter()
+    try:
+        exec(compile(code, page, "exec"), {"__name__": "__main__"})
+    except BaseException:
+        traceback.print_exc()
+        sys.exit(f"{page}: a code block failed (above)")
+    finally:
+        os.chdir(root)
+    print(f"{page}: {time.perf_counter() - t0:.1f} s", flush=True)
+"""
+
+
+def _page_code(page: Path) -> str:
+    """The runnable blocks of ``page`` as one script, each block marked by its section."""
+    return "\n".join(f"# --- {s}\n{c}" for s, c in _blocks(page) if not _placeholder(c))
 
 
 @pytest.mark.slow
-def test_every_readme_code_block_runs(tmp_path):
-    code = "\n".join(f"# --- {s}\n{c}" for s, c in _blocks()
-                     if not c.lstrip().startswith("# placeholder"))
-    script = tmp_path / "readme.py"
-    script.write_text("import matplotlib\nmatplotlib.use('Agg')\n" + code)
+def test_every_code_block_of_the_readme_and_the_docs_runs(tmp_path):
+    runnable = [(_rel(p), f"page{i}", _page_code(p)) for i, p in enumerate(pages())
+                if _page_code(p).strip()]
+    script = tmp_path / "pages.py"
+    script.write_text(f"PAGES = {runnable!r}\n" + DRIVER)
     r = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
                        text=True, timeout=900, env={**os.environ, "MPLBACKEND": "Agg"})
     assert r.returncode == 0, r.stderr[-3000:]
-    written = {p.name for p in tmp_path.iterdir()}
-    assert {"g1_walk.csv", "subject01_walk1.c3d", "g1_walk.pkl", "walk.html"} <= written
+    folders = {page: tmp_path / folder for page, folder, _ in runnable}
+    for page, files in WRITTEN.items():
+        written = {p.name for p in folders[page].iterdir()}
+        assert files <= written, (page, written)
 
 
 def _make_readme_output():
     """docs/make_readme_output.py as a module (it is a script, not part of the package)."""
-    path = README.parent / "docs" / "make_readme_output.py"
+    path = ROOT / "docs" / "make_readme_output.py"
     spec = importlib.util.spec_from_file_location("make_readme_output", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -73,7 +133,7 @@ def test_the_printed_demo_block_is_regenerated_not_pasted():
     from gdimitate.apps.demo import DEFAULT_IMITATOR, default_demonstration, summary_table
 
     script = _make_readme_output()
-    summary = json.loads((README.parent / "docs" / "output" / "demo_summary.json").read_text())
+    summary = json.loads((ROOT / "docs" / "output" / "demo_summary.json").read_text())
     block = script.output_block("demo")
     table = summary_table(summary, script.DEMO_OUT).splitlines()
     assert block[:len(table)] == table
