@@ -1,5 +1,5 @@
 """The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``,
-``walk``, ``export``, ``simulate``, ``batch``, ``audit``.
+``walk``, ``export``, ``simulate``, ``batch``, ``audit``, ``stream``.
 
 Without a demonstration file, ``adapt``, ``entrain`` and ``view`` use the default story of
 ``demo``: one stride of the shipped real 3-D walk (with its measured forces) and the G1
@@ -227,28 +227,14 @@ def _force_goal(given: str | None, method: str, forces) -> str:
 
 
 def _cmd_adapt(a: argparse.Namespace) -> int:
-    from .verdict import push_errors, report_lines, solver_record, verdict
+    from .apps.outputs import write_adapted
+    from .verdict import report_lines, verdict
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
         demonstrator, demo, _, result = _adapted(a, a.demonstration)
         v = verdict(result)
-        with atomic_write(out / "imitator_joints.csv") as tmp:
-            result.save(tmp, "csv")
-        with atomic_write(out / "imitator_motion.npz") as tmp:
-            result.save(tmp, "npz")
-        report = {**result.report.to_dict(), "verdict": v.to_dict(),
-                  "audit": result.audit.to_dict() if result.audit is not None else None,
-                  "solver": solver_record(result.solver),
-                  "gait": result.gait.to_dict() if result.gait is not None else None,
-                  "push_direction_error": {s: {"rad": e, "knot": k, "measure": m} for s, (
-                      e, k, m) in push_errors(result).items()}}
-        text = json.dumps(report, indent=2, default=str)
-        with atomic_write(out / "report.json") as tmp:
-            tmp.write_text(text)
-        from .plots import plot_gait
-
-        plot_gait(demonstrator, demo, result, out / "gait.png")
+        text = write_adapted(out, demonstrator, demo, result)
     print(f"wrote {out}/imitator_joints.csv, imitator_motion.npz, report.json, gait.png")
     written = json.loads(text)  # the console prints the file's numbers
     for line in report_lines(written) + _error_lines(written):
@@ -432,6 +418,14 @@ def _cmd_audit(a: argparse.Namespace) -> int:
     return EXIT_NOT_FEASIBLE if bad else 0
 
 
+def _cmd_stream(a: argparse.Namespace) -> int:
+    from .apps.stream import stream_command
+
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
+        out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
+        return stream_command(a, out, _robot(a.imitator, a))
+
+
 def _cmd_export(a: argparse.Namespace) -> None:
     from .export import FORMATS, export_motion, read_wrenches
 
@@ -515,7 +509,7 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
     for add in (_add_demo, _add_paper, _add_adapt, _add_walk, _add_view, _add_entrain,
-                _add_export, _add_simulate, _add_batch, _add_audit):
+                _add_export, _add_simulate, _add_batch, _add_audit, _add_stream):
         add(sub)
     return p
 
@@ -732,6 +726,44 @@ def _add_audit(sub) -> None:
     au.add_argument("--fps", type=float, default=30.0,
                     help="frame rate of a LAFAN1 CSV [Hz] (default: %(default)s)")
     au.set_defaults(func=_cmd_audit)
+
+
+def _add_stream(sub) -> None:
+    """``gdimitate stream``: a live mocap stream adapted frame by frame (docs/guide/
+    streaming.md)."""
+    from .apps.demo import DEFAULT_IMITATOR
+
+    st = sub.add_parser("stream", help="adapt a live mocap stream frame by frame (a BVH file "
+                        "played at its rate, or Lab Streaming Layer), shown in meshcat; "
+                        "writes adapt's outputs when stopped (Ctrl-C)",
+                        epilog=f"exit status {EXIT_NOT_FEASIBLE}: some frame's verdict is not "
+                               "feasible (docs/guide/streaming.md)")
+    st.add_argument("source", help="a .bvh file (played at its own frame rate), or lsl:NAME "
+                    "(the LSL stream called NAME: a BVH skeleton's channels '<Joint>.<Channel>' "
+                    "and 'contact.left', 'contact.right'; with --skeleton)")
+    _add_robot_args(st, "--imitator", DEFAULT_IMITATOR, "imitator robot")
+    st.add_argument("--skeleton", default=None, metavar="FILE.bvh",
+                    help="lsl: the BVH file whose HIERARCHY names the stream's channels (its "
+                         "unit, up axis and floor are the file's)")
+    st.add_argument("--loopback", action="store_true",
+                    help="lsl: look for the stream on this machine only (liblsl's "
+                         "ResolveScope machine)")
+    st.add_argument("--timeout", type=_seconds, default=10.0,
+                    help="lsl: seconds to find the stream, and of silence that ends it "
+                         "(default: %(default)s)")
+    st.add_argument("--frames", type=int, default=None,
+                    help="stop after this many frames adapted (a .bvh: play its first N)")
+    st.add_argument("--seconds", type=_seconds, default=None, help="stop after this long")
+    st.add_argument("--delay", type=float, default=0.0, metavar="MS",
+                    help="wait this long after each frame (a slower machine: frames dropped)")
+    st.add_argument("--view", action="store_true",
+                    help="show the robot following the stream in meshcat (prints its URL)")
+    st.add_argument("--port", type=_port, default=None,
+                    help="web port of the --view page (default: a free one)")
+    st.add_argument("--open", action="store_true", help="open the --view page in a browser")
+    st.add_argument("--out", default="gdimitate-stream",
+                    help="output folder (default: %(default)s)")
+    st.set_defaults(func=_cmd_stream)
 
 
 def _on_signal(signum: int, frame: object) -> None:

@@ -18,7 +18,7 @@ PKG = Path(gdimitate.__file__).resolve().parent
 #: cycles allowed for now (none: the last one, retarget.solve <-> retarget.streaming, is gone)
 KNOWN_CYCLES: list[list[str]] = []
 
-ENGINES = ("mujoco", "meshcat", "dask", "numba", "pink", "matplotlib")
+ENGINES = ("mujoco", "meshcat", "dask", "numba", "pink", "matplotlib", "pylsl")
 
 
 # ------------------------------------------------------------------ the import graph
@@ -264,7 +264,7 @@ FLOORS: tuple[frozenset[str], ...] = (
     frozenset({"batch", "walk", "plots"}),
     frozenset({"adapt"}),
     frozenset({"retarget"}),
-    frozenset({"planar", "gait", "demonstration"}),
+    frozenset({"planar", "gait", "demonstration", "live"}),
     frozenset({"result"}),
     frozenset({"audit", "metrics", "wrenches", "selfcollision", "cpg", "export", "sim"}),
 )

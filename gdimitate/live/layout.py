@@ -1,0 +1,113 @@
+"""The channel layout of a live mocap stream: one sample's numbers → the demonstrator's
+configuration and stance flags.
+
+A sample is a BVH skeleton's frame line plus the stance of each foot, each number named by
+its channel label (the order does not matter; other channels are ignored):
+
+- ``<Joint>.<Channel>`` for every channel of the skeleton's HIERARCHY, e.g. ``Hips.Xposition``,
+  ``LeftUpLeg.Zrotation``: the number a BVH MOTION line holds there (the skeleton file's length
+  unit, degrees);
+- ``contact.left``, ``contact.right``: 1 while that foot is in stance, 0 in swing (a force
+  plate's or an insole's threshold, or the mocap system's foot-contact events; values ≥ 0.5
+  are stance).
+
+The skeleton is a BVH file (:func:`gdimitate.bvh.read_bvh`: the unit, the up axis and the floor
+height are the file's, found from its frames as for a BVH demonstration), so a frame received
+live gives the same configuration as the file's own frame would (:meth:`BVHLayout.decode`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..bvh import bvh_to_q, parse_bvh, read_bvh
+from ..errors import GdimitateError
+
+__all__ = ["CONTACT_LABELS", "BVHLayout", "LiveSourceError"]
+
+#: the stance channels' labels, by side
+CONTACT_LABELS = {"left": "contact.left", "right": "contact.right"}
+
+
+class LiveSourceError(GdimitateError):
+    """A live source that cannot be used: no such stream, a channel missing, a frame that is
+    not a number, the stream gone."""
+
+
+class BVHLayout:
+    """The channel layout of a BVH skeleton (module docstring).
+
+    ``skeleton``: a BVH file (its HIERARCHY names the channels; its frames set the unit and the
+    floor, as :func:`~gdimitate.bvh.read_bvh` finds them). Attributes: ``robot`` (the
+    demonstrator), ``labels`` (``n_channels + 2`` channel labels: the frame line's, then the two
+    stance channels), ``frame_time`` [s] (the file's), ``path``."""
+
+    def __init__(self, skeleton: str | Path):
+        self.path = Path(skeleton)
+        self.robot, self._motion = read_bvh(self.path)
+        info = self.robot.bvh_info
+        self._bvh = parse_bvh(self.path)
+        self._info = info
+        self.frame_time = float(info.frame_time)
+        channels = [f"{j.name}.{c}" for j in self._bvh.joints for c in j.channels]
+        self.labels: tuple[str, ...] = (*channels, *CONTACT_LABELS.values())
+        model = self.robot.model
+        rot = [model.joints[model.getJointId(cj.joint)].idx_q for cj in info.channels
+               if cj.joint is not None and cj.channel.endswith("rotation")]
+        self._angles = np.array(rot, int)  # q entries of rotation channels (unwrapped)
+        self._previous: np.ndarray | None = None
+
+    @property
+    def file_samples(self) -> np.ndarray:
+        """``(T, len(labels))``: the skeleton file's own frames in this layout (its reference
+        frame left out where :func:`~gdimitate.bvh.read_bvh` skips it), stance as it detects
+        it — what a mocap system replaying the file would send."""
+        skip = 1 if self._info.skipped_first_frame else 0
+        rows = self._bvh.frames[skip:]
+        c = self._motion.contact
+        return np.column_stack([rows, c["left"], c["right"]]).astype(float)
+
+    def columns(self, labels: list[str] | tuple[str, ...]) -> np.ndarray:
+        """``(len(self.labels),)`` int: where each of this layout's channels is among a
+        stream's channel ``labels``; :class:`LiveSourceError` naming the missing ones."""
+        where = {label: i for i, label in enumerate(labels)}
+        missing = [label for label in self.labels if label not in where]
+        if missing:
+            raise LiveSourceError(
+                f"the stream lacks {len(missing)} channel(s) of the skeleton {self.path.name} "
+                f"and the stance: {', '.join(missing[:8])}{' …' if len(missing) > 8 else ''} "
+                "(channel labels '<Joint>.<Channel>' and 'contact.left', 'contact.right'; "
+                "docs/guide/streaming.md)")
+        return np.array([where[label] for label in self.labels], int)
+
+    def reset(self) -> None:
+        """Forget the previous frame (angles are unwrapped against it)."""
+        self._previous = None
+
+    def decode(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
+        """One sample ``(len(labels),)`` in this layout's order → ``(q (nq,), {side: stance})``:
+        the configuration :func:`~gdimitate.bvh.read_bvh` gives the same frame (base in metres
+        on the floor z = 0, quaternion x, y, z, w; angles [rad]), each angle within π of the
+        previous frame's and the quaternion on its side (a frame line's 179° → −179° is a
+        2° turn); :class:`LiveSourceError` for a number that is not finite."""
+        x = np.asarray(sample, float)
+        if x.shape != (len(self.labels),) or not np.all(np.isfinite(x)):
+            raise LiveSourceError(f"a frame of {x.size} numbers, not {len(self.labels)} finite "
+                                  "ones, in the layout of " + self.path.name)
+        info = self._info
+        q = bvh_to_q(self._bvh, self.robot.model, info.channels, info.turn, info.scale,
+                     x[None, :-2])[0]
+        if info.grounded:
+            q[2] -= info.floor
+        p = self._previous
+        if p is not None:
+            i = self._angles
+            q[i] = p[i] + (q[i] - p[i] + np.pi) % (2 * np.pi) - np.pi
+            if float(q[3:7] @ p[3:7]) < 0:
+                q[3:7] *= -1
+        self._previous = q.copy()
+        contact = {s: bool(x[-2 + k] >= 0.5) for k, s in enumerate(CONTACT_LABELS)}
+        return q, contact
+
