@@ -63,7 +63,9 @@ class GaitSpec:
 
 
 HUMAN_GAIT = GaitSpec(single_support=0.85)
+"""The paper's demonstrator gait (its Fig. 3): 85 % of each step in single support."""
 ROBOT_GAIT = GaitSpec(single_support=0.35)
+"""A small robot of the paper's era: 35 % of each step in single support."""
 
 
 def walking_motion(robot: Robot, spec: GaitSpec = HUMAN_GAIT) -> Motion:
