@@ -1,0 +1,327 @@
+"""Repair a robot motion from any retargeter on its own robot: the whole-body adaptor with the
+same robot as demonstrator and imitator (docs/design.md §16).
+
+:func:`repair` takes a robot motion (GMR's, holosoma's, a joint-angle copy: any
+:class:`~gdimitate.Motion` of ``robot``, e.g. read by ``gdimitate audit``'s readers) and makes it
+dynamically consistent while keeping, as far as the robot's limits and the physics of contact
+allow, what the motion shows:
+
+- **audit before** — :func:`gdimitate.audit_motion` of the motion as given (stance from its
+  ``contact`` or the soles' height and speed, wrenches by
+  :func:`gdimitate.wrenches.estimate_wrenches` inside each sole's cone, the audit);
+- **the demonstration** — the same motion with a *flat-foot* stance schedule
+  (:func:`repair_schedule`: the audit's stance where the whole sole is near the floor; the
+  adaptor's contact is a flat foot, so a heel-off or toe-off frame is swing for it) and the
+  contact wrenches of the same estimate on that schedule, turned into world-frame
+  :class:`~gdimitate.contact.ContactForces` (:func:`wrench_forces`) — the "measured" forces
+  whose direction is the adaptor's goal (``force="measured"``);
+- **the adaptor** — :func:`gdimitate.adapt` (``method="optimal"``) from the robot to itself with
+  an identity body map of every 1-DoF joint (:func:`identity_map`: every joint's angle is a
+  target, none is held at rest) and :data:`REPAIR_WEIGHTS` (the keypoints' placement and the
+  thigh direction weighed up: the motion's own keypoints are the reference);
+- **audit after** — :func:`gdimitate.audit_motion` of the repaired motion (its q, v, a and
+  stance; its wrenches estimated anew, not the optimiser's): the verdict.
+
+The result (:class:`RepairResult`) also measures what was kept: the keypoints (hip, knee,
+ankle and sole frame of each leg, the ones the adaptor's body map targets) against the input's
+at the repaired motion's times (:func:`keypoint_error`), and each foot's push direction
+against the input's estimated one (the adaptor's audit, ``force_direction``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .audit.dataset import MotionAudit
+from .contact import ContactForces, FootForces
+from .errors import InvalidInputError
+from .motion import Motion
+from .result import AdaptedMotion
+from .robot import SIDES, Robot
+
+__all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
+           "wrench_forces", "identity_map", "keypoint_frames", "keypoint_error", "repair_rate"]
+
+#: Cost weights of the repair (:class:`gdimitate.retarget.Weights` fields changed from the
+#: adaptor's defaults): the horizontal ankle-to-hip placement and the thigh direction weighed
+#: as the hip height and shank (3). Measured on one stride of the shipped walk's joint copy
+#: onto G1 (30 knots/s): keypoints 7.6 cm RMS from the input with the defaults, 5.0 cm with 1,
+#: 4.4 cm with 3; with 10 (and height, shank 10) 3.2 cm but a stance velocity over the audit's
+#: bound.
+REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0}
+
+#: A stance frame of the audit's schedule stays stance for the repair only while the sole's
+#: highest corner is within this height above the floor [hip heights] (G1: 5.8 cm): the
+#: adaptor's contact is a flat foot. On the joint copy above: 0.057 (4 cm) 8.4 cm keypoint
+#: RMS, 0.086 (6 cm) 7.6 cm, 0.114 (8 cm) 8.8 cm; the audit's schedule alone (toe-off frames
+#: in stance, the sole centre up to 11 cm high) 10.8 cm and a push 19° RMS off.
+FLAT_HEIGHT = 0.085
+
+
+@dataclass(frozen=True, eq=False)
+class RepairResult:
+    """What :func:`repair` returns.
+
+    - ``adapted``: the :class:`~gdimitate.AdaptedMotion` of the adaptor (its ``motion`` is
+      the repaired motion: ``q`` ``(K, nq)``, ``v``/``a`` ``(K, nv)``, ``contact``; its
+      ``wrenches`` ``{side: (K, 6)}`` in each sole frame; its ``audit`` checks the push
+      against the input's as a target too);
+    - ``before``, ``after``: :class:`~gdimitate.audit.dataset.MotionAudit` of the input as
+      given and of the repaired motion (the same function on both: wrenches estimated from
+      each motion's own inverse dynamics);
+    - ``keypoint_rms``, ``keypoint_max`` [m]: RMS and largest distance of the keypoints
+      (:func:`keypoint_frames`) from the input's at the repaired motion's times;
+    - ``push_error_rms`` ``{side: rad}``: RMS angle of each foot's push from the input's
+      estimated one (NaN where no knot has both);
+    - ``schedule``: the stance ``{side: (T,) bool}`` on the input's frames the adaptor was
+      given; ``seconds``: wall time of the whole repair [s].
+    """
+
+    adapted: AdaptedMotion
+    before: MotionAudit
+    after: MotionAudit
+    keypoint_rms: float
+    keypoint_max: float
+    push_error_rms: Mapping[str, float]
+    schedule: Mapping[str, np.ndarray]
+    seconds: float
+
+    @property
+    def motion(self) -> Motion:
+        """The repaired motion (``adapted.motion``)."""
+        return self.adapted.motion
+
+    @property
+    def feasible(self) -> bool:
+        """The verdict: the audit of the repaired motion (:attr:`after`)."""
+        return self.after.feasible
+
+    def comparison(self) -> list[tuple[str, str, str]]:
+        """``(quantity, before, after)`` rows of the two audits, as printed."""
+        b, a = self.before, self.after
+
+        def f(x: float, fmt: str) -> str:
+            return "-" if x is None or not math.isfinite(x) else format(x, fmt)
+
+        rows = [("feasible", "yes" if b.feasible else "NO", "yes" if a.feasible else "NO"),
+                ("frames", str(b.frames), str(a.frames)),
+                ("knots feasible [%]", f(100 * b.share_feasible, ".1f"),
+                 f(100 * a.share_feasible, ".1f")),
+                ("torque/limit max", f(b.torque_ratio, ".3g"), f(a.torque_ratio, ".3g")),
+                ("slip [m]", f(b.slip, ".3g"), f(a.slip, ".3g")),
+                ("penetration [m]", f(b.penetration, ".3g"), f(a.penetration, ".3g")),
+                ("stance hover [m]", f(b.hover, ".3g"), f(a.hover, ".3g")),
+                ("CoP margin [m]", f(b.cop_margin, ".3g"), f(a.cop_margin, ".3g")),
+                ("friction |f_t|/f_z", f(b.friction, ".3g"), f(a.friction, ".3g")),
+                ("self-collision [m]", "-" if b.self_collision is None
+                 else f(b.self_collision, ".3g"),
+                 "-" if a.self_collision is None else f(a.self_collision, ".3g")),
+                ("failed checks", str(len(b.report.binding)), str(len(a.report.binding)))]
+        return rows
+
+    def lines(self) -> list[str]:
+        """The console table: the audits side by side, then what was kept."""
+        out = [f"{'':<22} {'before':>12} {'after':>12}"]
+        out += [f"{q:<22} {b:>12} {a:>12}" for q, b, a in self.comparison()]
+        push = ", ".join(f"{s} {math.degrees(e):.1f}°" for s, e in self.push_error_rms.items())
+        out.append(f"keypoints from the input: RMS {100 * self.keypoint_rms:.1f} cm, max "
+                   f"{100 * self.keypoint_max:.1f} cm; push from the input's RMS {push}")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: ``feasible``, ``before`` and ``after`` (each
+        :meth:`MotionAudit.summary_dict` with its failed checks), the kept keypoints [m] and
+        push [rad], ``seconds``."""
+        from .jsonable import jsonable
+
+        return jsonable({
+            "feasible": self.feasible,
+            "before": {**self.before.summary_dict(), "failed": self.before.failed()},
+            "after": {**self.after.summary_dict(), "failed": self.after.failed()},
+            "keypoint_rms_m": self.keypoint_rms, "keypoint_max_m": self.keypoint_max,
+            "push_error_rms_rad": dict(self.push_error_rms), "seconds": self.seconds})
+
+
+def repair_rate(t: np.ndarray, limit: float = 50.0) -> float:
+    """The knot rate [knots/s] of a repair of a motion on times ``t`` ``(T,)`` [s]: the input's
+    frame rate divided by the smallest whole number that brings it to ``limit`` or below
+    (60 Hz → 30, 120 Hz → 40, 50 Hz → 50), so that every knot is an input frame."""
+    fps = round(1.0 / float(np.median(np.diff(t))), 6)  # 60, not 59.99999999
+    return fps / math.ceil(fps / limit - 1e-9)
+
+
+def repair_schedule(robot: Robot, motion: Motion, flat: float = FLAT_HEIGHT
+                    ) -> dict[str, np.ndarray]:
+    """The stance ``{side: (T,) bool}`` a repair adapts with: the motion's own ``contact``
+    where it has both feet; else the audit's (:func:`gdimitate.audit.dataset.stance_schedule`:
+    the lowest sole corner's height and speed) where also the sole's highest corner is within
+    ``flat`` hip heights of the floor (:func:`gdimitate.bvh.contacts.estimate_floor`), the
+    flat foot the adaptor's contact is."""
+    from .audit.dataset import stance_schedule
+
+    stance, _ = stance_schedule(robot, motion)
+    if all(s in motion.contact for s in SIDES):
+        return stance
+    from .bvh.contacts import estimate_floor, sole_corners
+
+    hip = max(robot.legs[s].length + robot.legs[s].foot for s in SIDES)
+    corners = sole_corners(robot, motion.q)
+    floor = estimate_floor(corners)
+    return {s: stance[s] & (corners[s][..., 2].max(axis=1) - floor < flat * hip)
+            for s in SIDES}
+
+
+def wrench_forces(robot: Robot, motion: Motion, wrenches: Mapping[str, np.ndarray],
+                  source: str = "estimated from the motion's inverse dynamics"
+                  ) -> ContactForces:
+    """Contact wrenches ``{side: (T, 6)}`` (``[f; τ]`` [N, N·m] on each foot in its contact
+    frame at the frame's origin, :func:`gdimitate.wrenches.estimate_wrenches`'s convention) as
+    world-frame :class:`ContactForces` on ``motion.t``: the force ``R f``, the centre of
+    pressure ``p + R (−τ_y/f_z, τ_x/f_z, 0)`` and the free moment about it ``R (0, 0, τ_z −
+    c_x f_y + c_y f_x)``; in contact where ``motion.contact`` says stance and f_z > 0.
+    :func:`gdimitate.wrenches.measured_wrenches` turns them back (within round-off)."""
+    from .kinematics import frame_placements
+
+    contacts = robot.require_contacts()
+    P = frame_placements(robot, motion.q, [contacts[s].frame for s in SIDES])
+    feet = {}
+    for s in SIDES:
+        pl = P[contacts[s].frame]
+        R, p = pl.rotation, pl.translation
+        w = np.asarray(wrenches[s], float)
+        f, tau = w[:, :3], w[:, 3:]
+        on = np.asarray(motion.contact[s], bool) & (f[:, 2] > 0)
+        fz = np.where(on, f[:, 2], 1.0)
+        c = np.where(on[:, None], np.stack([-tau[:, 1] / fz, tau[:, 0] / fz,
+                                            np.zeros_like(fz)], axis=1), 0.0)
+        free = np.zeros_like(tau)
+        free[:, 2] = tau[:, 2] - (c[:, 0] * f[:, 1] - c[:, 1] * f[:, 0])
+        cop = p + np.einsum("tij,tj->ti", R, c)
+        cop[~on] = np.nan
+        feet[s] = FootForces(np.where(on[:, None], np.einsum("tij,tj->ti", R, f), 0.0), cop,
+                             np.where(on[:, None], np.einsum("tij,tj->ti", R, free), 0.0), on)
+    return ContactForces(np.asarray(motion.t, float).copy(), feet, source)
+
+
+def identity_map(robot: Robot) -> dict[str, dict]:
+    """The body map of ``robot`` onto itself: every 1-DoF joint (not a planar base's) onto
+    itself (scale 1, offset 0) and the preset's segments (pelvis, torso) onto themselves."""
+    from .retarget.bodymap import body_map
+
+    m = robot.model
+    joints = {j: [j, 1.0, 0.0] for j in robot.joint_names
+              if m.joints[m.getJointId(j)].nq == 1 and not j.startswith("base_")}
+    try:
+        segments = {f: f for f in body_map(robot, robot).segments}
+    except InvalidInputError:  # no preset for the robot's naming: joints alone
+        segments = {}
+    return {"joints": joints, "segments": segments}
+
+
+def keypoint_frames(robot: Robot) -> list[str]:
+    """The keypoints the adaptor's body map targets, per leg: hip, knee, ankle (joints) and
+    the sole frame."""
+    out = []
+    for s in SIDES:
+        leg = robot.legs[s]
+        out += [f for f in (leg.hip, leg.knee, leg.ankle, leg.sole) if f]
+    return out
+
+
+def _keypoints(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """World positions ``(T, n, 3)`` [m] of :func:`keypoint_frames` for ``q`` ``(T, nq)``
+    (joints: their origin; frames: theirs)."""
+    import pinocchio as pin
+
+    m = robot.model
+    d = m.createData()
+    names = keypoint_frames(robot)
+    out = np.empty((len(q), len(names), 3))
+    for k, x in enumerate(q):
+        pin.framesForwardKinematics(m, d, x)
+        for i, n in enumerate(names):
+            out[k, i] = (d.oMf[m.getFrameId(n)].translation if m.existFrame(n)
+                         else d.oMi[m.getJointId(n)].translation)
+    return out
+
+
+def keypoint_error(robot: Robot, reference: Motion, motion: Motion) -> np.ndarray:
+    """Distances ``(K, n)`` [m] of ``motion``'s keypoints (:func:`keypoint_frames`) from
+    ``reference``'s at ``motion.t`` (``reference``'s q linearly interpolated there, a
+    free-flyer's quaternion re-normalised: :func:`gdimitate.retarget.resample`'s rule)."""
+    t = motion.t
+    ref = np.column_stack([np.interp(t, reference.t, reference.q[:, c])
+                           for c in range(reference.q.shape[1])])
+    if robot.base == "free":
+        ref[:, 3:7] /= np.linalg.norm(ref[:, 3:7], axis=1, keepdims=True)
+    return np.linalg.norm(_keypoints(robot, motion.q) - _keypoints(robot, ref), axis=2)
+
+
+def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
+           weights: Any = None, flat: float = FLAT_HEIGHT, verbose: bool = False,
+           **options: Any) -> RepairResult:
+    """Make ``motion`` (a motion of ``robot`` from any source) physically consistent on
+    ``robot`` itself (module docstring).
+
+    ``robot``: a free-flyer :class:`~gdimitate.Robot` with soles; ``motion``: its
+    :class:`~gdimitate.Motion` (``t`` ``(T,)`` [s], ``q`` ``(T, nq)``; ``v``/``a``
+    differenced where absent; ``contact`` used where it has both feet); ``rate``
+    [knots/s]: the adaptor's grid (default :func:`repair_rate`); ``weights``: a
+    :class:`gdimitate.retarget.Weights` (default: the adaptor's with :data:`REPAIR_WEIGHTS`);
+    ``flat`` [hip heights]: :func:`repair_schedule`'s sole-flatness bound; ``verbose``: the
+    solver's progress on stderr; ``options``: more :func:`gdimitate.retarget.adapt_optimal`
+    options (``limits``, ``contact``, ``stop``, ``ipopt`` …; not ``forces``, ``body_map``,
+    ``force``).
+
+    Returns a :class:`RepairResult`; :attr:`RepairResult.feasible` is the audit of the
+    repaired motion. Raises :class:`~gdimitate.errors.InvalidInputError` for a motion that is
+    not the robot's, too short, a robot without a free base, or options the repair sets itself.
+    """
+    from .adapt import adapt
+    from .audit.dataset import audit_motion
+    from .motion import differentiate
+    from .retarget import Weights
+    from .wrenches import estimate_wrenches
+
+    t0 = time.perf_counter()
+    if not isinstance(robot, Robot):
+        raise InvalidInputError(f"robot must be a gdimitate.Robot; got {type(robot).__name__}")
+    if robot.base != "free":
+        raise InvalidInputError(f"repair needs a free-floating robot; {robot.name!r} has a "
+                                f"{robot.base} base")
+    taken = sorted(set(options) & {"forces", "body_map", "force", "method"})
+    if taken:
+        raise InvalidInputError(f"repair sets {taken} itself (the input's own estimated "
+                                "forces, the identity body map, force='measured'); leave them out")
+    if not (isinstance(flat, (int, float)) and math.isfinite(flat) and flat > 0):
+        raise InvalidInputError(f"flat must be a positive number of hip heights; got {flat!r}")
+    before = audit_motion(robot, motion)  # checks the motion against the robot
+    stance = repair_schedule(robot, motion, flat)
+    if not any(stance[s].any() for s in SIDES):
+        raise InvalidInputError("no frame of the motion has a sole flat on the floor (within "
+                                f"{flat:g} hip heights): nothing to stand on; is the floor at "
+                                "z = 0 and the motion the robot's?")
+    demo = motion.replace(contact=stance)
+    if demo.v is None or demo.a is None:
+        demo = differentiate(robot.model, demo)
+    forces = wrench_forces(robot, demo, estimate_wrenches(robot, demo).wrenches)
+    if weights is None:
+        weights = Weights(**REPAIR_WEIGHTS)
+    adapted = adapt(demo, robot, robot, method="optimal", force="measured", forces=forces,
+                    rate=repair_rate(demo.t) if rate is None else rate,
+                    body_map=identity_map(robot), weights=weights, verbose=verbose, **options)
+    after = audit_motion(robot, adapted.motion)
+    err = keypoint_error(robot, motion, adapted.motion)
+    push = {}
+    fde = adapted.audit.force_direction_error if adapted.audit is not None else {}
+    for s in SIDES:
+        e = fde.get(s)
+        push[s] = float("nan") if e is None else float(e.error_rms)
+    return RepairResult(adapted, before, after, float(np.sqrt(np.mean(err ** 2))),
+                        float(err.max()), push, stance, time.perf_counter() - t0)
