@@ -73,6 +73,7 @@ if TYPE_CHECKING:
     from .motion import Motion
     from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
     from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
+    from .repair import RepairResult, repair
     from .result import AdaptationReport, AdaptedMotion
     from .retarget import Limits, StreamingAdaptor, Weights
     from .robot import Leg, Robot
@@ -111,6 +112,8 @@ _LAZY_NAMES: dict[str, str] = {
     "ROBOT_GAIT": ".planar.walking",
     "GaitSpec": ".planar.walking",
     "walking_motion": ".planar.walking",
+    "repair": ".repair",
+    "RepairResult": ".repair",
     "walk": ".walk",
 }
 
@@ -178,6 +181,7 @@ __all__ = [
     "OscillatorError",
     "Robot",
     "ROBOT_GAIT",
+    "RepairResult",
     "SoleContact",
     "SolverError",
     "StreamingAdaptor",
@@ -204,6 +208,7 @@ __all__ = [
     "oscillator",
     "paper_case",
     "planar",
+    "repair",
     "retarget",
     "self_adjust",
     "sim",

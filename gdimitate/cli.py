@@ -1,5 +1,5 @@
 """The ``gdimitate`` command line: ``demo``, ``paper``, ``adapt``, ``view``, ``entrain``,
-``walk``, ``export``, ``simulate``, ``batch``, ``audit``, ``stream``.
+``walk``, ``export``, ``simulate``, ``batch``, ``audit``, ``repair``, ``stream``.
 
 Without a demonstration file, ``adapt``, ``entrain`` and ``view`` use the default story of
 ``demo``: one stride of the shipped real 3-D walk (with its measured forces) and the G1
@@ -395,6 +395,23 @@ def _cmd_batch(a: argparse.Namespace) -> int:
     return EXIT_NOT_FEASIBLE if bad else 0
 
 
+def _cmd_repair(a: argparse.Namespace) -> int:
+    from .apps.repair import repair_file
+    from .batch.audit import find_motion_files
+    from .errors import InvalidInputError
+
+    if Path(a.file).expanduser().is_dir():
+        raise InvalidInputError(f"{a.file} is a folder; repair takes one motion file (audit "
+                                "takes folders)")
+    (path,) = find_motion_files([a.file])
+    with output_job(a.out):  # one run per folder; failed: what it wrote is undone
+        out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
+        status, lines = repair_file(out, path, _robot(a.robot, a) if a.robot else None,
+                                    fps=a.fps, simulate=a.simulate, rate=a.rate)
+    print("\n".join(lines))
+    return status
+
+
 def _cmd_audit(a: argparse.Namespace) -> int:
     from .batch.audit import audit_csv, audit_files, audit_table, find_motion_files
 
@@ -509,7 +526,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
     for add in (_add_demo, _add_paper, _add_adapt, _add_walk, _add_view, _add_entrain,
-                _add_export, _add_simulate, _add_batch, _add_audit, _add_stream):
+                _add_export, _add_simulate, _add_batch, _add_audit, _add_repair,
+                _add_stream):
         add(sub)
     return p
 
@@ -726,6 +744,27 @@ def _add_audit(sub) -> None:
     au.add_argument("--fps", type=float, default=30.0,
                     help="frame rate of a LAFAN1 CSV [Hz] (default: %(default)s)")
     au.set_defaults(func=_cmd_audit)
+
+
+def _add_repair(sub) -> None:
+    """``gdimitate repair``: a robot motion file made physically consistent on its robot."""
+    rp = sub.add_parser("repair", help="make a robot motion file (any format audit reads) "
+                        "physically consistent on the same robot: the whole-body adaptor from "
+                        "the robot to itself, the audits before and after",
+                        epilog=f"exit status {EXIT_NOT_FEASIBLE}: {EXIT_STATUS[3]}")
+    rp.add_argument("file", metavar="FILE", help="a motion file gdimitate audit reads")
+    _add_robot_args(rp, "--robot", None, "the robot the motion was made for (optional for a "
+                    "gdimitate .npz, which records it)")
+    rp.add_argument("--out", default="gdimitate-repair", help="output folder (default: "
+                    "%(default)s)")
+    rp.add_argument("--fps", type=float, default=30.0,
+                    help="frame rate of a LAFAN1 CSV [Hz] (default: %(default)s)")
+    rp.add_argument("--rate", type=float, default=None,
+                    help="the adaptor's knots/s (default: the file's frame rate over the "
+                         "smallest whole number that brings it to 50 or below)")
+    rp.add_argument("--simulate", action="store_true",
+                    help="also run the input and the repaired motion in MuJoCo")
+    rp.set_defaults(func=_cmd_repair)
 
 
 def _add_stream(sub) -> None:

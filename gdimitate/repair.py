@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -212,13 +213,15 @@ def wrench_forces(robot: Robot, motion: Motion, wrenches: Mapping[str, np.ndarra
 def identity_map(robot: Robot) -> dict[str, dict]:
     """The body map of ``robot`` onto itself: every 1-DoF joint (not a planar base's) onto
     itself (scale 1, offset 0) and the preset's segments (pelvis, torso) onto themselves."""
-    from .retarget.bodymap import body_map
+    from .retarget.bodymap import UnmappedJointsWarning, body_map
 
     m = robot.model
     joints = {j: [j, 1.0, 0.0] for j in robot.joint_names
               if m.joints[m.getJointId(j)].nq == 1 and not j.startswith("base_")}
     try:
-        segments = {f: f for f in body_map(robot, robot).segments}
+        with warnings.catch_warnings():  # the preset's joints are not used: no warning
+            warnings.simplefilter("ignore", UnmappedJointsWarning)
+            segments = {f: f for f in body_map(robot, robot).segments}
     except InvalidInputError:  # no preset for the robot's naming: joints alone
         segments = {}
     return {"joints": joints, "segments": segments}
