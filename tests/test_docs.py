@@ -90,8 +90,12 @@ def _text(fragment: str) -> str:
 
 
 def _plain(doc_line: str) -> str:
-    """A docstring line as the page shows its words (markup characters dropped)."""
-    return " ".join(re.sub(r"[`*~]|:\w+:", "", doc_line).split())
+    """A docstring line as the page shows its words: reST roles as the site's Griffe
+    extension (docs/hooks/rst_roles.py) writes them, markup characters dropped."""
+    line = re.sub(r":(?:py:)?\w+:`(~?)([^`]+)`",
+                  lambda m: m.group(2).rsplit(".", 1)[-1] if m.group(1) else m.group(2),
+                  doc_line)
+    return " ".join(re.sub(r"[`*~]", "", line).split())
 
 
 
@@ -126,7 +130,9 @@ def _one_page_site(tmp_path: Path, extra: str = "") -> Path:
     docs = tmp_path / "docs"
     docs.mkdir()
     config.update(docs_dir=str(docs), nav=[{"Home": "index.md"}])
-    config["plugins"][1]["mkdocstrings"]["handlers"]["python"]["paths"] = [str(ROOT)]
+    python = config["plugins"][1]["mkdocstrings"]["handlers"]["python"]
+    python["paths"] = [str(ROOT)]
+    python["options"]["extensions"] = [str(ROOT / e) for e in python["options"]["extensions"]]
     (tmp_path / "mkdocs.yml").write_text(yaml.safe_dump(config))
     (docs / "index.md").write_text("# Home\n\n## A heading\n\n[fine](#a-heading)\n\n"
                                    f"::: gdimitate.adapt.adapt\n\n{extra}\n")
