@@ -39,6 +39,8 @@ def _printed(out: str) -> dict:
     pats = {"adapted": r"streamed (\d+) frames from", "received": r"received (\d+) frames",
             "dropped": r"dropped (\d+) \(", "median": rf"median {n} ms, p95",
             "p95": rf"p95 {n} ms", "max": rf"ms, max {n} ms \(frame period",
+            "step": rf"step alone: median {n} ms", "step_max": rf"step alone: median [0-9.]+ "
+            rf"ms, max {n} ms",
             "feasible": r"verdicts: (\d+) of", "frames": r"verdicts: \d+ of (\d+) frames"}
     got = {}
     for k, p in pats.items():
@@ -59,6 +61,9 @@ def _check_written(folder: Path, out: str) -> dict:
     assert s["frames_received"] == s["frames_adapted"] + s["frames_dropped"]
     for k in ("median", "p95", "max"):
         assert p[k] == pytest.approx(s["latency_ms"][k], abs=0.005)  # printed to 0.01 ms
+    assert p["step"] == pytest.approx(s["step_ms"]["median"], abs=0.005)
+    assert p["step_max"] == pytest.approx(s["step_ms"]["max"], abs=0.005)
+    assert s["step_ms"]["median"] <= s["latency_ms"]["median"]  # a latency holds its step
     verdicts = np.array(s["verdicts"]["per_frame"], bool)
     assert (p["feasible"], p["frames"]) == (verdicts.sum(), verdicts.size) == (
         s["verdicts"]["feasible"], s["frames_adapted"])

@@ -52,7 +52,8 @@ class StreamLog:
     """What the loop kept of each adapted frame (K of them): source times ``t`` [s], the
     demonstrator's ``q_demo`` ``(nq_d,)``, stance, the imitator's ``q``, ``v``, ``a`` (``a``
     and ``w`` one frame late: :class:`~gdimitate.retarget.FrameResult`), the wrenches ``w``
-    ``{side: (6,)}``, latencies [s]; frames received and dropped; verdicts ``{frame: ok}``."""
+    ``{side: (6,)}``, latencies and the steps' own durations [s]; frames received and
+    dropped; verdicts ``{frame: ok}``."""
 
     t: list[float] = field(default_factory=list)
     q_demo: list[np.ndarray] = field(default_factory=list)
@@ -62,6 +63,7 @@ class StreamLog:
     a: list[np.ndarray] = field(default_factory=list)
     w: list[dict] = field(default_factory=list)
     latency: list[float] = field(default_factory=list)
+    step: list[float] = field(default_factory=list)
     received: int = 0
     dropped: int = 0
     verdicts: dict[int, bool] = field(default_factory=dict)
@@ -178,7 +180,9 @@ def _stream_loop(source: LiveSource, sa: Any, log: StreamLog, stop: dict, *,
             log.dropped += 1
             continue
         q_demo, contact = layout.decode(frame.sample)
+        t_step = time.perf_counter()
         r = sa.step(q_demo, contact, frame.t - log.t[-1] if log.t else None)
+        log.step.append(time.perf_counter() - t_step)
         log.latency.append(source.now() - frame.arrived)
         if view is not None:
             view.offer(r.q)
@@ -237,12 +241,13 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
 def _record(source: LiveSource, log: StreamLog, reason: str, wall_s: float,
             verdicts: np.ndarray, audit_ok: np.ndarray, view: LiveView | None) -> dict:
     """report.json's ``"stream"`` entry (latencies in ms)."""
-    lat = np.asarray(log.latency) * 1e3
+    lat, step = np.asarray(log.latency) * 1e3, np.asarray(log.step) * 1e3
     return {"source": source.description, "stopped": reason, "seconds": wall_s,
             "frames_received": log.received, "frames_adapted": len(log.t),
             "frames_dropped": log.dropped, "frame_period_ms": 1e3 / source.rate,
             "latency_ms": {"median": float(np.median(lat)),
                            "p95": float(np.percentile(lat, 95)), "max": float(lat.max())},
+            "step_ms": {"median": float(np.median(step)), "max": float(step.max())},
             "verdicts": {"feasible": int(verdicts.sum()), "frames": int(verdicts.size),
                          "per_frame": [int(x) for x in verdicts]},
             "verdicts_are_the_audit": bool(np.array_equal(verdicts, audit_ok)),
@@ -259,7 +264,9 @@ def stream_lines(report: dict) -> list[str]:
              f"received {s['frames_received']} frames, dropped {s['frames_dropped']} (the "
              "loop takes the newest frame: those that arrived while it was busy)",
              f"latency receive → command: median {lat['median']:.2f} ms, p95 {lat['p95']:.2f} "
-             f"ms, max {lat['max']:.2f} ms (frame period {s['frame_period_ms']:.2f} ms)",
+             f"ms, max {lat['max']:.2f} ms (frame period {s['frame_period_ms']:.2f} ms; the "
+             f"adaptor's step alone: median {s['step_ms']['median']:.2f} ms, max "
+             f"{s['step_ms']['max']:.2f} ms)",
              f"verdicts: {v['feasible']} of {v['frames']} frames feasible ({share:.1f} %)"
              + ("" if s["verdicts_are_the_audit"] else
                 "; NOT the audit of the written motion frame for frame")]

@@ -100,9 +100,8 @@ class LSLSource:
         self.rate = srate if srate > 0 else 1.0 / layout.frame_time
         self.description = (f"LSL stream {name!r} ({full.type()}, {full.channel_count()} "
                             f"channels, {srate:g} Hz nominal) from {full.hostname()}")
-        self._inlet.time_correction(self.timeout)  # the clock sync's first probes (~0.5 s),
-        self._inlet.open_stream(self.timeout)  # before the data flows: no backlog at the start
-        self._count = 0
+        self._opened = False  # the data flows from the first newest(): a reader that gets
+        self._count = 0  # ready after finding the stream finds no backlog
         self._last_seen: float | None = None
         self._ended: str | None = None
 
@@ -126,9 +125,17 @@ class LSLSource:
             return [], []
         return rows, stamps
 
+    def _open(self) -> None:
+        self._inlet.time_correction(self.timeout)  # the clock sync's first probes (~0.5 s),
+        self._inlet.open_stream(self.timeout)  # before the data flows: no backlog at the start
+        self._opened = True
+
     def newest(self, timeout: float) -> tuple[LiveFrame | None, int]:
         """Every sample received since the last call is drained: the newest is returned, the
-        others counted as dropped; waits at most ``timeout`` [s] for one."""
+        others counted as dropped; waits at most ``timeout`` [s] for one. The first call
+        opens the data stream (after the clock synchronisation's first probes)."""
+        if not self._opened:
+            self._open()
         rows, stamps = self._pull(timeout)
         now = self.now()
         if not stamps:
@@ -145,7 +152,8 @@ class LSLSource:
 
     def close(self) -> None:
         """Close the inlet."""
-        self._inlet.close_stream()
+        if self._opened:
+            self._inlet.close_stream()
 
 
 class BVHOutlet:
