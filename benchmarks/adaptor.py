@@ -30,6 +30,7 @@ import textwrap
 import time
 from pathlib import Path
 
+from results import add_flag, recording
 from revision import checkout
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,6 +145,7 @@ def main() -> None:
     ap.add_argument("--cases", default="hoap2,cmu,clip")
     ap.add_argument("--no-first", action="store_true",
                     help="skip Talos's first-time-ever run (an empty cache: its compilation)")
+    add_flag(ap)
     a = ap.parse_args()
     rows = _Rows(["| case | goal | first time ever | fresh process | second call | iterations "
                   "| peak memory | audit | same-run baseline (second call, CPU, iterations) |",
@@ -203,4 +205,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("adaptor", "--results" in sys.argv[1:]):
+        main()

@@ -15,8 +15,11 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import tempfile
 from pathlib import Path
+
+from results import add_flag, recording
 
 from gdimitate.batch import BatchOptions, run_batch
 from gdimitate.gait import human_walk_path
@@ -40,6 +43,7 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=40)
     ap.add_argument("--method", default="optimal", choices=["analytic", "copy", "optimal"])
     ap.add_argument("--imitator", default="hoap2")
+    add_flag(ap)
     a = ap.parse_args()
     options = BatchOptions(a.imitator, method=a.method)
     with tempfile.TemporaryDirectory() as tmp:
@@ -71,4 +75,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("batch", "--results" in sys.argv[1:]):
+        main()

@@ -32,6 +32,7 @@ import tempfile
 import textwrap
 from pathlib import Path
 
+from results import add_flag, recording
 from revision import checkout
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -177,6 +178,7 @@ def main() -> None:
                          "geometric only)")
     ap.add_argument("--simulate", action="store_true",
                     help="also run each result in MuJoCo under the tracking controller")
+    add_flag(ap)
     a = ap.parse_args()
     print(f"gait scaling: {a.scaling}")
     print("| tree | clip | variant | robot | audit feasible | travel ratio | speed ratio | "
@@ -199,4 +201,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("corpus", "--results" in sys.argv[1:]):
+        main()

@@ -23,6 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from results import add_flag, recording
 from revision import checkout as extract
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,6 +58,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--baseline-rev", default="eac54a4")
+    add_flag(ap)
     a = ap.parse_args()
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs; "
           f"median of {a.repeat} fresh interpreters")
@@ -70,4 +72,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("import_time", "--results" in sys.argv[1:]):
+        main()

@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 import warnings
 
 import numpy as np
+from results import add_flag, recording
 from scipy.integrate import solve_ivp
 
 from gdimitate.oscillator import MatsuokaBank, MatsuokaParams
@@ -56,6 +58,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--repeat", type=int, default=3)
+    add_flag(ap)
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     t = np.arange(args.steps + 1) * 1e-3
@@ -71,4 +74,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("oscillator_bank", "--results" in sys.argv[1:]):
+        main()
