@@ -2,7 +2,7 @@
 audited (``gdimitate.audit.audit``) and simulated (``gdimitate.sim.simulate``) alike.
 
 Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]
-[--save-plans DIR | --plans DIR] [--holosoma-python PYTHON]`` (``--plans``: audit and
+[--save-plans DIR | --plans DIR] [--holosoma-python PYTHON] [--repair]`` (``--plans``: audit and
 simulate the optimal plans a ``--save-plans`` run wrote, with the adaptation time it
 measured, instead of adapting anew).
 Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``).
@@ -24,6 +24,13 @@ ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
   (``--holosoma-python``, ``benchmarks/holosoma_run.py``); its G1 motion is put on our G1 by
   joint name. G1 only (its model);
 - ``optimal`` — gdimitate's whole-body adaptor (``adapt(method="optimal", force="measured")``).
+
+``--repair`` adds a second table: each kinematic output (free-flyer robots: the 3-D copy,
+diff IK, holosoma's) handed over as its q alone — what a retargeter writes — to
+``gdimitate.repair`` (the whole-body adaptor from the robot to itself, :mod:`gdimitate.repair`)
+and audited before and after by ``gdimitate.audit_motion`` (share of knots feasible, verdict),
+both run in MuJoCo (``gdimitate.apps.repair.simulate_both``: fell [s] or "no"), the keypoints
+kept (RMS distance of hips, knees, ankles, soles from the input's) and the repair's wall time.
 
 Kinematic methods get the wrenches their motion implicitly asks of the floor
 (``estimate_wrenches(method="lstsq")``: no cone). Columns:
@@ -309,12 +316,72 @@ def holosoma_plan(demo, demonstrator, robot, python: str):
     return kinematic_plan(robot, motion, "holosoma", sec), note
 
 
+@dataclass(frozen=True)
+class RepairRow:
+    """One kinematic output repaired on its own robot (``gdimitate.repair``): the share of
+    knots the audit finds feasible and its verdict before/after, MuJoCo's fall time [s from
+    the start] before/after (None: walked), the keypoints' RMS distance from the input [m],
+    the push kept (RMS angle from the input's estimate, worse foot) [deg] and the repair's
+    wall time [s]."""
+
+    robot: str
+    method: str
+    frames: int
+    share_before: float
+    share_after: float
+    feasible_before: bool
+    feasible_after: bool
+    fell_before: float | None
+    fell_after: float | None
+    keypoint_rms: float
+    push_deg: float
+    seconds: float
+
+
+def repair_row(robot, plan, method: str) -> RepairRow:
+    """``plan``'s motion as its q alone repaired on ``robot`` and both run in MuJoCo."""
+    from gdimitate.apps.repair import simulate_both
+
+    motion = plan.motion.replace(contact={}, v=None, a=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r, sec = _timed(lambda: gd.repair(robot, motion))
+    sim = simulate_both(robot, motion, r)
+    return RepairRow(robot.name, method, motion.T, r.before.share_feasible,
+                     r.after.share_feasible, r.before.feasible, r.after.feasible,
+                     sim["before"]["fall_time"], sim["after"]["fall_time"], r.keypoint_rms,
+                     float(np.degrees(np.nanmax(list(r.push_error_rms.values())))), sec)
+
+
+def repair_table(rows: list[RepairRow]) -> str:
+    """The repair rows as a markdown table."""
+    lines = ["| robot | input | frames | knots feasible before → after [%] | audit before → "
+             "after | MuJoCo fell before → after [s] | keypoints kept RMS [cm] | push kept "
+             "[deg RMS] | repair [s] |", "|---|---|---|---|---|---|---|---|---|"]
+
+    def fell(x: float | None) -> str:
+        return "no" if x is None else f"{x:.2f}"
+
+    def ok(x: bool) -> str:
+        return "feasible" if x else "infeasible"
+
+    for r in rows:
+        lines.append(f"| {r.robot} | {r.method} | {r.frames} | {100 * r.share_before:.0f} → "
+                     f"{100 * r.share_after:.0f} | {ok(r.feasible_before)} → "
+                     f"{ok(r.feasible_after)} | {fell(r.fell_before)} → {fell(r.fell_after)} "
+                     f"| {100 * r.keypoint_rms:.1f} | {r.push_deg:.1f} | {r.seconds:.0f} |")
+    return "\n".join(lines)
+
+
 def run(robots: list[str], optimal: bool = True, save: Path | None = None,
-        plans: Path | None = None, holosoma: str | None = None) -> list[Row]:
+        plans: Path | None = None, holosoma: str | None = None,
+        repaired: list[RepairRow] | None = None) -> list[Row]:
     """Every method on every robot in ``robots`` (library names); ``save``: a folder for the
     optimal plans (``<robot>_optimal.npz`` and the adaptation's seconds in ``.json``);
     ``plans``: such a folder to take the optimal plans from instead of adapting anew;
-    ``holosoma``: the Python that has ``holosoma-retargeting`` (its G1 row, G1 only)."""
+    ``holosoma``: the Python that has ``holosoma-retargeting`` (its G1 row, G1 only);
+    ``repaired``: a list to append each kinematic output's :func:`repair_row` to (None: no
+    repair)."""
     demonstrator, demo, forces = gd.gait.human_walk_3d()
     rows: list[Row] = []
     for name in robots:
@@ -330,15 +397,21 @@ def run(robots: list[str], optimal: bool = True, save: Path | None = None,
         else:
             plan = joint_copy(demo, demonstrator, robot)
             rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "copy (3-D)"))
+            if repaired is not None:
+                repaired.append(repair_row(robot, plan, "copy (3-D)"))
             plan = diff_ik(demo, demonstrator, robot)
             note = (f"keypoint error median {100 * np.median(plan.residual):.1f} cm; "
                     f"{int(plan.relaxed.sum())} frames feet held by cost")
             rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "diff IK (Pink)",
                                  note))
+            if repaired is not None:
+                repaired.append(repair_row(robot, plan, "diff IK (Pink)"))
             if holosoma and name.startswith("g1"):
                 plan, note = holosoma_plan(demo, demonstrator, robot, holosoma)
                 rows.append(evaluate(robot, plan, plan.frames_per_s, forces,
                                      "OmniRetarget (holosoma)", note))
+                if repaired is not None:
+                    repaired.append(repair_row(robot, plan, "OmniRetarget (holosoma)"))
         if optimal and plans is not None:
             _saved_optimal(plans, robot, demo, forces, rows)
         elif optimal:
@@ -409,11 +482,18 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--holosoma-python", default=None, metavar="PYTHON",
                    help="a Python with holosoma-retargeting installed ('.[peers]', or a venv of "
                         "its own: it pins numpy==2.3.5): adds OmniRetarget's row on G1")
+    p.add_argument("--repair", action="store_true",
+                   help="also repair each kinematic output on its own robot (gdimitate.repair) "
+                        "and print the before/after table")
     a = p.parse_args(argv)
     t0 = time.perf_counter()
+    repaired: list[RepairRow] | None = [] if a.repair else None
     rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans, plans=a.plans,
-               holosoma=a.holosoma_python)
-    text = (table(rows) + "\n\nNegative control (physics check):\n" + negative_control(rows)
+               holosoma=a.holosoma_python, repaired=repaired)
+    text = (table(rows)
+            + ("" if repaired is None else "\n\nRepaired on the same robot (gdimitate repair; "
+               "the input as its q alone):\n\n" + repair_table(repaired))
+            + "\n\nNegative control (physics check):\n" + negative_control(rows)
             + f"\n\nDemonstration: OpenSim subject01 walk (3-D, measured GRF), 211 frames, 3.5 s; "
             f"simulation: MuJoCo, 1 kHz QP tracking controller; run took "
             f"{time.perf_counter() - t0:.0f} s.\n")
