@@ -440,7 +440,7 @@ def _cmd_stream(a: argparse.Namespace) -> int:
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
-        return stream_command(a, out, _robot(a.imitator, a))
+        return stream_command(a, out, lambda: _robot(a.imitator, a))
 
 
 def _cmd_export(a: argparse.Namespace) -> None:

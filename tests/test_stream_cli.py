@@ -168,3 +168,34 @@ def test_the_meshcat_view_follows_the_stream(tmp_path):
     assert len(nodes) == g1.visual_model.ngeoms
     for g, node in enumerate(nodes):
         assert np.allclose(placed[f"/meshcat/g1/robot/{node}"], f.placements[0][g], atol=1e-6)
+
+
+def test_no_such_lsl_stream_is_an_error_and_leaves_no_output(tmp_path):
+    """An LSL stream nobody sends (on loopback, 1 s to find it): exit status 2, the message
+    names it, and the output folder the command made is removed again."""
+    out = tmp_path / "out"
+    p = _run(["lsl:gdimitate-nobody-sends-this", "--skeleton", CMU, "--loopback",
+              "--timeout", "1", "--out", str(out)])
+    text, err = p.communicate(timeout=120)
+    assert p.returncode == 2, (text, err[-2000:])
+    assert "no LSL stream called 'gdimitate-nobody-sends-this' on this machine within 1 s" in err
+    assert not out.exists()
+
+
+def test_a_frame_received_is_the_configuration_read_bvh_gives_that_frame():
+    """The layout's decoding of each of the CMU walk's frame lines (as a live source delivers
+    them, one at a time) is read_bvh's configuration of that frame, to 1e-12, and its
+    stance read_bvh's."""
+    from gdimitate.bvh import read_bvh
+    from gdimitate.live import BVHLayout
+
+    layout = BVHLayout(CMU)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, motion = read_bvh(CMU)
+    samples = layout.file_samples
+    assert samples.shape == (motion.T, len(layout.labels)) == (343, 98)
+    for k, x in enumerate(samples):
+        q, contact = layout.decode(x)
+        assert np.allclose(q, motion.q[k], rtol=0, atol=1e-12)
+        assert contact == {s: bool(motion.contact[s][k]) for s in ("left", "right")}

@@ -369,20 +369,23 @@ def open_source(spec: str, *, skeleton: str | None = None, frames: int | None = 
     return BVHFileSource(spec, frames=frames)
 
 
-def stream_command(a: Any, out: Path, imitator: Robot) -> int:
+def stream_command(a: Any, out: Path, imitator: Callable[[], Robot]) -> int:
     """``gdimitate stream`` with its parsed arguments ``a`` (gdimitate.cli), writing into
-    ``out``; prints the summary from the written report.json; returns the exit status."""
+    ``out``; ``imitator()`` loads the robot (after the source is found: a missing stream
+    fails at once); prints the summary from the written report.json; returns the exit
+    status."""
     from ..verdict import report_lines
 
     source = open_source(a.source, skeleton=a.skeleton, frames=a.frames, timeout=a.timeout,
                          loopback=a.loopback)
     viewer = None
     try:
+        robot = imitator()
         if a.view:
             from ..viz import Viewer
 
             viewer = Viewer.start(a.port, a.open)
-        status, written = run_stream(source, imitator, out, frames=a.frames,
+        status, written = run_stream(source, robot, out, frames=a.frames,
                                      seconds=a.seconds, delay_s=a.delay / 1e3, viewer=viewer,
                                      say=lambda line: print(line, flush=True))
     finally:
