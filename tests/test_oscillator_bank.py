@@ -18,6 +18,7 @@ from gdimitate.oscillator import (
     NoOscillationError,
     OscillatorWarning,
     StepTooLargeError,
+    _kernel,
 )
 
 P0 = MatsuokaParams(tau_r=0.1, tau_a=0.2, b=2.5, w=2.5, s=1.0)
@@ -209,8 +210,6 @@ def test_a_first_numba_compile_is_announced(tmp_path, capsys, monkeypatch):
     dispatcher of the same function is not announced."""
     import importlib.util
 
-    from gdimitate.oscillator import _kernel
-
     src = tmp_path / "fresh_kernel.py"
     src.write_text("import numba\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n")
 
@@ -229,3 +228,31 @@ def test_a_first_numba_compile_is_announced(tmp_path, capsys, monkeypatch):
     assert f(21) == 42  # compiles and writes numba's cache next to the module
     assert not _kernel.first_compile(f)  # compiled in this process
     assert not _kernel.first_compile(load())  # a fresh dispatcher finds the cache on disk
+
+
+def test_both_builds_equal_the_reference_and_read_only_inputs_compile_nothing_new():
+    """The serial build runs one chunk of copies, the parallel one more than one chunk (the
+    same definition compiled twice); both equal the NumPy reference. Inputs that are read-only
+    views (a broadcast ``g``) are the same numba type as writable ones: a read-only array was a
+    second compile of the whole kernel (47 s on 2 cores in a fresh install's first demo)."""
+    rng = np.random.default_rng(1)
+    t = np.arange(0, 0.2, 1e-3)
+    W = np.array([[0, 0.3], [0.2, 0]])
+    for copies in (3, _kernel.CHUNK + 5):
+        p = P0.replace(tau_r=rng.uniform(0.08, 0.12, (copies, 2)), k=0.4)
+        g = np.broadcast_to(np.sin(2 * np.pi * 1.1 * t)[:, None, None], (t.size, copies, 2))
+        assert not g.flags.writeable
+        for coupling in (W, None):
+            run = _kernel.kernel(coupling is not None, copies if coupling is not None
+                                 else 2 * copies)
+            assert run is ((_kernel.rk4_numba if coupling is not None else
+                            _kernel.rk4_uncoupled_numba) if copies > _kernel.CHUNK else
+                           (_kernel.rk4_numba_serial if coupling is not None else
+                            _kernel.rk4_uncoupled_numba_serial))
+            bank = MatsuokaBank(p, coupling)
+            a = bank.simulate(t, g, backend="numba")
+            b = bank.simulate(t, g, backend="numpy")
+            np.testing.assert_allclose(a.y, b.y, rtol=0, atol=1e-11)
+            a2 = bank.simulate(t, np.ascontiguousarray(g), backend="numba")
+            np.testing.assert_array_equal(a2.y, a.y)
+            assert len(run.signatures) == 1

@@ -147,7 +147,9 @@ def _rk4_compiled(t, g, p, W, x0, rec_all):
 
     def to_nb(a, lead):  # (*lead, *batch, n) -> (*lead, n, B)
         a = a.reshape(*lead, B, n)
-        return np.ascontiguousarray(np.swapaxes(a, -1, -2))
+        # writable as well as contiguous: numba compiles a read-only array (a broadcast
+        # view's) as another type, and so the whole kernel again (47 s on 2 cores)
+        return np.require(np.swapaxes(a, -1, -2), requirements=["C", "W"])
 
     P = np.stack(
         [1.0 / p.tau_r, 1.0 / p.tau_a, p.b, p.w, p.s, p.k]
@@ -160,14 +162,14 @@ def _rk4_compiled(t, g, p, W, x0, rec_all):
     rec = (T, n, B) if rec_all else (1, 1, 1)
     XE, XF, VE, VF = (np.empty(rec) for _ in range(4))
     final = np.empty((4, n, B))
-    tc = np.ascontiguousarray(t)
-    _kernel.announce_first_compile(_kernel.rk4_numba if coupled else _kernel.rk4_uncoupled_numba)
+    tc = np.require(t, requirements=["C", "W"])
+    run = _kernel.kernel(coupled, B)
+    _kernel.announce_first_compile(run)
     if coupled:
-        _kernel.rk4_numba(
-            tc, gk, has_g, P, np.ascontiguousarray(W), xs, rec_all, Y, XE, XF, VE, VF, final
-        )
+        run(tc, gk, has_g, P, np.require(W, requirements=["C", "W"]), xs, rec_all, Y, XE, XF,
+            VE, VF, final)
     else:
-        _kernel.rk4_uncoupled_numba(tc, gk, has_g, P, xs, rec_all, Y, XE, XF, VE, VF, final)
+        run(tc, gk, has_g, P, xs, rec_all, Y, XE, XF, VE, VF, final)
 
     def back(a, lead):  # (*lead, n, B) -> (*lead, *batch, n)
         return np.swapaxes(a, -1, -2).reshape(*lead, *shape)
