@@ -76,6 +76,14 @@ def _first_line(doc: str | None) -> str:
     return (doc or "").strip().split("\n\n")[0].split("\n")[0].strip()
 
 
+def test_the_readme_is_a_guide_and_the_design_page_no_log():
+    """Issue 38: the README ≤ 12 KB (it was 82 KB, three generations of benchmark tables) and
+    docs/design.md ≤ 25 KB (it was 84 KB, three quarters measurement logs): measurements go to
+    benchmarks/RESULTS.md, the user guide to docs/guide/, history to CHANGELOG.md."""
+    assert len((ROOT / "README.md").read_bytes()) <= 12 * 1024
+    assert len((ROOT / "docs" / "design.md").read_bytes()) <= 25 * 1024
+
+
 def test_every_public_name_is_in_the_api_reference_with_a_docstring():
     found = _public()
     assert sorted(set(gdimitate.__all__) - set(found)) == []

@@ -106,6 +106,7 @@ def test_every_code_block_of_the_readme_and_the_docs_runs(tmp_path):
     script.write_text(f"PAGES = {runnable!r}\n" + DRIVER)
     r = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
                        text=True, timeout=900, env={**os.environ, "MPLBACKEND": "Agg"})
+    print("".join(line + "\n" for line in r.stdout.splitlines() if ".md: " in line))
     assert r.returncode == 0, r.stderr[-3000:]
     folders = {page: tmp_path / folder for page, folder, _ in runnable}
     for page, files in WRITTEN.items():
