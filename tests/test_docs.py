@@ -72,6 +72,22 @@ def _doc(name: str, path: str) -> str:
     return m.group(1) if m else ""
 
 
+def test_every_public_module_has_a_page_with_its_own_public_names():
+    """docs/reference/<module>.md (written by docs/make_reference.py) documents every name of
+    the module's ``__all__``: ``gd.sim.simulate``, ``gd.gait.human_walk_3d`` … are what a
+    user calls after ``gd.adapt``."""
+    for name in gdimitate.__all__:
+        module = getattr(gdimitate, name)
+        if not isinstance(module, types.ModuleType):
+            continue
+        page = ROOT / "docs" / "reference" / f"{name}.md"
+        assert page.exists(), f"{page} missing: run python docs/make_reference.py"
+        documented = {p.rsplit(".", 1)[-1] for p in
+                      re.findall(r"^::: (\S+)\s*$", page.read_text(), re.MULTILINE)}
+        missing = sorted(set(module.__all__) - documented)
+        assert missing == [], f"{name}: run python docs/make_reference.py ({missing})"
+
+
 def _first_line(doc: str | None) -> str:
     return (doc or "").strip().split("\n\n")[0].split("\n")[0].strip()
 
