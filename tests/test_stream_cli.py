@@ -7,6 +7,7 @@ either adapted or counted as dropped, and a slow consumer drops instead of falli
 from __future__ import annotations
 
 import json
+import os
 import re
 import signal
 import subprocess
@@ -81,17 +82,18 @@ def _check_written(folder: Path, out: str) -> dict:
 
 
 def test_a_bvh_file_streamed_live_stops_at_ctrl_c_and_writes_adapt_outputs(tmp_path):
-    """The CMU walk (2.9 s) played at 120 Hz; Ctrl-C one second into the stream: it stops,
+    """The CMU walk (2.9 s) played at 120 Hz; Ctrl-C one second into the stream, sent as a
+    terminal does, to the command's whole process group (its verdict worker too): it stops,
     writes what it streamed and exits 0 or 3 by the verdicts. Frames adapted are frames of
     the file (times on its 1/120 s grid), the others counted dropped."""
     out = tmp_path / "out"
-    p = _run([CMU, "--imitator", "g1", "--out", str(out)])
+    p = _run([CMU, "--imitator", "g1", "--out", str(out)], start_new_session=True)
     assert p.stdout is not None
     for line in p.stdout:  # the stream starts after the robot, the adaptor and its warm-up
         if line.startswith("streaming "):
             break
     time.sleep(1.0)
-    p.send_signal(signal.SIGINT)
+    os.killpg(p.pid, signal.SIGINT)
     rest, err = p.communicate(timeout=120)
     assert "stopped: Ctrl-C" in rest, (rest, err[-2000:])
     report = _check_written(out, rest)
