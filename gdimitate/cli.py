@@ -779,11 +779,15 @@ def _add_stream(sub) -> None:
                                "feasible (docs/guide/streaming.md)")
     st.add_argument("source", help="a .bvh file (played at its own frame rate), or lsl:NAME "
                     "(the LSL stream called NAME: a BVH skeleton's channels '<Joint>.<Channel>' "
-                    "and 'contact.left', 'contact.right'; with --skeleton)")
+                    "or an OpenSim model's coordinates, and 'contact.left', 'contact.right'; "
+                    "with --skeleton or --osim)")
     _add_robot_args(st, "--imitator", DEFAULT_IMITATOR, "imitator robot")
     st.add_argument("--skeleton", default=None, metavar="FILE.bvh",
                     help="lsl: the BVH file whose HIERARCHY names the stream's channels (its "
                          "unit, up axis and floor are the file's)")
+    st.add_argument("--osim", default=None, metavar="FILE.osim",
+                    help="lsl: the OpenSim model whose coordinates name the stream's channels "
+                         "(degrees and metres, as a .mot with inDegrees=yes)")
     st.add_argument("--loopback", action="store_true",
                     help="lsl: look for the stream on this machine only (liblsl's "
                          "ResolveScope machine)")

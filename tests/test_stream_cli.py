@@ -201,3 +201,55 @@ def test_a_frame_received_is_the_configuration_read_bvh_gives_that_frame():
         q, contact = layout.decode(x)
         assert np.allclose(q, motion.q[k], rtol=0, atol=1e-12)
         assert contact == {s: bool(motion.contact[s][k]) for s in ("left", "right")}
+
+
+def _walk_3d_samples(layout):
+    """The shipped 3-D walk (60 Hz) as samples of its OpenSim model's coordinates: the IK
+    file's rows (degrees, metres), pelvis_tx moved as human_walk_3d turns the treadmill trial
+    overground, its measured stance; and the configurations human_walk_3d gives."""
+    from gdimitate.opensim._table import read_table
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, walk, _ = gd.gait.human_walk_3d()
+        _, belt, _ = gd.gait.human_walk_3d(overground=False)
+    table = read_table(gd.gait.human_walk_3d_folder() / "subject01_walk1_ik.mot")
+    col = {n: i for i, n in enumerate(table.names)}
+    k0 = int(np.searchsorted(table.t, walk.t[0] - 1e-9))
+    rows = table.data[k0:k0 + walk.T]
+    assert np.allclose(table.t[k0:k0 + walk.T], walk.t)
+    x = np.column_stack([rows[:, col[c]] for c in layout.labels[:-2]]
+                        + [walk.contact["left"], walk.contact["right"]]).astype(float)
+    x[:, layout.labels.index("pelvis_tx")] += walk.q[:, 0] - belt.q[:, 0]
+    return x, walk.q
+
+
+def test_opensim_coordinates_over_lsl(tmp_path):
+    """The other layout: the shipped 3-D walk's model's coordinates (degrees, metres). Each
+    frame decoded is human_walk_3d's configuration of it (read_coordinates', to 1e-12); its
+    first second (60 frames at 60 Hz) sent by a real outlet on loopback and streamed onto G1
+    through the command with --osim: every frame received, adapted or counted dropped, the
+    printed numbers report.json's, the verdicts the written motion's audit."""
+    from gdimitate.live import OpenSimLayout
+    from gdimitate.live.lsl import LayoutOutlet
+
+    osim = str(gd.gait.human_walk_3d_folder() / "subject01.osim")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        layout = OpenSimLayout(osim)
+    samples, q = _walk_3d_samples(layout)
+    for k, x in enumerate(samples):
+        assert np.allclose(layout.decode(x)[0], q[k], rtol=0, atol=1e-12)
+    name = f"gdimitate-test-{uuid.uuid4().hex[:8]}"
+    outlet = LayoutOutlet(layout, samples[:60], name, 60.0, loopback=True).start()
+    out = tmp_path / "out"
+    try:
+        p = _run([f"lsl:{name}", "--osim", osim, "--loopback", "--imitator", "g1",
+                  "--timeout", "1", "--out", str(out)])
+        text, err = p.communicate(timeout=180)
+    finally:
+        outlet.stop()
+    assert p.returncode in (0, 3), err[-3000:]
+    s = _check_written(out, text)["stream"]
+    assert outlet.sent == 60 == s["frames_received"]
+    assert p.returncode == (0 if all(s["verdicts"]["per_frame"]) else 3)

@@ -328,7 +328,7 @@ def _warm_up(sa: Any, source: LiveSource, frames: int = 3) -> None:
     QP of a process costs ~0.2 s (its set-up), which would otherwise be the stream's first
     frame's latency and drop the frames behind it."""
     layout = source.layout
-    for x in layout.file_samples[:frames]:
+    for x in layout.warm_up_samples(frames):
         sa.step(*layout.decode(x))
     sa.reset()
     layout.reset()
@@ -345,13 +345,15 @@ def _rest_pose(robot: Robot) -> np.ndarray:
     return q
 
 
-def open_source(spec: str, *, skeleton: str | None = None, frames: int | None = None,
-                timeout: float = 10.0, loopback: bool = False) -> LiveSource:
+def open_source(spec: str, *, skeleton: str | None = None, osim: str | None = None,
+                frames: int | None = None, timeout: float = 10.0,
+                loopback: bool = False) -> LiveSource:
     """``gdimitate stream``'s SOURCE: a ``.bvh`` file (played at its own rate, its first
     ``frames``), or ``lsl:NAME`` (the LSL stream called NAME, in the channels of the BVH
-    ``skeleton``; ``timeout`` [s] to find it and of silence; ``loopback``: discovery on this
-    machine only, :func:`gdimitate.live.lsl.configure`)."""
-    from ..live.layout import BVHLayout
+    ``skeleton`` or of the OpenSim model ``osim``'s coordinates; ``timeout`` [s] to find it
+    and of silence; ``loopback``: discovery on this machine only,
+    :func:`gdimitate.live.lsl.configure`)."""
+    from ..live.layout import BVHLayout, Layout
     from ..live.source import BVHFileSource
 
     if spec.startswith("lsl:"):
@@ -359,11 +361,18 @@ def open_source(spec: str, *, skeleton: str | None = None, frames: int | None = 
 
         if not spec[4:]:
             raise InvalidInputError("lsl:NAME needs the stream's name after 'lsl:'")
-        if skeleton is None:
-            raise InvalidInputError("an LSL stream needs --skeleton FILE.bvh: the BVH file "
-                                    "whose HIERARCHY names its channels (docs/guide/"
-                                    "streaming.md)")
-        return LSLSource(spec[4:], BVHLayout(skeleton), timeout=timeout, loopback=loopback)
+        if (skeleton is None) == (osim is None):
+            raise InvalidInputError("an LSL stream needs its channel layout: --skeleton "
+                                    "FILE.bvh (a BVH skeleton's channels) or --osim FILE.osim "
+                                    "(an OpenSim model's coordinates), one of them "
+                                    "(docs/guide/streaming.md)")
+        if skeleton is not None:
+            layout: Layout = BVHLayout(skeleton)
+        else:
+            from ..live.coordinates import OpenSimLayout
+
+            layout = OpenSimLayout(str(osim))
+        return LSLSource(spec[4:], layout, timeout=timeout, loopback=loopback)
     if not spec.lower().endswith(".bvh"):
         raise InvalidInputError(f"SOURCE {spec!r}: a .bvh file or lsl:NAME")
     return BVHFileSource(spec, frames=frames)
@@ -376,8 +385,8 @@ def stream_command(a: Any, out: Path, imitator: Callable[[], Robot]) -> int:
     status."""
     from ..verdict import report_lines
 
-    source = open_source(a.source, skeleton=a.skeleton, frames=a.frames, timeout=a.timeout,
-                         loopback=a.loopback)
+    source = open_source(a.source, skeleton=a.skeleton, osim=a.osim, frames=a.frames,
+                         timeout=a.timeout, loopback=a.loopback)
     viewer = None
     try:
         robot = imitator()

@@ -25,8 +25,9 @@ from scipy.spatial.transform import Rotation
 
 from ..bvh import channel_rotation, parse_bvh, read_bvh
 from ..errors import GdimitateError
+from ..robot import Robot
 
-__all__ = ["CONTACT_LABELS", "BVHLayout", "LiveSourceError"]
+__all__ = ["CONTACT_LABELS", "BVHLayout", "Layout", "LiveSourceError"]
 
 #: the stance channels' labels, by side
 CONTACT_LABELS = {"left": "contact.left", "right": "contact.right"}
@@ -37,7 +38,51 @@ class LiveSourceError(GdimitateError):
     not a number, the stream gone."""
 
 
-class BVHLayout:
+class Layout:
+    """What a channel layout gives (:class:`BVHLayout`,
+    :class:`~gdimitate.live.coordinates.OpenSimLayout`): ``robot`` (the demonstrator),
+    ``labels`` (its channels, the stance's last), ``frame_time`` [s] (the default frame
+    period), :meth:`decode` of one sample, :meth:`warm_up_samples`."""
+
+    robot: Robot
+    labels: tuple[str, ...]
+    frame_time: float
+    path: Path
+
+    def columns(self, labels: list[str] | tuple[str, ...]) -> np.ndarray:
+        """``(len(self.labels),)`` int: where each of this layout's channels is among a
+        stream's channel ``labels``; :class:`LiveSourceError` naming the missing ones."""
+        where = {label: i for i, label in enumerate(labels)}
+        missing = [label for label in self.labels if label not in where]
+        if missing:
+            raise LiveSourceError(
+                f"the stream lacks {len(missing)} channel(s) of {self.path.name} and the "
+                f"stance: {', '.join(missing[:8])}{' …' if len(missing) > 8 else ''} "
+                "(docs/guide/streaming.md)")
+        return np.array([where[label] for label in self.labels], int)
+
+    def reset(self) -> None:
+        """Forget the previous frame."""
+
+    def decode(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
+        """One sample ``(len(labels),)`` → ``(q (nq,), {side: stance})``."""
+        raise NotImplementedError
+
+    def warm_up_samples(self, k: int) -> np.ndarray:
+        """``(k, len(labels))``: frames to warm the adaptor up on before a stream."""
+        raise NotImplementedError
+
+    def _checked(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
+        """The sample as floats (:class:`LiveSourceError` unless ``len(labels)`` finite
+        numbers) and its stance."""
+        x = np.asarray(sample, float)
+        if x.shape != (len(self.labels),) or not np.all(np.isfinite(x)):
+            raise LiveSourceError(f"a frame of {x.size} numbers, not {len(self.labels)} finite "
+                                  "ones, in the layout of " + self.path.name)
+        return x, {s: bool(x[-2 + k] >= 0.5) for k, s in enumerate(CONTACT_LABELS)}
+
+
+class BVHLayout(Layout):
     """The channel layout of a BVH skeleton (module docstring).
 
     ``skeleton``: a BVH file (its HIERARCHY names the channels; its frames set the unit and the
@@ -75,18 +120,9 @@ class BVHLayout:
         c = self._motion.contact
         return np.column_stack([rows, c["left"], c["right"]]).astype(float)
 
-    def columns(self, labels: list[str] | tuple[str, ...]) -> np.ndarray:
-        """``(len(self.labels),)`` int: where each of this layout's channels is among a
-        stream's channel ``labels``; :class:`LiveSourceError` naming the missing ones."""
-        where = {label: i for i, label in enumerate(labels)}
-        missing = [label for label in self.labels if label not in where]
-        if missing:
-            raise LiveSourceError(
-                f"the stream lacks {len(missing)} channel(s) of the skeleton {self.path.name} "
-                f"and the stance: {', '.join(missing[:8])}{' …' if len(missing) > 8 else ''} "
-                "(channel labels '<Joint>.<Channel>' and 'contact.left', 'contact.right'; "
-                "docs/guide/streaming.md)")
-        return np.array([where[label] for label in self.labels], int)
+    def warm_up_samples(self, k: int) -> np.ndarray:
+        """The file's first ``k`` frames (:attr:`file_samples`)."""
+        return self.file_samples[:k]
 
     def reset(self) -> None:
         """Forget the previous frame (angles are unwrapped against it)."""
@@ -116,10 +152,7 @@ class BVHLayout:
         on the floor z = 0, quaternion x, y, z, w; angles [rad]), each angle within π of the
         previous frame's and the quaternion on its side (a frame line's 179° → −179° is a
         2° turn); :class:`LiveSourceError` for a number that is not finite."""
-        x = np.asarray(sample, float)
-        if x.shape != (len(self.labels),) or not np.all(np.isfinite(x)):
-            raise LiveSourceError(f"a frame of {x.size} numbers, not {len(self.labels)} finite "
-                                  "ones, in the layout of " + self.path.name)
+        x, contact = self._checked(sample)
         info = self._info
         q = self._q(x)
         if info.grounded:
@@ -131,6 +164,5 @@ class BVHLayout:
             if float(q[3:7] @ p[3:7]) < 0:
                 q[3:7] *= -1
         self._previous = q.copy()
-        contact = {s: bool(x[-2 + k] >= 0.5) for k, s in enumerate(CONTACT_LABELS)}
         return q, contact
 

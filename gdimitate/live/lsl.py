@@ -1,9 +1,10 @@
 """Lab Streaming Layer (``pylsl``, whose wheel carries ``liblsl``): a mocap stream in
-(:class:`LSLSource`) and a BVH file played out as one (:class:`BVHOutlet`: a stand-in for a
-lab's mocap system, the tests' sender).
+(:class:`LSLSource`) and frames played out as one (:class:`LayoutOutlet`, :class:`BVHOutlet`:
+a stand-in for a lab's mocap system, the tests' sender).
 
-The stream: ``channel_count`` numbers per sample in :class:`~gdimitate.live.layout.BVHLayout`'s
-channels (any order), labelled in the stream's description as XDF does it
+The stream: ``channel_count`` numbers per sample in a layout's channels
+(:class:`~gdimitate.live.layout.BVHLayout`, :class:`~gdimitate.live.coordinates.OpenSimLayout`;
+any order), labelled in the stream's description as XDF does it
 (``<desc><channels><channel><label>Hips.Xposition</label>…``; pylsl's
 ``StreamInfo.set_channel_labels``), any numeric channel format (``double64`` keeps a BVH
 line's digits), content type ``MoCap`` by convention. Time stamps are the sender's
@@ -30,10 +31,10 @@ from typing import Any
 
 import numpy as np
 
-from .layout import BVHLayout, LiveSourceError
+from .layout import BVHLayout, Layout, LiveSourceError
 from .source import LiveFrame
 
-__all__ = ["LOOPBACK_CONFIG", "configure", "LSLSource", "BVHOutlet"]
+__all__ = ["LOOPBACK_CONFIG", "configure", "LSLSource", "LayoutOutlet", "BVHOutlet"]
 
 #: liblsl's configuration (INI) that keeps discovery on this machine
 LOOPBACK_CONFIG = """[ports]
@@ -80,7 +81,7 @@ class LSLSource:
     stream, and how long the stream may stay silent before it counts as ended.
     ``loopback``: :func:`configure`'s."""
 
-    def __init__(self, name: str, layout: BVHLayout, *, timeout: float = 10.0,
+    def __init__(self, name: str, layout: Layout, *, timeout: float = 10.0,
                  loopback: bool = False):
         configure(loopback)
         pylsl = _pylsl()
@@ -156,32 +157,32 @@ class LSLSource:
             self._inlet.close_stream()
 
 
-class BVHOutlet:
-    """A BVH file's frames sent as an LSL stream called ``name`` in
-    :class:`~gdimitate.live.layout.BVHLayout`'s channels (``double64``, type ``MoCap``), from
-    a thread: :meth:`start` waits for a consumer (at most ``wait`` [s]) and then pushes one
-    frame every ``1 / rate`` s (default: the file's frame rate; time stamps: ``local_clock()``
-    at each push), ``frames`` of them (default: all) — a stand-in for a mocap system.
-    ``sent`` counts the frames pushed; :meth:`stop` ends it early."""
+class LayoutOutlet:
+    """Frames ``samples`` ``(T, len(layout.labels))`` in a layout's channels (a
+    :class:`~gdimitate.live.layout.Layout`: BVH or OpenSim coordinates) sent as an LSL stream
+    called ``name`` (``double64``, type ``MoCap``, the labels in its description), from a
+    thread: :meth:`start` waits for a consumer (at most ``wait`` [s]) and then pushes one frame
+    every ``1 / rate`` s (time stamps: ``local_clock()`` at each push) — a stand-in for a mocap
+    system. ``sent`` counts the frames pushed; :meth:`stop` ends it early."""
 
-    def __init__(self, path: str | Path, name: str, *, rate: float | None = None,
-                 frames: int | None = None, wait: float = 60.0, loopback: bool = False):
+    def __init__(self, layout: Layout, samples: np.ndarray, name: str, rate: float, *,
+                 wait: float = 60.0, loopback: bool = False):
         configure(loopback)
         pylsl = _pylsl()
-        self.layout = BVHLayout(path)
-        samples = self.layout.file_samples
-        self.samples = samples[:frames] if frames else samples
-        self.rate = float(rate) if rate else 1.0 / self.layout.frame_time
-        info = pylsl.StreamInfo(name, "MoCap", len(self.layout.labels), self.rate,
+        self.layout, self.samples, self.rate = layout, np.asarray(samples, float), float(rate)
+        if self.samples.ndim != 2 or self.samples.shape[1] != len(layout.labels):
+            raise LiveSourceError(f"samples of shape {self.samples.shape}: expected (T, "
+                                  f"{len(layout.labels)}) in the layout's channels")
+        info = pylsl.StreamInfo(name, "MoCap", len(layout.labels), self.rate,
                                 pylsl.cf_double64, f"gdimitate-{name}")
-        info.set_channel_labels(list(self.layout.labels))
+        info.set_channel_labels(list(layout.labels))
         self._outlet: Any = pylsl.StreamOutlet(info)
         self._pylsl, self._wait = pylsl, float(wait)
         self.sent = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"lsl-{name}", daemon=True)
 
-    def start(self) -> BVHOutlet:
+    def start(self) -> LayoutOutlet:
         """Start sending (in a thread); returns self."""
         self._thread.start()
         return self
@@ -209,3 +210,18 @@ class BVHOutlet:
         if self._thread.is_alive():
             self._thread.join(5.0)
         self._outlet = None  # liblsl's outlet is destroyed with its last reference
+
+
+class BVHOutlet(LayoutOutlet):
+    """A BVH file's frames (:attr:`~gdimitate.live.layout.BVHLayout.file_samples`: its
+    stance as :func:`~gdimitate.bvh.read_bvh` detects it) sent as the LSL stream ``name``
+    in :class:`~gdimitate.live.layout.BVHLayout`'s channels at ``rate`` (default: the file's
+    frame rate), its first ``frames`` (default: all) — :class:`LayoutOutlet`."""
+
+    def __init__(self, path: str | Path, name: str, *, rate: float | None = None,
+                 frames: int | None = None, wait: float = 60.0, loopback: bool = False):
+        layout = BVHLayout(path)
+        samples = layout.file_samples
+        super().__init__(layout, samples[:frames] if frames else samples, name,
+                         float(rate) if rate else 1.0 / layout.frame_time, wait=wait,
+                         loopback=loopback)

@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .layout import BVHLayout
+from .layout import BVHLayout, Layout
 
 __all__ = ["LiveFrame", "LiveSource", "BVHFileSource"]
 
@@ -39,7 +39,7 @@ class LiveSource(Protocol):
     """What ``gdimitate stream`` reads (:class:`BVHFileSource`,
     :class:`~gdimitate.live.lsl.LSLSource`)."""
 
-    layout: BVHLayout
+    layout: Layout
     #: the nominal frame rate [Hz]
     rate: float
     #: what it is, for the console (e.g. ``"cmu_02_01.bvh at 120 Hz"``)
@@ -71,8 +71,9 @@ class BVHFileSource:
     ``frames``: play only the first ones."""
 
     def __init__(self, path: str | Path, frames: int | None = None):
-        self.layout = BVHLayout(path)
-        samples = self.layout.file_samples
+        layout = BVHLayout(path)
+        self.layout: Layout = layout
+        samples = layout.file_samples
         self._samples = samples[:frames] if frames else samples
         self.rate = 1.0 / self.layout.frame_time
         self.description = (f"{Path(path).name} played at its own rate ({self.rate:.4g} Hz, "
