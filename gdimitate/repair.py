@@ -19,6 +19,9 @@ allow, what the motion shows:
   an identity body map of every 1-DoF joint (:func:`identity_map`: every joint's angle is a
   target, none is held at rest) and :data:`REPAIR_WEIGHTS` (the keypoints' placement and the
   thigh direction weighed up: the motion's own keypoints are the reference);
+- **placed** — the adaptor's motion moved along the floor to where the input is
+  (:func:`placed`: the mean horizontal offset of the keypoints; a horizontal shift changes no
+  force, torque or contact on a flat floor);
 - **audit after** — :func:`gdimitate.audit_motion` of the repaired motion (its q, v, a and
   stance; its wrenches estimated anew, not the optimiser's): the verdict.
 
@@ -30,6 +33,7 @@ against the input's estimated one (the adaptor's audit, ``force_direction``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
@@ -47,7 +51,8 @@ from .result import AdaptedMotion
 from .robot import SIDES, Robot
 
 __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
-           "wrench_forces", "identity_map", "keypoint_frames", "keypoint_error", "repair_rate"]
+           "wrench_forces", "identity_map", "keypoint_frames", "keypoint_error", "placed",
+           "repair_rate"]
 
 #: Cost weights of the repair (:class:`gdimitate.retarget.Weights` fields changed from the
 #: adaptor's defaults): the horizontal ankle-to-hip placement and the thigh direction weighed
@@ -254,15 +259,34 @@ def _keypoints(robot: Robot, q: np.ndarray) -> np.ndarray:
     return out
 
 
-def keypoint_error(robot: Robot, reference: Motion, motion: Motion) -> np.ndarray:
-    """Distances ``(K, n)`` [m] of ``motion``'s keypoints (:func:`keypoint_frames`) from
-    ``reference``'s at ``motion.t`` (``reference``'s q linearly interpolated there, a
-    free-flyer's quaternion re-normalised: :func:`gdimitate.retarget.resample`'s rule)."""
-    t = motion.t
+def _reference_at(robot: Robot, reference: Motion, t: np.ndarray) -> np.ndarray:
+    """``reference``'s q at times ``t`` ``(K,)`` [s]: each column linearly interpolated, a
+    free-flyer's quaternion re-normalised (:func:`gdimitate.retarget.resample`'s rule)."""
     ref = np.column_stack([np.interp(t, reference.t, reference.q[:, c])
                            for c in range(reference.q.shape[1])])
     if robot.base == "free":
         ref[:, 3:7] /= np.linalg.norm(ref[:, 3:7], axis=1, keepdims=True)
+    return ref
+
+
+def placed(robot: Robot, reference: Motion, motion: Motion) -> Motion:
+    """``motion`` moved along the floor (its base's x, y) by the mean horizontal offset of its
+    keypoints from ``reference``'s at its times: the adaptor writes a motion from the origin
+    of the demonstration's heading frame; on a flat floor a horizontal shift changes no force,
+    torque, contact or collision (the audit and MuJoCo give the same numbers), and it puts the
+    repaired motion where the input was."""
+    d = (_keypoints(robot, _reference_at(robot, reference, motion.t))
+         - _keypoints(robot, motion.q))[..., :2].reshape(-1, 2).mean(axis=0)
+    q = motion.q.copy()
+    q[:, :2] += d
+    return motion.replace(q=q)
+
+
+def keypoint_error(robot: Robot, reference: Motion, motion: Motion) -> np.ndarray:
+    """Distances ``(K, n)`` [m] of ``motion``'s keypoints (:func:`keypoint_frames`) from
+    ``reference``'s at ``motion.t`` (``reference``'s q linearly interpolated there, a
+    free-flyer's quaternion re-normalised: :func:`gdimitate.retarget.resample`'s rule)."""
+    ref = _reference_at(robot, reference, motion.t)
     return np.linalg.norm(_keypoints(robot, motion.q) - _keypoints(robot, ref), axis=2)
 
 
@@ -319,6 +343,7 @@ def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
     adapted = adapt(demo, robot, robot, method="optimal", force="measured", forces=forces,
                     rate=repair_rate(demo.t) if rate is None else rate,
                     body_map=identity_map(robot), weights=weights, verbose=verbose, **options)
+    adapted = dataclasses.replace(adapted, motion=placed(robot, motion, adapted.motion))
     after = audit_motion(robot, adapted.motion)
     err = keypoint_error(robot, motion, adapted.motion)
     push = {}
