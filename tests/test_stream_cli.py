@@ -228,8 +228,9 @@ def test_opensim_coordinates_over_lsl(tmp_path):
     """The other layout: the shipped 3-D walk's model's coordinates (degrees, metres). Each
     frame decoded is human_walk_3d's configuration of it (read_coordinates', to 1e-12); its
     first second (60 frames at 60 Hz) sent by a real outlet on loopback and streamed onto G1
-    through the command with --osim: every frame received, adapted or counted dropped, the
-    printed numbers report.json's, the verdicts the written motion's audit."""
+    through the command with --osim, stopped by SIGTERM 1.5 s after the last frame was sent:
+    every frame received, adapted or counted dropped, the printed numbers report.json's, the
+    verdicts the written motion's audit."""
     from gdimitate.live import OpenSimLayout
     from gdimitate.live.lsl import LayoutOutlet
 
@@ -245,11 +246,15 @@ def test_opensim_coordinates_over_lsl(tmp_path):
     out = tmp_path / "out"
     try:
         p = _run([f"lsl:{name}", "--osim", osim, "--loopback", "--imitator", "g1",
-                  "--timeout", "1", "--out", str(out)])
+                  "--timeout", "60", "--out", str(out)])
+        outlet.join(120)
+        time.sleep(1.5)
+        p.send_signal(signal.SIGTERM)
         text, err = p.communicate(timeout=180)
     finally:
         outlet.stop()
     assert p.returncode in (0, 3), err[-3000:]
+    assert "stopped: SIGTERM" in text
     s = _check_written(out, text)["stream"]
     assert outlet.sent == 60 == s["frames_received"]
     assert p.returncode == (0 if all(s["verdicts"]["per_frame"]) else 3)
