@@ -229,7 +229,7 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
     bad = tuple(Unmet(f"frame {k}", 1.0, int(k)) for k in np.flatnonzero(~ok))
     T = len(t)
     info = SolverInfo(status="streamed", success=bool(ok.all()), iterations=T - 1,
-                      time_s=float(np.sum(log.latency)), build_s=0.0, cached=True,
+                      time_s=float(np.sum(log.step)), build_s=0.0, cached=True,
                       elastic=not ok.all(), knots=T, variables=0, constraints=0, unmet=bad)
     result = AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,
                            contacts=dict(sa.contacts), audit=aud, solver=info,
@@ -251,7 +251,8 @@ def _record(source: LiveSource, log: StreamLog, reason: str, wall_s: float,
             "verdicts": {"feasible": int(verdicts.sum()), "frames": int(verdicts.size),
                          "per_frame": [int(x) for x in verdicts]},
             "verdicts_are_the_audit": bool(np.array_equal(verdicts, audit_ok)),
-            "view_updates": None if view is None else view.updates}
+            "view_updates": None if view is None else view.updates,
+            "view_error": None if view is None or view.error is None else str(view.error)}
 
 
 def stream_lines(report: dict) -> list[str]:
@@ -271,7 +272,8 @@ def stream_lines(report: dict) -> list[str]:
              + ("" if s["verdicts_are_the_audit"] else
                 "; NOT the audit of the written motion frame for frame")]
     if s["view_updates"] is not None:
-        lines.append(f"meshcat view drawn {s['view_updates']} times")
+        lines.append(f"meshcat view drawn {s['view_updates']} times" + (
+            f"; it stopped: {s['view_error']}" if s["view_error"] else ""))
     return lines
 
 
