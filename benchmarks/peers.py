@@ -54,12 +54,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from results import add_flag, recording
 
 import gdimitate as gd
 from gdimitate.apps.baselines import diff_ik, joint_copy, kinematic_plan
@@ -485,6 +487,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--repair", action="store_true",
                    help="also repair each kinematic output on its own robot (gdimitate.repair) "
                         "and print the before/after table")
+    add_flag(p)
     a = p.parse_args(argv)
     t0 = time.perf_counter()
     repaired: list[RepairRow] | None = [] if a.repair else None
@@ -504,4 +507,5 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("peers", "--results" in sys.argv[1:]):
+        main()

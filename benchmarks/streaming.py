@@ -46,6 +46,7 @@ import tempfile
 import textwrap
 from pathlib import Path
 
+from results import add_flag, recording
 from revision import checkout
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -181,6 +182,7 @@ def main() -> None:
     ap.add_argument("--baseline-rev", default="ff13e49",
                     help="git revision streamed as the same-run baseline ('' for none)")
     ap.add_argument("--baseline-frames", type=int, default=200)
+    add_flag(ap)
     a = ap.parse_args()
     robots = [a.robot] if a.robot else [r.strip() for r in a.robots.split(",") if r.strip()]
     rows = [f"streaming the shipped 3-D walk (force={a.force}), joining {a.start:g} s in, "
@@ -213,4 +215,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("streaming", "--results" in sys.argv[1:]):
+        main()

@@ -10,10 +10,12 @@ is the same-run baseline.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import warnings
 
 import numpy as np
+from results import add_flag, recording
 
 from gdimitate.contact import ContactForces
 
@@ -32,6 +34,7 @@ def main() -> None:
     p.add_argument("--factors", nargs="+", type=float, default=[0.8, 0.9, 1.0, 1.1, 1.2, 1.3])
     p.add_argument("--steps", type=int, default=6)
     p.add_argument("--gain", type=float, default=0.5)
+    add_flag(p)
     args = p.parse_args()
     warnings.simplefilter("ignore")
     from gdimitate.apps.demo import default_demonstration
@@ -62,4 +65,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("walk_frequency", "--results" in sys.argv[1:]):
+        main()

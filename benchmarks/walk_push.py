@@ -19,12 +19,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 import warnings
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+from results import add_flag, recording
 
 from gdimitate.contact import SoleContact
 from gdimitate.motion import Motion
@@ -172,6 +174,7 @@ def main() -> None:
     p.add_argument("--cycle", nargs="*", default=[], metavar="ROBOT=NPZ",
                    type=lambda x: (x.split("=", 1)[0], Path(x.split("=", 1)[1])),
                    help="use this saved cycle (save_cycle's .npz) for ROBOT")
+    add_flag(p)
     args = p.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
     warnings.simplefilter("ignore")
@@ -191,4 +194,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording("walk_push", "--results" in sys.argv[1:]):
+        main()

@@ -25,7 +25,8 @@ def _results():
 def test_every_block_is_written_by_its_benchmark():
     names = re.findall(r"^<!-- results: (\w+) -->$", (BENCHMARKS / "RESULTS.md").read_text(),
                        re.MULTILINE)
-    assert {"adaptor", "corpus", "oscillator_bank", "batch", "import_time"} <= set(names)
+    assert {"adaptor", "corpus", "oscillator_bank", "batch", "import_time", "streaming", "peers",
+            "walk_push", "walk_frequency"} <= set(names)
     for name in names:
         script = (BENCHMARKS / f"{name}.py").read_text()
         assert f'recording("{name}", "--results" in sys.argv[1:])' in script, name
