@@ -56,11 +56,13 @@ __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_sc
 
 #: Cost weights of the repair (:class:`gdimitate.retarget.Weights` fields changed from the
 #: adaptor's defaults): the horizontal ankle-to-hip placement and the thigh direction weighed
-#: as the hip height and shank (3). Measured on one stride of the shipped walk's joint copy
-#: onto G1 (30 knots/s): keypoints 7.6 cm RMS from the input with the defaults, 5.0 cm with 1,
-#: 4.4 cm with 3; with 10 (and height, shank 10) 3.2 cm but a stance velocity over the audit's
-#: bound.
-REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0}
+#: as the hip height and shank (3), the feet's places in double support 3 × the default (300).
+#: Measured on the joint copy of the shipped walk onto G1 (30 knots/s), keypoints' RMS from
+#: the input: one stride 7.6 cm with the defaults, 4.4 cm with placement and thigh 3, 4.0 cm
+#: with steps 300 too (500 and 1000 left a stance velocity over the audit's 1e-3 m/s); the
+#: whole walk (3.5 s) 11.9 cm without steps 300 (it travelled 0.74 of the input's distance),
+#: 6.1 cm with it (0.93), 4.9 cm with 1000.
+REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0, "steps": 300.0}
 
 #: A stance frame of the audit's schedule stays stance for the repair only while the sole's
 #: highest corner is within this height above the floor [hip heights] (G1: 5.8 cm): the
