@@ -1,4 +1,5 @@
-"""Regenerate the README's figures from the project's own functions (scenario code, not API).
+"""Regenerate the documentation's figures (docs/img, shown by the user guide) from the project's own
+functions (scenario code, not API).
 
     python docs/make_figures.py [NAME ...]      # default: all; writes docs/img/<name>.png
 """
