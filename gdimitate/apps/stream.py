@@ -179,7 +179,7 @@ def _stream_loop(source: LiveSource, sa: Any, log: StreamLog, stop: dict, *,
         if log.t and frame.t <= log.t[-1]:  # no time passed since the last frame: not one
             log.dropped += 1
             continue
-        q_demo, contact = layout.decode(frame.sample)
+        q_demo, contact = layout.decode(frame.sample, frame.t)
         t_step = time.perf_counter()
         r = sa.step(q_demo, contact, frame.t - log.t[-1] if log.t else None)
         log.step.append(time.perf_counter() - t_step)

@@ -43,10 +43,11 @@ class OpenSimLayout(Layout):
         self.labels = (*(j for j, _, _ in self._joints), *(c for c, _ in self._root),
                        *CONTACT_LABELS.values())
 
-    def decode(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
-        """One sample ``(len(labels),)`` in this layout's order → ``(q (nq,), {side:
-        stance})``: degrees → radians for the rotational coordinates; an unbounded joint's
-        angle as (cos, sin); the root's coordinates → the free-flyer
+    def decode(self, sample: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, dict[str, bool]]:
+        """One sample ``(len(labels),)`` in this layout's order at time ``t`` [s] → ``(q (nq,),
+        {side: stance})`` (the stance's channels both NaN: detected, :meth:`Layout.decode`):
+        degrees → radians for the rotational coordinates; an unbounded joint's angle as
+        (cos, sin); the root's coordinates → the free-flyer
         (:func:`~gdimitate.opensim.joints.pelvis_to_freeflyer`)."""
         x, contact = self._checked(sample)
         q = np.array(self.robot.neutral, float)
@@ -62,7 +63,7 @@ class OpenSimLayout(Layout):
         values = {c: np.array([np.deg2rad(x[k + m]) if rot else x[k + m]])
                   for m, (c, rot) in enumerate(self._root)}
         q[:7] = pelvis_to_freeflyer(values, self._model)[0]
-        return q, contact
+        return q, self._stance(t, q, contact)
 
     def warm_up_samples(self, k: int) -> np.ndarray:
         """``k`` frames of the model at its default coordinates (the joints' zero, the root's

@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 from ..bvh import channel_rotation, parse_bvh, read_bvh
 from ..errors import GdimitateError
 from ..robot import Robot
+from .stance import CausalStance
 
 __all__ = ["CONTACT_LABELS", "BVHLayout", "Layout", "LiveSourceError"]
 
@@ -51,8 +52,13 @@ class Layout:
 
     def columns(self, labels: list[str] | tuple[str, ...]) -> np.ndarray:
         """``(len(self.labels),)`` int: where each of this layout's channels is among a
-        stream's channel ``labels``; :class:`LiveSourceError` naming the missing ones."""
+        stream's channel ``labels``, −1 for the two stance channels where the stream has
+        neither (the stance is then detected: :meth:`decode`); :class:`LiveSourceError`
+        naming the missing ones."""
         where = {label: i for i, label in enumerate(labels)}
+        stance = list(CONTACT_LABELS.values())
+        if not any(label in where for label in stance):
+            where.update({label: -1 for label in stance})
         missing = [label for label in self.labels if label not in where]
         if missing:
             raise LiveSourceError(
@@ -61,25 +67,44 @@ class Layout:
                 "(docs/guide/streaming.md)")
         return np.array([where[label] for label in self.labels], int)
 
+    _detector: CausalStance | None = None
+
     def reset(self) -> None:
         """Forget the previous frame."""
+        if self._detector is not None:
+            self._detector.reset()
 
-    def decode(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
-        """One sample ``(len(labels),)`` → ``(q (nq,), {side: stance})``."""
+    def decode(self, sample: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, dict[str, bool]]:
+        """One sample ``(len(labels),)`` at time ``t`` [s] → ``(q (nq,), {side: stance})``;
+        NaN in both stance channels: the stance detected from the feet
+        (:class:`~gdimitate.live.stance.CausalStance`, which reads ``t``)."""
         raise NotImplementedError
 
     def warm_up_samples(self, k: int) -> np.ndarray:
         """``(k, len(labels))``: frames to warm the adaptor up on before a stream."""
         raise NotImplementedError
 
-    def _checked(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
+    def _checked(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool] | None]:
         """The sample as floats (:class:`LiveSourceError` unless ``len(labels)`` finite
-        numbers) and its stance."""
+        numbers, the stance's two possibly both NaN) and its stance (None: to detect)."""
         x = np.asarray(sample, float)
-        if x.shape != (len(self.labels),) or not np.all(np.isfinite(x)):
+        stance = x[-2:]
+        detect = x.shape == (len(self.labels),) and bool(np.all(np.isnan(stance)))
+        if x.shape != (len(self.labels),) or not np.all(np.isfinite(x[:-2])) or not (
+                detect or np.all(np.isfinite(stance))):
             raise LiveSourceError(f"a frame of {x.size} numbers, not {len(self.labels)} finite "
                                   "ones, in the layout of " + self.path.name)
-        return x, {s: bool(x[-2 + k] >= 0.5) for k, s in enumerate(CONTACT_LABELS)}
+        return x, None if detect else {s: bool(stance[k] >= 0.5)
+                                       for k, s in enumerate(CONTACT_LABELS)}
+
+    def _stance(self, t: float, q: np.ndarray, given: dict[str, bool] | None
+                ) -> dict[str, bool]:
+        """The stance given, else detected from ``q`` at ``t``."""
+        if given is not None:
+            return given
+        if self._detector is None:
+            self._detector = CausalStance(self.robot)
+        return self._detector(t, q)
 
 
 class BVHLayout(Layout):
@@ -126,6 +151,7 @@ class BVHLayout(Layout):
 
     def reset(self) -> None:
         """Forget the previous frame (angles are unwrapped against it)."""
+        super().reset()
         self._previous = None
 
     def _q(self, x: np.ndarray) -> np.ndarray:
@@ -146,8 +172,9 @@ class BVHLayout(Layout):
         q[self._pos[:, 1]] = x[self._pos[:, 0]] * info.scale
         return q
 
-    def decode(self, sample: np.ndarray) -> tuple[np.ndarray, dict[str, bool]]:
-        """One sample ``(len(labels),)`` in this layout's order → ``(q (nq,), {side: stance})``:
+    def decode(self, sample: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, dict[str, bool]]:
+        """One sample ``(len(labels),)`` in this layout's order at time ``t`` [s] → ``(q (nq,),
+        {side: stance})`` (the stance's channels both NaN: detected, :meth:`Layout.decode`):
         the configuration :func:`~gdimitate.bvh.read_bvh` gives the same frame (base in metres
         on the floor z = 0, quaternion x, y, z, w; angles [rad]), each angle within π of the
         previous frame's and the quaternion on its side (a frame line's 179° → −179° is a
@@ -164,5 +191,5 @@ class BVHLayout(Layout):
             if float(q[3:7] @ p[3:7]) < 0:
                 q[3:7] *= -1
         self._previous = q.copy()
-        return q, contact
+        return q, self._stance(t, q, contact)
 

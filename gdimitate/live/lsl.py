@@ -97,10 +97,12 @@ class LSLSource:
         full = self._inlet.info(self.timeout)
         labels = full.get_channel_labels() or []
         self._columns = layout.columns([str(x) for x in labels])
+        self._given = self._columns >= 0  # the stance's two: -1 where it is detected
         srate = float(full.nominal_srate())
         self.rate = srate if srate > 0 else 1.0 / layout.frame_time
         self.description = (f"LSL stream {name!r} ({full.type()}, {full.channel_count()} "
-                            f"channels, {srate:g} Hz nominal) from {full.hostname()}")
+                            f"channels, {srate:g} Hz nominal) from {full.hostname()}"
+                            + ("" if self._given.all() else ", stance detected from the feet"))
         self._opened = False  # the data flows from the first newest(): a reader that gets
         self._count = 0  # ready after finding the stream finds no backlog
         self._last_seen: float | None = None
@@ -147,7 +149,8 @@ class LSLSource:
             return None, 0
         self._last_seen = now
         self._count += len(stamps)
-        x = np.asarray(rows[-1], float)[self._columns]
+        x = np.full(self._columns.size, np.nan)
+        x[self._given] = np.asarray(rows[-1], float)[self._columns[self._given]]
         ts = float(stamps[-1])
         return LiveFrame(self._count - 1, ts, x, ts), len(stamps) - 1
 
@@ -166,16 +169,19 @@ class LayoutOutlet:
     system. ``sent`` counts the frames pushed; :meth:`stop` ends it early."""
 
     def __init__(self, layout: Layout, samples: np.ndarray, name: str, rate: float, *,
-                 wait: float = 60.0, loopback: bool = False):
+                 wait: float = 60.0, loopback: bool = False, stance: bool = True):
         configure(loopback)
         pylsl = _pylsl()
         self.layout, self.samples, self.rate = layout, np.asarray(samples, float), float(rate)
         if self.samples.ndim != 2 or self.samples.shape[1] != len(layout.labels):
             raise LiveSourceError(f"samples of shape {self.samples.shape}: expected (T, "
                                   f"{len(layout.labels)}) in the layout's channels")
-        info = pylsl.StreamInfo(name, "MoCap", len(layout.labels), self.rate,
+        labels = list(layout.labels) if stance else list(layout.labels[:-2])
+        if not stance:  # ``stance=False``: the stance channels left out (the reader detects it)
+            self.samples = self.samples[:, :-2]
+        info = pylsl.StreamInfo(name, "MoCap", len(labels), self.rate,
                                 pylsl.cf_double64, f"gdimitate-{name}")
-        info.set_channel_labels(list(layout.labels))
+        info.set_channel_labels(labels)
         self._outlet: Any = pylsl.StreamOutlet(info)
         self._pylsl, self._wait = pylsl, float(wait)
         self.sent = 0
@@ -219,9 +225,10 @@ class BVHOutlet(LayoutOutlet):
     frame rate), its first ``frames`` (default: all) — :class:`LayoutOutlet`."""
 
     def __init__(self, path: str | Path, name: str, *, rate: float | None = None,
-                 frames: int | None = None, wait: float = 60.0, loopback: bool = False):
+                 frames: int | None = None, wait: float = 60.0, loopback: bool = False,
+                 stance: bool = True):
         layout = BVHLayout(path)
         samples = layout.file_samples
         super().__init__(layout, samples[:frames] if frames else samples, name,
                          float(rate) if rate else 1.0 / layout.frame_time, wait=wait,
-                         loopback=loopback)
+                         loopback=loopback, stance=stance)
