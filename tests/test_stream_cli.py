@@ -280,3 +280,27 @@ def test_the_stance_detected_frame_by_frame_is_the_recorded_one_on_nine_frames_i
         for s in ("left", "right"):
             share = np.mean([g[s] for g in got] == np.asarray(motion.contact[s], bool))
             assert share >= 0.90, (robot.name, s, share)
+
+
+def test_an_lsl_outlet_that_goes_away_ends_the_stream():
+    """The source reads a real outlet's frames (drained, the newest kept, the rest counted),
+    and says the stream ended when the outlet is destroyed (liblsl's lost stream)."""
+    from gdimitate.live.lsl import BVHOutlet, LSLSource
+
+    name = f"gdimitate-test-{uuid.uuid4().hex[:8]}"
+    outlet = BVHOutlet(CMU, name, frames=30, loopback=True).start()
+    source = LSLSource(name, outlet.layout, timeout=5, loopback=True)
+    got, dropped = [], 0
+    deadline = time.monotonic() + 30
+    while len(got) + dropped < 30 and time.monotonic() < deadline:
+        frame, skipped = source.newest(0.1)
+        if frame is not None:
+            got.append(frame)
+            dropped += skipped
+    assert len(got) + dropped == 30 == outlet.sent
+    assert np.array_equal(got[-1].sample, outlet.samples[29])
+    outlet.stop()
+    while source.ended is None and time.monotonic() < deadline:
+        assert source.newest(0.1)[0] is None
+    assert source.ended == "the LSL outlet is gone"
+    source.close()

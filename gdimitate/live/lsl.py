@@ -118,19 +118,27 @@ class LSLSource:
         return self._ended
 
     def _pull(self, timeout: float) -> tuple[list[Any], list[float]]:
+        from pylsl.util import LostError
+
         try:
             rows, stamps = self._inlet.pull_chunk(timeout=0.0, max_samples=4096)
             if not stamps:
                 row, stamp = self._inlet.pull_sample(timeout=timeout)
                 rows, stamps = ([row], [stamp]) if row is not None else ([], [])
-        except self._pylsl.LostError:
+        except LostError:
             self._ended = "the LSL outlet is gone"
             return [], []
         return rows, stamps
 
     def _open(self) -> None:
-        self._inlet.time_correction(self.timeout)  # the clock sync's first probes (~0.5 s),
-        self._inlet.open_stream(self.timeout)  # before the data flows: no backlog at the start
+        from pylsl.util import LostError
+
+        try:
+            self._inlet.time_correction(self.timeout)  # the clock sync's first probes (~0.5
+            self._inlet.open_stream(self.timeout)  # s), before the data flows: no backlog
+        except (TimeoutError, LostError) as e:
+            raise LiveSourceError(f"the LSL stream found did not open within {self.timeout:g} "
+                                  f"s: {e}") from None
         self._opened = True
 
     def newest(self, timeout: float) -> tuple[LiveFrame | None, int]:
