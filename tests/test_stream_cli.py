@@ -230,7 +230,8 @@ def test_opensim_coordinates_over_lsl(tmp_path):
     """The other layout: the shipped 3-D walk's model's coordinates (degrees, metres). Each
     frame decoded is human_walk_3d's configuration of it (read_coordinates', to 1e-12); its
     first second (60 frames at 60 Hz) sent by a real outlet on loopback and streamed onto G1
-    through the command with --osim, stopped by SIGTERM 1.5 s after the last frame was sent:
+    through the command with --osim (two of them not numbers: dropped and counted, the stream
+    goes on), stopped by SIGTERM 1.5 s after the last frame was sent:
     every frame received, adapted or counted dropped, the printed numbers report.json's, the
     verdicts the written motion's audit."""
     from gdimitate.live import OpenSimLayout
@@ -244,7 +245,9 @@ def test_opensim_coordinates_over_lsl(tmp_path):
     for k, x in enumerate(samples):
         assert np.allclose(layout.decode(x)[0], q[k], rtol=0, atol=1e-12)
     name = f"gdimitate-test-{uuid.uuid4().hex[:8]}"
-    outlet = LayoutOutlet(layout, samples[:60], name, 60.0, loopback=True).start()
+    sent = samples[:60].copy()
+    sent[[20, 40], 3] = np.nan  # an occluded marker: the frame is dropped, the stream goes on
+    outlet = LayoutOutlet(layout, sent, name, 60.0, loopback=True).start()
     out = tmp_path / "out"
     try:
         p = _run([f"lsl:{name}", "--osim", osim, "--loopback", "--imitator", "g1",
@@ -259,6 +262,8 @@ def test_opensim_coordinates_over_lsl(tmp_path):
     assert "stopped: SIGTERM" in text
     s = _check_written(out, text)["stream"]
     assert outlet.sent == 60 == s["frames_received"]
+    assert s["frames_invalid"] <= 2 and s["frames_invalid"] <= s["frames_dropped"]
+    assert (f"; {s['frames_invalid']} not numbers)" in text) == (s["frames_invalid"] > 0)
     assert p.returncode == (0 if all(s["verdicts"]["per_frame"]) else 3)
 
 

@@ -52,8 +52,8 @@ class StreamLog:
     """What the loop kept of each adapted frame (K of them): source times ``t`` [s], the
     demonstrator's ``q_demo`` ``(nq_d,)``, stance, the imitator's ``q``, ``v``, ``a`` (``a``
     and ``w`` one frame late: :class:`~gdimitate.retarget.FrameResult`), the wrenches ``w``
-    ``{side: (6,)}``, latencies and the steps' own durations [s]; frames received and
-    dropped; verdicts ``{frame: ok}``."""
+    ``{side: (6,)}``, latencies and the steps' own durations [s]; frames received, dropped
+    and, among those, not numbers (``invalid``); verdicts ``{frame: ok}``."""
 
     t: list[float] = field(default_factory=list)
     q_demo: list[np.ndarray] = field(default_factory=list)
@@ -66,6 +66,7 @@ class StreamLog:
     step: list[float] = field(default_factory=list)
     received: int = 0
     dropped: int = 0
+    invalid: int = 0
     verdicts: dict[int, bool] = field(default_factory=dict)
 
 
@@ -179,7 +180,12 @@ def _stream_loop(source: LiveSource, sa: Any, log: StreamLog, stop: dict, *,
         if log.t and frame.t <= log.t[-1]:  # no time passed since the last frame: not one
             log.dropped += 1
             continue
-        q_demo, contact = layout.decode(frame.sample, frame.t)
+        try:
+            q_demo, contact = layout.decode(frame.sample, frame.t)
+        except LiveSourceError:  # not numbers (an occluded marker's NaN): dropped, counted
+            log.dropped += 1
+            log.invalid += 1
+            continue
         t_step = time.perf_counter()
         r = sa.step(q_demo, contact, frame.t - log.t[-1] if log.t else None)
         log.step.append(time.perf_counter() - t_step)
@@ -244,7 +250,8 @@ def _record(source: LiveSource, log: StreamLog, reason: str, wall_s: float,
     lat, step = np.asarray(log.latency) * 1e3, np.asarray(log.step) * 1e3
     return {"source": source.description, "stopped": reason, "seconds": wall_s,
             "frames_received": log.received, "frames_adapted": len(log.t),
-            "frames_dropped": log.dropped, "frame_period_ms": 1e3 / source.rate,
+            "frames_dropped": log.dropped, "frames_invalid": log.invalid,
+            "frame_period_ms": 1e3 / source.rate,
             "latency_ms": {"median": float(np.median(lat)),
                            "p95": float(np.percentile(lat, 95)), "max": float(lat.max())},
             "step_ms": {"median": float(np.median(step)), "max": float(step.max())},
@@ -263,7 +270,8 @@ def stream_lines(report: dict) -> list[str]:
     lines = [f"streamed {s['frames_adapted']} frames from {s['source']}; stopped: "
              f"{s['stopped']} ({s['seconds']:.2f} s)",
              f"received {s['frames_received']} frames, dropped {s['frames_dropped']} (the "
-             "loop takes the newest frame: those that arrived while it was busy)",
+             "loop takes the newest frame: those that arrived while it was busy"
+             + (f"; {s['frames_invalid']} not numbers" if s["frames_invalid"] else "") + ")",
              f"latency receive → command: median {lat['median']:.2f} ms, p95 {lat['p95']:.2f} "
              f"ms, max {lat['max']:.2f} ms (frame period {s['frame_period_ms']:.2f} ms; the "
              f"adaptor's step alone: median {s['step_ms']['median']:.2f} ms, max "
