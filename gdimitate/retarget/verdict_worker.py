@@ -1,4 +1,4 @@
-"""The streaming mode's per-frame verdict, off the hot path (docs/design.md §12, §13, §17).
+"""The streaming mode's per-frame verdict, off the hot path (docs/design.md §6, §12, §13).
 
 A frame's verdict is the trajectory audit's knot verdict (:func:`gdimitate.audit.audit`,
 ``knot_feasible``), recomputed from the stream's own output: :func:`knot_verdicts` is its one
