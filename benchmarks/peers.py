@@ -338,6 +338,7 @@ class RepairRow:
     keypoint_rms: float
     push_deg: float
     seconds: float
+    note: str = ""
 
 
 def repair_row(robot, plan, method: str) -> RepairRow:
@@ -345,9 +346,15 @@ def repair_row(robot, plan, method: str) -> RepairRow:
     from gdimitate.apps.repair import simulate_both
 
     motion = plan.motion.replace(contact={}, v=None, a=None)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        r, sec = _timed(lambda: gd.repair(robot, motion))
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r, sec = _timed(lambda: gd.repair(robot, motion))
+    except gd.InvalidInputError as e:  # refused, with what to fix: a row that says it
+        before = gd.audit_motion(robot, motion)
+        nan = float("nan")
+        return RepairRow(robot.name, method, motion.T, before.share_feasible, nan,
+                         before.feasible, False, None, None, nan, nan, nan, str(e))
     sim = simulate_both(robot, motion, r)
     return RepairRow(robot.name, method, motion.T, r.before.share_feasible,
                      r.after.share_feasible, r.before.feasible, r.after.feasible,
@@ -360,6 +367,7 @@ def repair_table(rows: list[RepairRow]) -> str:
     lines = ["| robot | input | frames | knots feasible before → after [%] | audit before → "
              "after | MuJoCo fell before → after [s] | keypoints kept RMS [cm] | push kept "
              "[deg RMS] | repair [s] |", "|---|---|---|---|---|---|---|---|---|"]
+    refused = [r for r in rows if r.note]
 
     def fell(x: float | None) -> str:
         return "no" if x is None else f"{x:.2f}"
@@ -371,8 +379,11 @@ def repair_table(rows: list[RepairRow]) -> str:
         lines.append(f"| {r.robot} | {r.method} | {r.frames} | {100 * r.share_before:.0f} → "
                      f"{100 * r.share_after:.0f} | {ok(r.feasible_before)} → "
                      f"{ok(r.feasible_after)} | {fell(r.fell_before)} → {fell(r.fell_after)} "
-                     f"| {100 * r.keypoint_rms:.1f} | {r.push_deg:.1f} | {r.seconds:.0f} |")
-    return "\n".join(lines)
+                     f"| {100 * r.keypoint_rms:.1f} | {r.push_deg:.1f} | {r.seconds:.0f} |"
+                     if not r.note else
+                     f"| {r.robot} | {r.method} | {r.frames} | {100 * r.share_before:.0f} → — | "
+                     f"{ok(r.feasible_before)} → refused | — | — | — | — |")
+    return "\n".join(lines + [f"\nRefused: {r.method} on {r.robot}: {r.note}" for r in refused])
 
 
 def run(robots: list[str], optimal: bool = True, save: Path | None = None,

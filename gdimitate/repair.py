@@ -52,7 +52,7 @@ from .robot import SIDES, Robot
 
 __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
            "wrench_forces", "identity_map", "keypoint_frames", "keypoint_error", "placed",
-           "repair_rate"]
+           "repair_rate", "MAX_FLIGHT"]
 
 #: Cost weights of the repair (:class:`gdimitate.retarget.Weights` fields changed from the
 #: adaptor's defaults): the horizontal ankle-to-hip placement and the thigh direction weighed
@@ -292,6 +292,26 @@ def keypoint_error(robot: Robot, reference: Motion, motion: Motion) -> np.ndarra
     return np.linalg.norm(_keypoints(robot, motion.q) - _keypoints(robot, ref), axis=2)
 
 
+#: The longest time [s] both soles may be off the floor in a motion to repair: a walk has
+#: none, a run's flight lasts about 0.1 s; longer is a jump or a motion that left the floor
+#: (holosoma's G1 output of the shipped walk has both soles 0.2–0.6 m up for its last 2 s).
+MAX_FLIGHT = 0.3
+
+
+def _check_flight(t: np.ndarray, stance: Mapping[str, np.ndarray]) -> None:
+    """Raise :class:`InvalidInputError` naming the frames where no sole is on the floor for
+    longer than :data:`MAX_FLIGHT` (``t`` ``(T,)`` [s], ``stance`` ``{side: (T,) bool}``)."""
+    air = ~np.logical_or.reduce([np.asarray(stance[s], bool) for s in SIDES])
+    edges = np.flatnonzero(np.diff(np.r_[0, air.astype(int), 0]))
+    for a, b in zip(edges[::2], edges[1::2]):  # runs [a, b) of frames in the air
+        if t[b - 1] - t[max(a - 1, 0)] > MAX_FLIGHT:
+            raise InvalidInputError(
+                f"both soles are off the floor for {t[b - 1] - t[max(a - 1, 0)]:.2f} s (frames "
+                f"{a}–{b - 1}, {t[a]:.2f}–{t[b - 1]:.2f} s; more than {MAX_FLIGHT} s): repair "
+                "keeps a walk on the floor — trim the clip to the frames where a foot is down, "
+                "or check that the floor is at z = 0")
+
+
 def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
            weights: Any = None, flat: float = FLAT_HEIGHT, verbose: bool = False,
            **options: Any) -> RepairResult:
@@ -336,6 +356,7 @@ def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
         raise InvalidInputError("no frame of the motion has a sole flat on the floor (within "
                                 f"{flat:g} hip heights): nothing to stand on; is the floor at "
                                 "z = 0 and the motion the robot's?")
+    _check_flight(motion.t, stance)
     demo = motion.replace(contact=stance)
     if demo.v is None or demo.a is None:
         demo = differentiate(robot.model, demo)

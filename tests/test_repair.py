@@ -147,6 +147,11 @@ def test_bad_inputs_say_what_to_fix(g1_copy_stride, tmp_path, capsys):
         gd.repair(g1, copy, flat=1e-9)  # no sole this flat on the floor (1e-9 hip heights)
     with pytest.raises(gd.InvalidInputError, match="hip heights"):
         gd.repair(g1, copy, flat=-1.0)
+    q = copy.q.copy()
+    q[30:60, 2] += 0.3  # the robot lifted 0.3 m for 0.5 s: no foot on the floor (the
+    # stance detection's low-pass filter and minimum phase widen it by a few frames)
+    with pytest.raises(gd.InvalidInputError, match=r"off the floor for 0\.5\d s \(frames 2\d–6\d"):
+        gd.repair(g1, copy.replace(q=q))
     csv = tmp_path / "m.csv"
     gd.export_motion(g1, copy, csv, "csv")
     assert main(["repair", str(csv), "--out", str(tmp_path / "o1")]) == 2
