@@ -5,8 +5,9 @@ numbers), ``cases`` (the paper's three planar cases: robots and the generated wa
 ``examples`` (named demonstration/adaptation pairs for ``gdimitate view`` and the notebooks),
 ``baselines`` (the kinematic retargeters the benchmarks compare against) and ``scenarios``
 (small plans for the physics check's tests), ``viewer_picture`` (the README's picture of the
-viewer), ``stream`` (``gdimitate stream``: a live source adapted frame by frame) and
-``outputs`` (the files ``adapt`` and ``stream`` write). Their names may change between
+viewer), ``stream`` (``gdimitate stream``: a live source adapted frame by frame), ``repair``
+(``gdimitate repair``: a motion file repaired on its own robot) and ``outputs`` (the files
+``adapt``, ``stream`` and ``repair`` write). Their names may change between
 releases without
 a deprecation period.
 
