@@ -1,5 +1,5 @@
 """Repair a robot motion from any retargeter on its own robot: the whole-body adaptor with the
-same robot as demonstrator and imitator (docs/design.md §16).
+same robot as demonstrator and imitator (docs/guide/datasets.md; docs/design.md §6, §12).
 
 :func:`repair` takes a robot motion (GMR's, holosoma's, a joint-angle copy: any
 :class:`~gdimitate.Motion` of ``robot``, e.g. read by ``gdimitate audit``'s readers) and makes it
