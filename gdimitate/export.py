@@ -12,7 +12,10 @@ call :func:`export_motion`):
   back with :func:`gdimitate.demonstration.load_demonstration` without naming the robot),
   ``v``/``a`` ``(T, nv)`` where the motion has them, and, for an adaptor's output, the contact
   wrenches ``wrench_left``/``wrench_right`` ``(T, 6)`` ``[f; τ]`` [N, N·m] in each sole frame
-  (``wrench_frame_left``/``_right`` name it). :func:`read_wrenches`.
+  (``wrench_frame_left``/``_right`` name it) with, where the motion has ``v`` and ``a``,
+  the joint torques they imply, ``joint_torque`` ``(T, D)`` [N·m, N] (the audit's inverse
+  dynamics ``rnea(q, v, a) − Σ Jᵀw`` without the base's rows; ``joint_torque_names``, the
+  actuated joints in Pinocchio's order). :func:`read_wrenches`.
 - ``"mujoco"``: an NPZ with ``time`` ``(T,)``, ``qpos`` ``(T, nq_mj)`` (and ``qvel``
   ``(T, nv_mj)`` where the motion has ``v``) in MuJoCo's joint order and conventions (free
   joint: position, then quaternion w, x, y, z; linear velocity in the world, angular in the
@@ -49,7 +52,9 @@ call :func:`export_motion`):
   ``body_lin_vel_w``/``body_ang_vel_w`` ``(N, B, 3)`` [m/s, rad/s] of the body frame's origin
   in the world — MuJoCo's own ``mj_forward`` and ``mj_objectVelocity`` on that model; float64
   (the loaders cast to float32). With ``wrenches`` it also carries gdimitate's
-  ``contact_wrench_<side>`` ``(N, 6)`` [N, N·m] (each sole frame, ``contact_frame_<side>``).
+  ``contact_wrench_<side>`` ``(N, 6)`` [N, N·m] (each sole frame, ``contact_frame_<side>``)
+  and the joint torques they imply, ``joint_torque`` ``(N, J)`` [N·m] in ``joint_names``'
+  order (as ``"npz"``'s, interpolated onto the frames like the wrenches).
   Isaac Sim numbers an articulation's bodies breadth-first; the file's ``body_names`` say which
   body is which. :func:`read_beyondmimic_npz`.
 
@@ -264,17 +269,57 @@ def read_csv(path: str | Path, robot: Robot) -> Motion:
 
 
 # ---------------------------------------------------------------------- npz
+def _checked_wrenches(motion: Motion, wrenches) -> dict[str, np.ndarray]:
+    """``wrenches`` as float arrays, each ``(T, 6)`` (else :class:`ExportError`)."""
+    out = {}
+    for s in SIDES:
+        w = np.asarray(wrenches[s], dtype=float)
+        if w.shape != (motion.T, 6):
+            raise ExportError(f"wrenches[{s!r}] must have shape ({motion.T}, 6); got {w.shape}")
+        out[s] = w
+    return out
+
+
+def _joint_torques(robot: Robot, motion: Motion, wrenches) -> np.ndarray | None:
+    """The actuated joints' torques ``(T, nv − base)`` [N·m, N] in Pinocchio's velocity order
+    that the motion's ``v``, ``a`` and the contact ``wrenches`` imply — the audit's own inverse
+    dynamics (:func:`gdimitate.audit.checks.joint_torques`) — or None without wrenches, ``v``
+    or ``a`` (nothing to compute them from)."""
+    if wrenches is None or motion.v is None or motion.a is None:
+        return None
+    from .audit.checks import joint_torques
+
+    return joint_torques(robot, motion, wrenches)[:, _base_nv(robot):]
+
+
+def _base_nv(robot: Robot) -> int:
+    """The base's velocity dimension: 6 (free), 3 (planar) or 0 (fixed)."""
+    return {"free": 6, "planar": 3}.get(robot.base, 0)
+
+
+def _torque_names(robot: Robot) -> list[str]:
+    """A name per actuated velocity column: the joint's, ``joint[i]`` for a multi-DoF one."""
+    m, names = robot.model, []
+    for j in range(1, m.njoints):
+        if m.joints[j].idx_v < _base_nv(robot):
+            continue
+        nv = m.joints[j].nv
+        names += [m.names[j]] if nv == 1 else [f"{m.names[j]}[{i}]" for i in range(nv)]
+    return names
+
+
 def _write_npz(robot, motion, path, wrenches=None, **_) -> None:
     extra = {}
     if wrenches is not None:
+        wrenches = _checked_wrenches(motion, wrenches)
         for s in SIDES:
-            w = np.asarray(wrenches[s], dtype=float)
-            if w.shape != (motion.T, 6):
-                raise ExportError(f"wrenches[{s!r}] must have shape ({motion.T}, 6); got "
-                                  f"{w.shape}")
-            extra[f"wrench_{s}"] = w
+            extra[f"wrench_{s}"] = wrenches[s]
             c = robot.contacts.get(s)
             extra[f"wrench_frame_{s}"] = np.array(c.frame if c else robot.legs[s].sole)
+        tau = _joint_torques(robot, motion, wrenches)
+        if tau is not None:
+            extra["joint_torque"] = tau
+            extra["joint_torque_names"] = np.array(_torque_names(robot))
     with open(path, "wb") as f:  # a file object: np.savez would append ".npz" to a name
         motion.to_npz(f, robot=robot, extra=extra)
 
@@ -546,13 +591,22 @@ def _write_beyondmimic(robot, motion, path, fps=30.0, wrenches=None, **_) -> Non
                                        for b in range(1, mj.nbody)]),
                   joint_pos=qpos[:, 7 if free else 0:], joint_vel=qvel[:, 6 if free else 0:],
                   body_pos_w=pos, body_quat_w=quat, body_lin_vel_w=lin, body_ang_vel_w=ang)
-    for s, w in (wrenches or {}).items():  # gdimitate's extras, on the same frames
-        w = np.asarray(w, float)
-        arrays[f"contact_wrench_{s}"] = np.column_stack(
-            [np.interp(t, motion.t, w[:, i]) for i in range(6)])
-        arrays[f"contact_frame_{s}"] = np.array(robot.require_contacts()[s].frame)
+    if wrenches is not None:  # gdimitate's extras, on the same frames
+        wrenches = _checked_wrenches(motion, wrenches)
+        for s, w in wrenches.items():
+            arrays[f"contact_wrench_{s}"] = _on_grid(t, motion.t, w)
+            arrays[f"contact_frame_{s}"] = np.array(robot.require_contacts()[s].frame)
+        tau = _joint_torques(robot, motion, wrenches)
+        if tau is not None:  # the joints' columns in the file's (MuJoCo's) joint order
+            col = {n: i for i, n in enumerate(_torque_names(robot))}
+            arrays["joint_torque"] = _on_grid(t, motion.t, tau[:, [col[n] for n in joints]])
     with open(path, "wb") as f:
         np.savez(f, **arrays)
+
+
+def _on_grid(t: np.ndarray, t_motion: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``x`` ``(T, n)`` on the motion's times, linearly interpolated onto ``t`` ``(N,)``."""
+    return np.column_stack([np.interp(t, t_motion, x[:, i]) for i in range(x.shape[1])])
 
 
 @dataclass(frozen=True)

@@ -111,6 +111,22 @@ def test_csv_round_trip_and_columns(tmp_path):
         read_csv(p, hoap)
 
 
+def _rnea_torques(robot: Robot, motion: Motion, wrenches: dict) -> np.ndarray:
+    """The actuated joints' torques ``(T, nv − base)``: Pinocchio's RNEA with each sole wrench
+    applied as an external force on its frame's parent joint (an independent route from the
+    exporter's ``rnea − Σ Jᵀw``)."""
+    m, d = robot.model, robot.model.createData()
+    frames = {s: m.frames[m.getFrameId(robot.contacts[s].frame)] for s in wrenches}
+    out = []
+    for k in range(motion.T):
+        fext = [pin.Force.Zero() for _ in range(m.njoints)]
+        for s, fr in frames.items():
+            fext[fr.parentJoint] = fext[fr.parentJoint] + fr.placement.act(
+                pin.Force(wrenches[s][k]))
+        out.append(pin.rnea(m, d, motion.q[k], motion.v[k], motion.a[k], fext).copy())
+    return np.array(out)[:, {"free": 6, "planar": 3}.get(robot.base, 0):]
+
+
 def test_npz_holds_q_v_a_wrenches_and_robot(tmp_path):
     hoap, res = _hoap_walk()
     motion = differentiate(hoap.model, res.motion)
@@ -127,6 +143,12 @@ def test_npz_holds_q_v_a_wrenches_and_robot(tmp_path):
     assert all(np.array_equal(w[s], wrenches[s]) for s in wrenches)
     with np.load(tmp_path / "walk_out.npz") as z:
         assert str(z["wrench_frame_left"]) == hoap.contacts["left"].frame
+        # the joint torques the wrenches imply (issue 36): Pinocchio's RNEA with external forces
+        np.testing.assert_allclose(z["joint_torque"], _rnea_torques(hoap, motion, wrenches),
+                                   rtol=0, atol=1e-9)
+        assert list(z["joint_torque_names"]) == [
+            n for n in hoap.joint_names if hoap.model.joints[hoap.model.getJointId(n)].idx_v
+            >= {"free": 6, "planar": 3}.get(hoap.base, 0)]
     with pytest.raises(ExportError, match="shape"):
         export_motion(hoap, motion, tmp_path / "bad.npz", "npz",
                       wrenches={"left": np.zeros((3, 6)), "right": np.zeros((3, 6))})
@@ -370,6 +392,12 @@ def test_beyondmimic_npz_keys_and_bodies_match_pinocchio(tmp_path):
         g1.contacts["left"].frame
     np.testing.assert_allclose(z["contact_wrench_right"], wrenches["right"], atol=1e-12)
     back = read_beyondmimic_npz(p)
+    # the joint torques the wrenches imply, each column under its joint_names entry (60 Hz:
+    # the motion's own frames, so no interpolation)
+    tau = _rnea_torques(g1, motion, wrenches)
+    cols = [g1.model.joints[g1.model.getJointId(str(n))].idx_v - 6 for n in z["joint_names"]]
+    assert z["joint_torque"].shape == (N, J) and z["joint_torque"].dtype == np.float64
+    np.testing.assert_allclose(z["joint_torque"], tau[:, cols], rtol=0, atol=1e-9)
     names = list(back.body_names)
     assert names == [mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, B + 1)]
     assert list(back.joint_names) == list(g1.joint_names[1:])  # MuJoCo's order is the URDF's

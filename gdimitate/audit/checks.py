@@ -160,6 +160,17 @@ def _kinematics_dynamics(robot, motion, contacts, W):
     return tau, pos, rot
 
 
+def joint_torques(robot, motion: Motion, wrenches: dict[str, np.ndarray]) -> np.ndarray:
+    """The audit's own inverse dynamics of ``motion`` (with ``v``, ``a``) and its sole-frame
+    contact wrenches ``{side: (T, 6)}`` [N, N·m]: ``tau`` ``(T, nv)`` [N·m, N] =
+    ``rnea(q, v, a) − Σ_c J_cᵀ w_c`` (Pinocchio; the base rows are the residual the audit
+    bounds, the rest the actuated joints' torques, in Pinocchio's velocity order)."""
+    if motion.v is None or motion.a is None:
+        raise InvalidInputError("joint torques need the motion's v and a")
+    contacts = {s: c for s, c in robot.require_contacts().items() if s in wrenches}
+    return _kinematics_dynamics(robot, motion, contacts, wrenches)[0]
+
+
 def _sole_velocities(robot, motion, contacts) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Per foot ``(V, dV)``, each ``(T, 2)``: the norms ``(‖v‖ [m/s], ‖ω‖ [rad/s])`` of the sole
     frame's spatial velocity ``J_c(q_k) v_k`` (Pinocchio's ``forwardKinematics(q, v)``, then
