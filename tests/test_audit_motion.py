@@ -164,35 +164,20 @@ def _talos_copy():
     return talos, gd.adapt(_slice(walk, 0, 70), human, talos, method="copy").motion
 
 
-@functools.cache
-def _talos_walk():
-    """Talos's repaired joint copy of one stride (:func:`gdimitate.repair`, 30 knots/s): an
-    adaptor's output that the audit of its own q, v, a and stance finds feasible."""
-    human, walk, forces = gd.gait.human_walk_3d()
-    stride, _ = gd.gait.one_stride(walk, forces)
-    talos = gd.Robot.from_library("talos")
-    from gdimitate.apps.baselines import joint_copy
-
-    copy = joint_copy(stride, human, talos).motion.replace(contact={}, v=None, a=None)
-    return talos, gd.repair(talos, copy).motion
-
-
-@pytest.fixture(params=["g1 copy", "g1 walk", "talos copy",
-                        pytest.param("talos walk", marks=pytest.mark.slow)])
+@pytest.fixture(params=["g1 copy", "g1 walk", "talos copy"])
 def motion_case(request):
-    """``(robot, motion, feasible)``: a joint copy (q only, 60 Hz; not feasible) and an adapted
-    walk (the adaptor's q, v, a and stance; feasible) on G1 and Talos."""
+    """``(robot, motion, feasible)``: a joint copy (q only, 60 Hz; not feasible) on G1 and
+    Talos and an adapted walk (the adaptor's q, v, a and stance; feasible) on G1. Talos's
+    adapted walk (its repaired joint copy) held too when measured, but it compiles Talos's
+    problem (190 s on 2 cores), so the suite leaves it out."""
     if request.param == "g1 copy":
         g1, m, _ = request.getfixturevalue("g1_copy")
         return g1, m.replace(contact={}, v=None, a=None), False
     if request.param == "g1 walk":
         adapted = request.getfixturevalue("g1_stride")[3]
         return adapted.robot, adapted.motion, True
-    if request.param == "talos copy":
-        talos, m = _talos_copy()
-        return talos, m.replace(contact={}, v=None, a=None), False
-    talos, m = _talos_walk()
-    return talos, m, True
+    talos, m = _talos_copy()
+    return talos, m.replace(contact={}, v=None, a=None), False
 
 
 def test_every_export_format_audits_as_the_motion_it_holds(motion_case, tmp_path, capsys):

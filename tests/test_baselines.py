@@ -194,7 +194,11 @@ def _peers():
     spec = importlib.util.spec_from_file_location("gdimitate_benchmark_peers", path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod  # its dataclasses look their module up there
-    spec.loader.exec_module(mod)
+    sys.path.insert(0, str(path.parent))  # its sibling modules (results, revision), as when run
+    try:
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(path.parent))
     return mod
 
 
