@@ -48,6 +48,7 @@ from .contact import ContactForces, FootForces
 from .errors import InvalidInputError
 from .motion import Motion
 from .result import AdaptedMotion
+from .retarget.targets import configurations_at
 from .robot import SIDES, Robot
 
 __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
@@ -261,23 +262,13 @@ def _keypoints(robot: Robot, q: np.ndarray) -> np.ndarray:
     return out
 
 
-def _reference_at(robot: Robot, reference: Motion, t: np.ndarray) -> np.ndarray:
-    """``reference``'s q at times ``t`` ``(K,)`` [s]: each column linearly interpolated, a
-    free-flyer's quaternion re-normalised (:func:`gdimitate.retarget.resample`'s rule)."""
-    ref = np.column_stack([np.interp(t, reference.t, reference.q[:, c])
-                           for c in range(reference.q.shape[1])])
-    if robot.base == "free":
-        ref[:, 3:7] /= np.linalg.norm(ref[:, 3:7], axis=1, keepdims=True)
-    return ref
-
-
 def placed(robot: Robot, reference: Motion, motion: Motion) -> Motion:
     """``motion`` moved along the floor (its base's x, y) by the mean horizontal offset of its
     keypoints from ``reference``'s at its times: the adaptor writes a motion from the origin
     of the demonstration's heading frame; on a flat floor a horizontal shift changes no force,
     torque, contact or collision (the audit and MuJoCo give the same numbers), and it puts the
     repaired motion where the input was."""
-    d = (_keypoints(robot, _reference_at(robot, reference, motion.t))
+    d = (_keypoints(robot, configurations_at(robot, reference, motion.t))
          - _keypoints(robot, motion.q))[..., :2].reshape(-1, 2).mean(axis=0)
     q = motion.q.copy()
     q[:, :2] += d
@@ -286,9 +277,9 @@ def placed(robot: Robot, reference: Motion, motion: Motion) -> Motion:
 
 def keypoint_error(robot: Robot, reference: Motion, motion: Motion) -> np.ndarray:
     """Distances ``(K, n)`` [m] of ``motion``'s keypoints (:func:`keypoint_frames`) from
-    ``reference``'s at ``motion.t`` (``reference``'s q linearly interpolated there, a
-    free-flyer's quaternion re-normalised: :func:`gdimitate.retarget.resample`'s rule)."""
-    ref = _reference_at(robot, reference, motion.t)
+    ``reference``'s at ``motion.t`` (``reference``'s q there by
+    :func:`gdimitate.retarget.targets.configurations_at`)."""
+    ref = configurations_at(robot, reference, motion.t)
     return np.linalg.norm(_keypoints(robot, motion.q) - _keypoints(robot, ref), axis=2)
 
 

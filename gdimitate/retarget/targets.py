@@ -17,8 +17,8 @@ from ..motion import Motion
 from ..robot import SIDES, Robot
 from .bodymap import BodyMap
 
-__all__ = ["Targets", "resample", "schedule", "demonstration_targets", "direction_frame",
-           "relative_rotations", "segment_rotations"]
+__all__ = ["Targets", "configurations_at", "resample", "schedule", "demonstration_targets",
+           "direction_frame", "relative_rotations", "segment_rotations"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +57,16 @@ class Targets:
         return int(self.t.size)
 
 
+def configurations_at(robot: Robot, motion: Motion, t: np.ndarray) -> np.ndarray:
+    """``motion``'s q at times ``t`` ``(K,)`` [s], ``(K, nq)``: each column linearly
+    interpolated, a free-flyer's quaternion re-normalised."""
+    q = np.column_stack([np.interp(t, motion.t, motion.q[:, c])
+                         for c in range(motion.q.shape[1])])
+    if robot.base == "free":
+        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    return q
+
+
 def resample(robot: Robot, motion: Motion, rate: float) -> Motion:
     """``motion`` on a uniform grid of ``rate`` knots/s from its first time to its last
     (linear interpolation of each column, a free-flyer's quaternion re-normalised; contact
@@ -73,9 +83,7 @@ def resample(robot: Robot, motion: Motion, rate: float) -> Motion:
     tk = t[0] + np.arange(n) / rate
     if tk.size == t.size and np.allclose(tk, t, atol=1e-9):
         return motion
-    q = np.column_stack([np.interp(tk, t, motion.q[:, c]) for c in range(motion.q.shape[1])])
-    if robot.base == "free":
-        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    q = configurations_at(robot, motion, tk)
     near = np.clip(np.searchsorted(t, tk - 0.5 / rate), 0, t.size - 1)
     near = np.array([min(range(max(i - 1, 0), min(i + 2, t.size)), key=lambda j: abs(t[j] - x))
                      for i, x in zip(near, tk)])
