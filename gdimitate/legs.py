@@ -32,8 +32,8 @@ import pinocchio as pin
 from .errors import LegDetectionError, UnknownNameError
 from .types import SIDES
 
-__all__ = ["LEG_PRESETS", "Leg", "SIDES", "legs_example", "measure_leg", "measure_orientation",
-           "resolve_leg_names", "side_of", "sole_from_geometry"]
+__all__ = ["LEG_PRESETS", "Leg", "SIDES", "hip_height", "legs_example", "measure_leg",
+           "measure_orientation", "resolve_leg_names", "side_of", "sole_from_geometry"]
 
 #: Explicit legs for library robots whose joint names don't say hip/knee/ankle.
 LEG_PRESETS: dict[str, dict[str, dict[str, str | None]]] = {
@@ -93,6 +93,12 @@ _ROLE_PATTERNS = {
 _SENSOR_NAME = re.compile(r"imu|sensor|camera|lidar|(^|[_\W])ft([_\W]|$)|force_?torque", re.I)
 _SOLE_PATTERNS = (r"sole", r"foot", r"toe", r"ankle")
 _LATERAL_COS = 0.9
+
+
+def hip_height(robot) -> float:
+    """The hip's height [m] over the sole of the longer leg of ``robot`` standing straight
+    (leg length plus foot height): the unit of the contact rules' thresholds."""
+    return max(robot.legs[s].length + robot.legs[s].foot for s in SIDES)
 
 
 def side_of(name: str) -> str | None:

@@ -46,6 +46,7 @@ import numpy as np
 from .audit.dataset import MotionAudit
 from .contact import ContactForces, FootForces
 from .errors import InvalidInputError
+from .legs import hip_height
 from .motion import Motion
 from .result import AdaptedMotion
 from .retarget.targets import configurations_at
@@ -179,7 +180,7 @@ def repair_schedule(robot: Robot, motion: Motion, flat: float = FLAT_HEIGHT
         return stance
     from .bvh.contacts import estimate_floor, sole_corners
 
-    hip = max(robot.legs[s].length + robot.legs[s].foot for s in SIDES)
+    hip = hip_height(robot)
     corners = sole_corners(robot, motion.q)
     floor = estimate_floor(corners)
     return {s: stance[s] & (corners[s][..., 2].max(axis=1) - floor < flat * hip)

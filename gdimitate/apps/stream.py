@@ -31,6 +31,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..kinematics import robot_motion
+from ..legs import hip_height
 from ..live.layout import LiveSourceError
 from ..live.source import LiveSource
 from ..motion import Motion
@@ -351,7 +352,7 @@ def _rest_pose(robot: Robot) -> np.ndarray:
 
     q = pin.neutral(robot.model)
     if robot.base == "free":
-        q[2] = max(robot.legs[s].length + robot.legs[s].foot for s in SIDES)
+        q[2] = hip_height(robot)
     return q
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..kinematics import frame_placements
+from ..legs import hip_height
 
 __all__ = ["ContactRule", "detect_contacts", "estimate_floor", "sole_corners", "close_gaps",
            "kinematic_stance",
@@ -92,7 +93,7 @@ def kinematic_stance(robot, q: np.ndarray, t: np.ndarray) -> tuple[dict[str, np.
     in hip heights), and the rule used: a foot that never stands still (a treadmill trial: the
     stance feet ride the belt) → height alone."""
     robot.require_contacts()
-    hip = max(robot.legs[s].length + robot.legs[s].foot for s in ("left", "right"))
+    hip = hip_height(robot)
     corners = sole_corners(robot, q)
     contact = detect_contacts(corners, t, hip)
     if min(c.mean() for c in contact.values()) >= 0.1:

@@ -13,6 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..bvh.contacts import ContactRule
+from ..legs import hip_height
 from ..robot import SIDES, Robot
 
 __all__ = ["CausalStance"]
@@ -25,7 +26,7 @@ class CausalStance:
 
     def __init__(self, robot: Robot, rule: ContactRule | None = None):
         self.robot, self.rule = robot, rule or ContactRule()
-        self.hip = max(robot.legs[s].length + robot.legs[s].foot for s in SIDES)
+        self.hip = hip_height(robot)
         contacts = robot.require_contacts()
         model = robot.model
         self._soles = {s: (model.getFrameId(contacts[s].frame), contacts[s].corners())
