@@ -12,7 +12,7 @@ clip's motion (and forces) before the adaptor sees it: ``asis``; ``turnD`` — t
 degrees about the vertical through its first base position; ``rateR`` — resampled to R Hz
 (linear interpolation, quaternions renormalised, contacts of the nearest frame); ``trim`` —
 0.3 s cut from each end (it starts and ends mid-stride); ``mirror`` — mirrored left to
-right (``gdimitate.mirror``: the walk led by the other foot); ``noise`` — 5 mm on the base
+right (``gdimitate.model.mirror``: the walk led by the other foot); ``noise`` — 5 mm on the base
 position and 0.01 rad on every joint angle, white, seed 0 (mocap noise; the contacts as
 recorded). Each case runs in its own Python process with its own timer (CPU seconds of the
 adaptation, derivatives already compiled). The travel ratio is computed here from the
@@ -43,7 +43,7 @@ _CHILD = textwrap.dedent("""
     import pinocchio as pin
     warnings.simplefilter("ignore")
     import gdimitate as gd
-    from gdimitate.contact import ContactForces, FootForces
+    from gdimitate.model.contact import ContactForces, FootForces
     clip, variant, name, scaling, simulate = sys.argv[1:6]
     if clip == "cmu":
         from gdimitate.demonstration import load_demonstration
@@ -102,7 +102,7 @@ _CHILD = textwrap.dedent("""
         n = int(round(0.3 / np.median(np.diff(demo.t))))
         demo, fs = cut(demo, fs, n, demo.T - n)
     elif variant == "mirror":
-        from gdimitate.mirror import mirror_forces, mirror_motion
+        from gdimitate.model.mirror import mirror_forces, mirror_motion
         demo = mirror_motion(h, demo)
         fs = None if fs is None else mirror_forces(fs)
     elif variant == "noise":

@@ -17,7 +17,7 @@ import warnings
 import numpy as np
 from results import add_flag, recording
 
-from gdimitate.contact import ContactForces
+from gdimitate.model.contact import ContactForces
 
 
 def retimed(demo, forces, k: float):
@@ -38,7 +38,7 @@ def main() -> None:
     args = p.parse_args()
     warnings.simplefilter("ignore")
     from gdimitate.apps.demo import default_demonstration
-    from gdimitate.robot import Robot
+    from gdimitate.model.robot import Robot
     from gdimitate.walk import periodic_cycle, walk
 
     robot, demo, forces = default_demonstration()

@@ -28,9 +28,9 @@ from types import SimpleNamespace
 import numpy as np
 from results import add_flag, recording
 
-from gdimitate.contact import SoleContact
-from gdimitate.motion import Motion
-from gdimitate.robot import SIDES, Robot
+from gdimitate.model.contact import SoleContact
+from gdimitate.model.motion import Motion
+from gdimitate.model.robot import SIDES, Robot
 
 
 def save_cycle(path: Path, cyc, name: str) -> None:

@@ -122,9 +122,9 @@ def arms_g1() -> Path:
     import matplotlib.pyplot as plt
 
     import gdimitate as gd
+    from gdimitate.model.selfcollision import self_collision
     from gdimitate.opensim import read_coordinates, read_grf
     from gdimitate.retarget.bodymap import body_map, following
-    from gdimitate.selfcollision import self_collision
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "opensim_ref"))
     from with_arms import arm_swing, write_model

@@ -51,7 +51,6 @@ if TYPE_CHECKING:
         audit,
         bvh,
         c3d,
-        contact,
         gait,
         metrics,
         opensim,
@@ -64,19 +63,20 @@ if TYPE_CHECKING:
     from .adapt import adapt
     from .apps.cases import paper_case
     from .audit.dataset import MotionAudit, audit_motion
-    from .contact import ContactForces, FootForces, SoleContact
     from .cpg import CPGReplay, entrain
     from .demonstration import Demonstration, load_demonstration
     from .export import export_motion
-    from .library import list_robots
     from .metrics import ForceDirection
-    from .motion import Motion
+    from .model import contact
+    from .model.contact import ContactForces, FootForces, SoleContact
+    from .model.library import list_robots
+    from .model.motion import Motion
+    from .model.robot import Leg, Robot
     from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
     from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
     from .repair import RepairResult, repair
     from .result import AdaptationReport, AdaptedMotion
     from .retarget import Limits, StreamingAdaptor, Weights
-    from .robot import Leg, Robot
     from .walk import walk
 
 __version__ = "0.1.0"
@@ -89,25 +89,25 @@ _LAZY_NAMES: dict[str, str] = {
     "paper_case": ".apps.cases",
     "audit_motion": ".audit.dataset",
     "MotionAudit": ".audit.dataset",
-    "ContactForces": ".contact",
-    "FootForces": ".contact",
-    "SoleContact": ".contact",
+    "ContactForces": ".model.contact",
+    "FootForces": ".model.contact",
+    "SoleContact": ".model.contact",
     "CPGReplay": ".cpg",
     "entrain": ".cpg",
     "Demonstration": ".demonstration",
     "load_demonstration": ".demonstration",
     "export_motion": ".export",
-    "list_robots": ".library",
+    "list_robots": ".model.library",
     "ForceDirection": ".metrics",
-    "Motion": ".motion",
+    "Motion": ".model.motion",
     "MatsuokaBank": ".oscillator",
     "MatsuokaParams": ".oscillator",
     "self_adjust": ".oscillator",
     "Limits": ".retarget",
     "StreamingAdaptor": ".retarget",
     "Weights": ".retarget",
-    "Leg": ".robot",
-    "Robot": ".robot",
+    "Leg": ".model.robot",
+    "Robot": ".model.robot",
     "HUMAN_GAIT": ".planar.walking",
     "ROBOT_GAIT": ".planar.walking",
     "GaitSpec": ".planar.walking",
@@ -117,19 +117,30 @@ _LAZY_NAMES: dict[str, str] = {
     "walk": ".walk",
 }
 
-#: public subpackages / modules (``gdimitate.sim`` etc.), imported on first use
-_LAZY_MODULES: frozenset[str] = frozenset({
-    "audit", "bvh", "c3d", "contact", "gait", "metrics", "opensim", "oscillator", "planar",
-    "retarget", "sim", "wrenches",
-})
+#: public subpackages / modules (``gdimitate.sim`` etc.) -> where they live, imported on first use
+_LAZY_MODULES: dict[str, str] = {
+    "audit": ".audit",
+    "bvh": ".bvh",
+    "c3d": ".c3d",
+    "contact": ".model.contact",
+    "gait": ".gait",
+    "metrics": ".metrics",
+    "opensim": ".opensim",
+    "oscillator": ".oscillator",
+    "planar": ".planar",
+    "retarget": ".retarget",
+    "sim": ".sim",
+    "wrenches": ".wrenches",
+}
 
 
 def __getattr__(name: str) -> Any:
     """Import a public name (or any submodule, e.g. ``gdimitate.viz``) on first use."""
     if name in _LAZY_NAMES:
         value = getattr(importlib.import_module(_LAZY_NAMES[name], __name__), name)
-    elif name in _LAZY_MODULES or (not name.startswith("_")
-                                   and importlib.util.find_spec(f"{__name__}.{name}")):
+    elif name in _LAZY_MODULES:
+        value = importlib.import_module(_LAZY_MODULES[name], __name__)
+    elif not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}"):
         value = importlib.import_module(f".{name}", __name__)
     else:
         raise AttributeError(f"module 'gdimitate' has no attribute {name!r}")

@@ -11,10 +11,10 @@ used, the solver's account and the independent physical audit (:func:`gdimitate.
 from __future__ import annotations
 
 from .errors import InvalidInputError, UnknownNameError
-from .motion import Motion
+from .model.motion import Motion
+from .model.robot import Robot
 from .planar.analytic import adapt_planar, check_pair
 from .result import AdaptationReport, AdaptedMotion, compare
-from .robot import Robot
 from .types import AdaptMethod, ForceModel
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "adapt", "METHODS", "compare"]

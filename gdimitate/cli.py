@@ -83,7 +83,7 @@ def _json_file(path: str | None, what: str):
     if path is None:
         return None
     from .errors import InvalidInputError
-    from .inputs import read_json
+    from .model.inputs import read_json
 
     value = read_json(path, what)  # bounded: size, nesting, digits, no NaN
     if not isinstance(value, dict):
@@ -95,7 +95,7 @@ def _json_file(path: str | None, what: str):
 def _robot(spec: str, a: argparse.Namespace):
     """``Robot.load`` of a library name or a .urdf/.osim path with the command's
     ``--package-dir``/``--contacts``/``--legs``/``--massless-joints``."""
-    from .robot import Robot
+    from .model.robot import Robot
 
     massless = [j for j in (a.massless_joints or "").split(",") if j.strip()]
     return Robot.load(spec, package_dir=a.package_dir,
@@ -106,7 +106,7 @@ def _robot(spec: str, a: argparse.Namespace):
 
 def _add_robot_args(p: argparse.ArgumentParser, flag: str, default: str | None,
                     what: str) -> None:
-    from .library import list_robots
+    from .model.library import list_robots
 
     p.add_argument(flag, default=default,
                    help=f"{what}: a library name ({', '.join(list_robots())}) or a .urdf/.osim "
@@ -154,7 +154,7 @@ def _demonstration(path: str | None, a: argparse.Namespace):
     if path is None:
         return None
     from .demonstration import load_demonstration
-    from .robot import Robot
+    from .model.robot import Robot
 
     robot = None
     if a.osim is not None:

@@ -4,7 +4,7 @@
 shared frequency) the whole body of a robot's motion — every actuated 1-DoF joint, and the
 floating base as periodic signals (its position with the mean walking velocity removed, its
 orientation as a rotation vector about the first frame's) — and lets it run free after the
-teaching input stops. The replay is a new :class:`~gdimitate.motion.Motion` of the same robot
+teaching input stops. The replay is a new :class:`~gdimitate.model.motion.Motion` of the same robot
 in the same joint order: the base advances at the taught mean velocity plus the network's
 periodic part; stance is read from the replayed feet (the lower sole is in stance).
 
@@ -26,10 +26,10 @@ from typing import Any
 import numpy as np
 
 from .errors import InvalidInputError, ResourceLimitError
-from .kinematics import kinematic_contact, robot_motion
-from .motion import Motion
+from .model.kinematics import kinematic_contact, robot_motion
+from .model.motion import Motion
+from .model.robot import PLANAR_BASE, Robot
 from .oscillator import OscillatorWarning, SelfAdjustResult, self_adjust
-from .robot import PLANAR_BASE, Robot
 from .safety import (
     MAX_MOTION_DURATION_S,
     MAX_OUTPUT_SAMPLES,

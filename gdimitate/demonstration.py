@@ -37,10 +37,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .contact import ContactForces
 from .errors import DemonstrationFormatError
-from .motion import Motion
-from .robot import Robot
+from .model.contact import ContactForces
+from .model.motion import Motion
+from .model.robot import Robot
 
 __all__ = ["Demonstration", "DemonstrationFormatError", "SUPPORTED",
            "load_demonstration"]
@@ -152,7 +152,7 @@ def _check_arguments(path, grf, coordinates, robot, overground, markers, package
     """:func:`load_demonstration`'s arguments of the right types (paths, a Robot, a bool) →
     the demonstration's path; :class:`InvalidInputError` naming the argument otherwise."""
     from .errors import InvalidInputError
-    from .inputs import path_arg
+    from .model.inputs import path_arg
 
     p = path_arg("path", path).expanduser()
     for name, value in (("grf", grf), ("coordinates", coordinates), ("markers", markers),
@@ -300,9 +300,10 @@ def _recorded_package_dir(p: Path, rec, given: str | Path | None) -> str | None:
 
 def _recorded_json(p: Path, field: str, text: str) -> object:
     """A JSON option (``robot_legs``/``robot_contacts``) recorded in an ``.npz``, checked
-    (:func:`gdimitate.inputs.loads_json`): :class:`FileFormatError` naming the file and field."""
+    (:func:`gdimitate.model.inputs.loads_json`): :class:`FileFormatError` naming the file and
+    field."""
     from .errors import FileFormatError
-    from .inputs import loads_json
+    from .model.inputs import loads_json
 
     if not text:
         return None
@@ -317,7 +318,7 @@ def _recorded_names(p: Path, text: str) -> tuple[str, ...]:
     """The ``robot_massless`` joint names recorded in an ``.npz`` (a JSON list of str):
     :class:`FileFormatError` naming the file and field otherwise."""
     from .errors import FileFormatError
-    from .inputs import loads_json
+    from .model.inputs import loads_json
 
     if not text:
         return ()
@@ -331,8 +332,8 @@ def _recorded_names(p: Path, text: str) -> tuple[str, ...]:
 def _npz(p: Path, robot: Robot | None, package_dir: str | Path | None = None
          ) -> Demonstration:
     from .errors import FileFormatError, RobotMismatchError
-    from .library import list_robots
-    from .motion import RobotRecord, check_motion_layout
+    from .model.library import list_robots
+    from .model.motion import RobotRecord, check_motion_layout
 
     rec = RobotRecord.from_npz(p)
     motion = Motion.from_npz(p)

@@ -145,7 +145,7 @@ class ResourceLimitError(InvalidInputError):
 
 class OsimLimitError(OsimError, ResourceLimitError):
     """An ``.osim`` file over the size a model may have
-    (:data:`gdimitate.opensim.model.MAX_OSIM_BYTES`)."""
+    (:data:`gdimitate.model.osim.model.MAX_OSIM_BYTES`)."""
 
 
 class URDFLimitError(URDFError, ResourceLimitError):

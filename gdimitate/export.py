@@ -79,9 +79,9 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import ExportError, FileFormatError, OutputError
-from .kinematics import base_joint_id
-from .motion import Motion, check_base_quaternion, check_motion_layout
-from .robot import PLANAR_BASE, SIDES, Robot
+from .model.kinematics import base_joint_id
+from .model.motion import Motion, check_base_quaternion, check_motion_layout
+from .model.robot import PLANAR_BASE, SIDES, Robot
 from .safety import check_array_size, check_positive
 
 __all__ = ["BODY_ORDERS", "FORMATS", "BeyondMimicMotion", "MujocoMotion", "body_links",
@@ -123,7 +123,7 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
     ``fps`` whose frames exceed :data:`~gdimitate.safety.MAX_ARRAY_BYTES`,
     :class:`~gdimitate.errors.OutputError` for a ``path`` that is a folder, in a folder that
     does not exist, or cannot be written."""
-    from .inputs import path_arg
+    from .model.inputs import path_arg
 
     if not isinstance(robot, Robot):
         raise ExportError(f"robot must be a gdimitate.Robot; got {type(robot).__name__}")
@@ -471,7 +471,7 @@ def _body_kinematics(robot: Robot, q: np.ndarray, v: np.ndarray, ids: list[int])
 
 def _training_frames(robot, motion, fps, what):
     """The resampled motion (t, q, v) for the gmr/isaaclab_amp writers."""
-    from .motion import differentiate
+    from .model.motion import differentiate
 
     t, q = _fps_grid(robot, motion, fps, what)
     if len(t) < 2:

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .contact import ContactForces, FootForces
 from .errors import InvalidInputError, UnitsWarning
-from .motion import Motion
+from .model.contact import ContactForces, FootForces
+from .model.motion import Motion
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
            "human_walk_3d_folder", "one_stride", "cmu_walk_path", "write_subject01_c3d"]
@@ -39,7 +39,7 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
             InvalidInputError): no such file, no ``endheader``, a malformed numeric table.
     """
     from .errors import OpenSimFormatError
-    from .opensim._table import read_table
+    from .model.osim._table import read_table
 
     table = read_table(path, min_rows=1)
     short = [n.split("/")[-2] if n.endswith("/value") else n.split("/")[-1]
@@ -115,10 +115,10 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     measured body motion, whose centre-of-mass acceleration reproduces the measured GRF
     direction (see ``tests/test_gait.py``).
     """
-    from .kinematics import kinematic_contact, robot_motion
-    from .planar.sagittal import compose_q, ground_base
-    from .robot import Robot
-    from .urdfgen import human_spec
+    from .model.kinematics import kinematic_contact, robot_motion
+    from .model.robot import Robot
+    from .model.sagittal import compose_q, ground_base
+    from .model.urdfgen import human_spec
 
     d = read_mot(path)
     _refuse_full_body(path, d)
@@ -177,7 +177,7 @@ def _refuse_full_body(path, d: dict) -> None:
 
 
 def _measured_base(robot, q, contact, d, t, belt_speed):
-    from .kinematics import frame_paths
+    from .model.kinematics import frame_paths
 
     for c in ("pelvis_tx", "pelvis_ty"):
         if c not in d:
@@ -227,8 +227,8 @@ def write_subject01_c3d(path: str | Path) -> Path:
     import warnings
 
     from .c3d import ForcePlate, write_c3d
+    from .model.robot import Robot
     from .opensim import read_grf, read_trc
-    from .robot import Robot
 
     folder = human_walk_3d_folder()
     robot = Robot.from_osim(folder / "subject01.osim")
@@ -264,10 +264,10 @@ def human_walk_3d(overground: bool = True):
     which was done and the speed. ``False`` keeps the treadmill kinematics (as OpenSim's own
     inverse dynamics of this trial used them).
     """
+    from .model.robot import Robot
     from .opensim.coordinates import read_coordinates
     from .opensim.grf import read_grf
     from .opensim.treadmill import treadmill_to_overground
-    from .robot import Robot
 
     folder = human_walk_3d_folder()
     robot = Robot.from_osim(folder / "subject01.osim", markers=folder / "subject01_walk1.trc")

@@ -1,7 +1,7 @@
 """What a walking motion achieves: hip and foot paths, centre of mass, force direction, limits.
 
 All positions are world coordinates [m] (x forward, z up); angles [rad]. Functions take the
-robot and one of its :class:`~gdimitate.motion.Motion`\\ s.
+robot and one of its :class:`~gdimitate.model.motion.Motion`\\ s.
 """
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact import ContactForces
 from .errors import InvalidInputError, UnknownNameError
-from .heading import walk_heading
-from .kinematics import frame_paths, frame_rotations, joint_paths
-from .motion import Motion
-from .robot import PLANAR_BASE, SIDES, Robot
+from .model.contact import ContactForces
+from .model.heading import walk_heading
+from .model.kinematics import frame_paths, frame_rotations, joint_paths
+from .model.motion import Motion
+from .model.robot import PLANAR_BASE, SIDES, Robot
 
 __all__ = ["FORCE_MODELS", "angle_down", "hip_path", "hip_height", "ankle_paths", "sole_paths",
            "foot_heights", "foot_distance", "com_path", "force_direction", "joint_limit_margins",
@@ -70,7 +70,7 @@ def foot_heights(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
 
 def foot_distance(robot: Robot, motion: Motion) -> np.ndarray:
     """Horizontal distance between the ankles along the walk, left minus right ``(T,)`` [m]
-    (signed): along the motion's heading (:func:`gdimitate.heading.walk_heading`, the
+    (signed): along the motion's heading (:func:`gdimitate.model.heading.walk_heading`, the
     direction of its base's travel; +x for planar models), so that a walk along any
     direction of the lab gives the same curve."""
     a = ankle_paths(robot, motion)
@@ -173,7 +173,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
       explain the base rows of its inverse dynamics inside each foot's contact wrench cone,
       split between the feet in double support (a QP per knot,
       :func:`gdimitate.wrenches.estimate_wrenches`); velocities and accelerations from
-      ``motion.v``/``motion.a`` or, when absent, :func:`gdimitate.motion.differentiate` with a
+      ``motion.v``/``motion.a`` or, when absent, :func:`gdimitate.model.motion.differentiate` with a
       ``cutoff`` [Hz] low-pass (zero phase; OpenSim's inverse dynamics uses 6 Hz);
     - ``com`` — from the whole-body centre of mass to the contact point (the measured centre
       of pressure where ``forces`` are given, else the sole frame): an inverted pendulum;
@@ -211,7 +211,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
             push[s] = -f
             stance[s] = stance[s] & contact
     else:
-        from .motion import differentiate
+        from .model.motion import differentiate
         from .wrenches import estimate_wrenches
 
         m = motion if motion.v is not None and motion.a is not None else differentiate(

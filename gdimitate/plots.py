@@ -13,11 +13,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from . import metrics
-from .contact import SoleContact, centre_of_pressure
 from .metrics import ForceDirection
-from .motion import Motion
-from .planar.sagittal import leg_angles
-from .robot import Robot
+from .model.contact import SoleContact, centre_of_pressure
+from .model.motion import Motion
+from .model.robot import Robot
+from .model.sagittal import leg_angles
 from .safety import atomic_write
 
 __all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
@@ -179,7 +179,7 @@ def plot_sole_cop(wrenches: Mapping[str, np.ndarray], contacts: Mapping[str, Sol
     sole frame (x forward, y left): ``wrenches`` ``{side: (T, 6)}`` [N, N·m] in the sole frame
     (an :class:`~gdimitate.adapt.AdaptedMotion`'s), ``contacts`` the sole rectangles,
     ``stance`` ``{side: (T,) bool}`` (only stance knots with a positive normal force are
-    drawn). The drawn points are :func:`gdimitate.contact.centre_of_pressure`'s."""
+    drawn). The drawn points are :func:`gdimitate.model.contact.centre_of_pressure`'s."""
     fig, ax = plt.subplots(1, 2, figsize=(8, 4.5))
     for a, side in zip(ax, ("left", "right"), strict=True):
         c = contacts[side]

@@ -44,13 +44,13 @@ from typing import Any
 import numpy as np
 
 from .audit.dataset import MotionAudit
-from .contact import ContactForces, FootForces
 from .errors import InvalidInputError
-from .legs import hip_height
-from .motion import Motion
+from .model.contact import ContactForces, FootForces
+from .model.legs import hip_height
+from .model.motion import Motion
+from .model.robot import SIDES, Robot
 from .result import AdaptedMotion
 from .retarget.targets import configurations_at
-from .robot import SIDES, Robot
 
 __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
            "wrench_forces", "identity_map", "keypoint_frames", "keypoint_error", "placed",
@@ -196,7 +196,7 @@ def wrench_forces(robot: Robot, motion: Motion, wrenches: Mapping[str, np.ndarra
     pressure ``p + R (−τ_y/f_z, τ_x/f_z, 0)`` and the free moment about it ``R (0, 0, τ_z −
     c_x f_y + c_y f_x)``; in contact where ``motion.contact`` says stance and f_z > 0.
     :func:`gdimitate.wrenches.measured_wrenches` turns them back (within round-off)."""
-    from .kinematics import frame_placements
+    from .model.kinematics import frame_placements
 
     contacts = robot.require_contacts()
     P = frame_placements(robot, motion.q, [contacts[s].frame for s in SIDES])
@@ -326,7 +326,7 @@ def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
     """
     from .adapt import adapt
     from .audit.dataset import audit_motion
-    from .motion import differentiate
+    from .model.motion import differentiate
     from .retarget import Weights
     from .wrenches import estimate_wrenches
 

@@ -10,8 +10,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .contact import SoleContact
-from .footsteps import GaitComparison
 from .metrics import (
     angle_down,
     foot_heights,
@@ -19,8 +17,10 @@ from .metrics import (
     hip_height_ratio,
     joint_limit_margins,
 )
-from .motion import Motion
-from .robot import SIDES, Robot
+from .model.contact import SoleContact
+from .model.footsteps import GaitComparison
+from .model.motion import Motion
+from .model.robot import SIDES, Robot
 
 if TYPE_CHECKING:  # annotations only: the audit is below this module, the solver above it
     from .audit.report import AuditReport
@@ -94,7 +94,7 @@ class AdaptedMotion:
     - ``solver`` (optimal only): :class:`gdimitate.retarget.SolverInfo`;
     - ``force_model``: the force-direction model of the goal;
     - ``frame_feasible`` (streaming mode only): ``(T,)`` per-frame audit flags;
-    - ``gait`` (optimal only): :class:`gdimitate.footsteps.GaitComparison`, the imitator's
+    - ``gait`` (optimal only): :class:`gdimitate.model.footsteps.GaitComparison`, the imitator's
       steps, stride, travel and speed against the demonstrator's scaled to its legs.
     """
 

@@ -232,10 +232,10 @@ def _num(x: Any) -> float:
 
 def written_gait_lines(report: dict[str, Any]) -> list[str]:
     """:func:`gait_lines` rendered from a written report's ``gait``
-    (:meth:`gdimitate.footsteps.GaitComparison.to_dict`) and ``audit`` (its joints)."""
+    (:meth:`gdimitate.model.footsteps.GaitComparison.to_dict`) and ``audit`` (its joints)."""
     from types import SimpleNamespace
 
-    from .footsteps import GaitComparison, Step
+    from .model.footsteps import GaitComparison, Step
 
     g = report.get("gait")
     if g is None:

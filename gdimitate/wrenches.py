@@ -22,10 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .contact import ContactForces, SoleContact, wrench_cone
 from .errors import InvalidInputError, SolverError, UnknownNameError
-from .kinematics import PLANAR_BASE, base_joint_id, base_v_indices, frame_placements
-from .motion import Motion
+from .model.contact import ContactForces, SoleContact, wrench_cone
+from .model.kinematics import PLANAR_BASE, base_joint_id, base_v_indices, frame_placements
+from .model.motion import Motion
 
 __all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS", "measured_wrenches",
            "cone_rows"]
@@ -71,7 +71,7 @@ class WrenchEstimate:
 
 def base_dofs(robot) -> list[int]:
     """Indices in ``v`` of the unactuated base: free-flyer 0–5, planar ``base_x``, ``base_z``,
-    ``base_pitch``; ``[]`` for a fixed base (:func:`gdimitate.kinematics.base_v_indices`)."""
+    ``base_pitch``; ``[]`` for a fixed base (:func:`gdimitate.model.kinematics.base_v_indices`)."""
     return [int(i) for i in base_v_indices(robot)]
 
 
@@ -133,7 +133,8 @@ def estimate_wrenches(robot, motion: Motion, contacts: Mapping[str, SoleContact]
       cone or ``f_min`` — what a kinematic retargeter implicitly asks of the floor (feet may
       pull, the centre of pressure may leave the sole).
 
-    Feet in swing get zeros. ``motion`` needs ``v``, ``a`` (:func:`gdimitate.motion.differentiate`)
+    Feet in swing get zeros. ``motion`` needs ``v``, ``a``
+    (:func:`gdimitate.model.motion.differentiate`)
     and ``contact``. Free-flyer and planar (x, z, pitch) bases; a fixed base raises
     :class:`~gdimitate.errors.InvalidInputError` (nothing to explain). Returns a
     :class:`WrenchEstimate` (wrenches, the unexplained residual, the explained net wrench).

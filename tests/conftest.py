@@ -2,7 +2,7 @@ import functools
 
 import pytest
 
-from gdimitate.robot import Robot
+from gdimitate.model.robot import Robot
 
 
 @functools.cache

@@ -10,8 +10,8 @@ from gdimitate import (
     paper_case,
 )
 from gdimitate.metrics import force_direction, hip_height_ratio
+from gdimitate.model.sagittal import leg_angles
 from gdimitate.planar import eq1
-from gdimitate.planar.sagittal import leg_angles
 
 
 @pytest.fixture(scope="module", params=["I", "II", "humanoid"])

@@ -22,9 +22,9 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
+from gdimitate.model.robot import SIDES
 from gdimitate.planar import sagittal_leg
 from gdimitate.retarget import Contact
-from gdimitate.robot import SIDES
 
 TILT = np.radians(30.0)
 LEG = 0.3  # thigh = shank [m]

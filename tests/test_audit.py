@@ -20,8 +20,8 @@ import pytest
 
 from gdimitate.audit import AuditReport, AuditTolerances, audit
 from gdimitate.errors import InvalidInputError
-from gdimitate.motion import Motion, differentiate
-from gdimitate.robot import Robot
+from gdimitate.model.motion import Motion, differentiate
+from gdimitate.model.robot import Robot
 
 SIDES = ("left", "right")
 G = 9.81

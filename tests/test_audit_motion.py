@@ -1,6 +1,6 @@
 """``gd.audit_motion`` and ``gdimitate audit``: a robot motion dataset checked for physical
 feasibility. Each verdict and number is compared with an independent reference: the audit of
-the same motion computed here step by step (:func:`gdimitate.motion.differentiate`,
+the same motion computed here step by step (:func:`gdimitate.model.motion.differentiate`,
 :func:`gdimitate.wrenches.estimate_wrenches`, :func:`gdimitate.audit.audit`), and the same
 motion before it was written to another format."""
 
@@ -18,6 +18,7 @@ from gdimitate.apps.cases import paper_case
 from gdimitate.audit import audit
 from gdimitate.cli import main
 from gdimitate.demonstration import load_demonstration
+from gdimitate.model.motion import differentiate
 from gdimitate.verdict import EXIT_NOT_FEASIBLE
 from gdimitate.wrenches import estimate_wrenches
 
@@ -90,7 +91,7 @@ def test_a_joint_copy_is_not_feasible_with_its_failed_checks_printed(case2, tmp_
     copy.save(path, "npz")
     status, out, _ = _cli(capsys, path, "--robot", "hoap2", "--out", tmp_path / "out")
     motion = load_demonstration(path).motion
-    motion = gd.motion.differentiate(i.model, motion)
+    motion = differentiate(i.model, motion)
     ref = audit(i, motion, estimate_wrenches(i, motion).wrenches)
     assert not ref.feasible
     assert status == EXIT_NOT_FEASIBLE and "0 of 1 clip(s) feasible" in out

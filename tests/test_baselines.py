@@ -27,7 +27,7 @@ from gdimitate.apps.baselines import (
 )
 from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
-from gdimitate.planar.sagittal import leg_angles, sagittal_leg
+from gdimitate.model.sagittal import leg_angles, sagittal_leg
 
 SIDES = ("left", "right")
 

@@ -697,7 +697,7 @@ def test_contacts_survive_mocap_noise(noise):
     shorter than 0.1 s may be lost. Without the low-pass filter 3 mm left no stance at all
     (every sole's speed above its threshold)."""
     from gdimitate.bvh.contacts import detect_contacts, sole_corners
-    from gdimitate.footsteps import stance_phases
+    from gdimitate.model.footsteps import stance_phases
 
     robot, m = gd.bvh.read_bvh(CMU)
     hh = float(np.median(m.q[:, 2]))

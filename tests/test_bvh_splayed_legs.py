@@ -12,8 +12,8 @@ import pinocchio as pin
 import pytest
 
 from gdimitate.bvh import read_bvh
+from gdimitate.model.robot import Robot
 from gdimitate.retarget.bodymap import body_map, legs_down
-from gdimitate.robot import Robot
 
 
 def _skeleton(path, splay_deg: float) -> None:
@@ -131,7 +131,7 @@ def test_cmu_soles_flat_in_stance_and_legs_reach():
     the bones' 3-D lengths (file OFFSETs: |(2.5972, −7.13576)| + |(2.49236, −6.8477)| CMU
     units of 0.056444 m)."""
     from gdimitate.gait import human_walk_path
-    from gdimitate.kinematics import frame_placements
+    from gdimitate.model.kinematics import frame_placements
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

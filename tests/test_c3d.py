@@ -210,7 +210,7 @@ def test_y_up_lab_and_non_marker_points(tmp_path):
     POINT:ANGLES (computed joint angles stored as points) are not markers."""
     import ezc3d
 
-    from gdimitate.opensim.grf import ground_to_world
+    from gdimitate.model.osim.joints import ground_to_world
 
     mk, _ = _synthetic()
     R = ground_to_world("Y")  # ours from a Y-up lab

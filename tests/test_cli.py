@@ -19,8 +19,8 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     re-audited with Pinocchio here; MuJoCo's verdicts (the plan walks, the joint copy falls)."""
     from gdimitate.audit import audit
     from gdimitate.export import read_wrenches
-    from gdimitate.motion import Motion
-    from gdimitate.robot import Robot
+    from gdimitate.model.motion import Motion
+    from gdimitate.model.robot import Robot
 
     assert main(["demo", "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
@@ -113,7 +113,7 @@ def test_paper_summary_matches_eq1_on_the_same_inputs(tmp_path):
     assert s["I"]["hip_height_ratio_error_max"]["without_adaptor"] > 0.01
     # an independent recount of Case II's infeasible share straight from Eq. (1)
     from gdimitate import paper_case
-    from gdimitate.planar.sagittal import leg_angles
+    from gdimitate.model.sagittal import leg_angles
 
     demo, imit, motion = paper_case("II")
     _, ang = leg_angles(demo, motion.q)

@@ -76,7 +76,7 @@ def test_advice_names_only_what_the_command_line_can_do(tmp_path, capsys):
     """`adapt --imitator romeo.urdf` (Romeo's hand links have no mass) ended "or pass
     massless_joints=('RHand',)", an option the command line did not have: the message names
     every such joint at once and the option it suggests exists and loads the robot."""
-    from gdimitate.library import MASSLESS_PRESETS, library_entry
+    from gdimitate.model.library import MASSLESS_PRESETS, library_entry
 
     urdf, _ = library_entry("romeo")
     assert main(["adapt", "--imitator", str(urdf), "--method", "copy", "--out",

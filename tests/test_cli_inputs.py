@@ -15,8 +15,8 @@ from gdimitate.cli import build_parser, main
 from gdimitate.demonstration import load_demonstration
 from gdimitate.export import read_csv
 from gdimitate.gait import human_walk_3d_folder, human_walk_path
-from gdimitate.motion import RobotRecord
-from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+from gdimitate.model.motion import RobotRecord
+from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 
 D3 = human_walk_3d_folder()
 SAG = human_walk_path()

@@ -128,7 +128,7 @@ def test_durations_must_be_positive(argv, capsys):
 
 def test_leg_advice_is_given_in_the_command_lines_terms(tmp_path, capsys):
     """The message asked a CLI user to "pass legs={...}" (Python); the CLI takes --legs."""
-    from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+    from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 
     text = planar_biped_urdf(PLANAR_MODELS["hoap2"])
     for side, new in (("left", "port"), ("right", "starboard")):
@@ -201,7 +201,7 @@ def test_adapt_entrain_view_default_to_the_demos_walk_and_g1(tmp_path, capsys):
     """adapt/entrain/view without a file used other demonstrations and imitators than demo
     (the sagittal walk on HOAP-2); now all use demo's: one stride of the 3-D walk, G1."""
     from gdimitate.apps.demo import DEFAULT_IMITATOR, default_demonstration
-    from gdimitate.motion import RobotRecord
+    from gdimitate.model.motion import RobotRecord
 
     sub = {a.dest: a for a in build_parser()._actions if a.dest == "command"}["command"].choices
     assert DEFAULT_IMITATOR == "g1"
@@ -394,8 +394,8 @@ def test_adapt_prints_the_gait_the_report_holds(tmp_path, capsys):
     step ratios, the travel itself) is report.json's `gait`, and the travel ratio is the one
     recomputed here from the written motion and the demonstration (docs/design.md §13: the
     imitator's base travel over the demonstrator's × the legs' ratio)."""
-    from gdimitate.footsteps import leg_ratio
     from gdimitate.gait import human_walk
+    from gdimitate.model.footsteps import leg_ratio
 
     out = tmp_path / "g"
     main(["adapt", str(SAG), "--grf", str(SAG_GRF), "--imitator", "hoap2", "--out", str(out)])

@@ -15,8 +15,8 @@ import pytest
 import gdimitate as gd
 from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError
-from gdimitate.motion import Motion
-from gdimitate.selfcollision import TRUNK, limb_groups, self_collision
+from gdimitate.model.motion import Motion
+from gdimitate.model.selfcollision import TRUNK, limb_groups, self_collision
 from gdimitate.wrenches import estimate_wrenches
 
 
@@ -119,8 +119,8 @@ def _reach(robot, frame: str, geom: str, arm_prefix: str) -> np.ndarray:
 def _static(robot, qs: np.ndarray):
     """A motion through configurations ``qs`` at 10 Hz, both feet in stance, its wrenches
     (the cone QP)."""
-    from gdimitate.kinematics import robot_motion
-    from gdimitate.motion import differentiate
+    from gdimitate.model.kinematics import robot_motion
+    from gdimitate.model.motion import differentiate
 
     t = np.arange(len(qs)) * 0.1
     mo = differentiate(robot.model, robot_motion(robot, t, qs, {s: np.ones(len(qs), bool)

@@ -11,8 +11,9 @@ from hypothesis import strategies as st
 from scipy.optimize import linprog
 
 import gdimitate as gd
-from gdimitate.contact import SoleContact, cone_margin, wrench_cone
 from gdimitate.errors import ContactError, InvalidInputError
+from gdimitate.model.contact import SoleContact, cone_margin, wrench_cone
+from gdimitate.model.robot import LEG_PRESETS
 
 
 def _corner_lp(w: np.ndarray, X: float, Y: float, mu: float) -> bool:
@@ -134,7 +135,7 @@ def test_sole_overrides_and_missing_feet():
                                                                                       "right")})
     assert r2.require_contacts()["left"].half_length == 0.1
     t = gd.Robot.from_library("talos")
-    legs = gd.robot.LEG_PRESETS["talos"]
+    legs = LEG_PRESETS["talos"]
     t2 = gd.Robot.from_urdf(t.urdf_path, legs, name="talos", package_dir=t.package_dir,
                             contacts={"left": {"mu": 0.4}})
     assert t2.contacts["left"].mu == 0.4
@@ -153,7 +154,7 @@ def test_optimiser_rows_and_numpy_cone_are_one_formula():
     yaw bounds τ_min/τ_max in their |·| form (the module docstring)."""
     import casadi as ca
 
-    from gdimitate.contact import PLANAR_CONE_ROWS, wrench_cone_rows
+    from gdimitate.model.contact import PLANAR_CONE_ROWS, wrench_cone_rows
     from gdimitate.retarget.parts.cone import cone_rows, rows_per_side
 
     ws, ps = ca.SX.sym("w", 6), ca.SX.sym("p", 6)

@@ -22,8 +22,8 @@ from gdimitate.errors import (
     UnknownRobotError,
 )
 from gdimitate.gait import human_walk_3d_folder, human_walk_path
-from gdimitate.library import list_robots
-from gdimitate.motion import Motion, RobotRecord
+from gdimitate.model.library import list_robots
+from gdimitate.model.motion import Motion, RobotRecord
 
 D3 = human_walk_3d_folder()
 BVH = human_walk_path().parents[1] / "cmu_02_01" / "cmu_02_01.bvh"
@@ -152,7 +152,7 @@ def test_npz_round_trip_without_naming_the_robot(tmp_path):
 
 
 def _write_hoap(tmp_path):
-    from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+    from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 
     p = tmp_path / "hoap2_src.urdf"
     p.write_text(planar_biped_urdf(PLANAR_MODELS["hoap2"]))

@@ -28,7 +28,7 @@ from gdimitate.export import (
     read_wrenches,
 )
 from gdimitate.gait import human_walk
-from gdimitate.motion import Motion, differentiate
+from gdimitate.model.motion import Motion, differentiate
 from gdimitate.sim import build_model
 
 #: The 29 joint columns of a Unitree G1 row in unitreerobotics/LAFAN1_Retargeting_Dataset (its
@@ -404,7 +404,7 @@ def test_beyondmimic_npz_keys_and_bodies_match_pinocchio(tmp_path):
     np.testing.assert_allclose(back.joint_pos, motion.q[:, 7:], atol=1e-12)
     m, d = g1.model, g1.model.createData()
     ids = [m.getFrameId(n) for n in names]
-    from gdimitate.motion import differentiate
+    from gdimitate.model.motion import differentiate
 
     v = differentiate(m, motion).v  # the writer's own velocities (the same 60 Hz grid)
     for k in range(N):

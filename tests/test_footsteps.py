@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import gdimitate as gd
-from gdimitate.footsteps import (
+from gdimitate.model.footsteps import (
     compare_gait,
     footprints,
     leg_ratio,
@@ -17,8 +17,8 @@ from gdimitate.footsteps import (
     time_scale,
     travel,
 )
-from gdimitate.heading import turn_motion
-from gdimitate.robot import SIDES
+from gdimitate.model.heading import turn_motion
+from gdimitate.model.robot import SIDES
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +124,7 @@ def test_a_clip_cut_mid_stride_covers_the_scaled_distance(walk, robot):
     demonstrator's distance × r. With the steps cost alone (which acts in double support
     only) it travelled 0.36: the body started slow and ended 0.2 m behind its stance foot;
     the body-over-feet cost (retarget/parts/over_feet.py) carries it."""
-    from gdimitate.contact import ContactForces, FootForces
+    from gdimitate.model.contact import ContactForces, FootForces
 
     h, m, f = walk
     stride, fs = gd.gait.one_stride(m, f)

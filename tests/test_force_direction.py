@@ -9,12 +9,12 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.contact import ContactForces, FootForces
 from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.gait import human_walk_path, read_mot, read_opensim
-from gdimitate.kinematics import joint_paths
 from gdimitate.metrics import ForceDirection, angle_between, force_direction
-from gdimitate.planar.sagittal import leg_angles
+from gdimitate.model.contact import ContactForces, FootForces
+from gdimitate.model.kinematics import joint_paths
+from gdimitate.model.sagittal import leg_angles
 
 GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
 
@@ -190,7 +190,7 @@ def test_filtered_derivatives_are_right_at_the_edges():
     2 % and acceleration within 15 % of their peaks at every frame, the edges included.
     Measured: 0.9 % and 10 %; with the filter's own odd padding 6 % and 78 % (its
     acceleration is 0 at the edges)."""
-    from gdimitate.motion import differentiate
+    from gdimitate.model.motion import differentiate
 
     robot = gd.Robot.from_library("hoap2")
     t = np.arange(0, 1.3, 1 / 60)

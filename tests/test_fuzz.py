@@ -26,9 +26,9 @@ from gdimitate.bvh import read_bvh
 from gdimitate.cli import main
 from gdimitate.errors import BVHError, GdimitateError
 from gdimitate.gait import read_mot, read_opensim
-from gdimitate.motion import Motion
+from gdimitate.model.motion import Motion
+from gdimitate.model.robot import Robot
 from gdimitate.opensim import read_coordinates, read_grf
-from gdimitate.robot import Robot
 
 FAST = settings(max_examples=200, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -389,7 +389,7 @@ def test_fuzz_urdf_joint_numbers(lower, upper, effort, velocity, xyz, dup):
     import re
 
     from gdimitate.errors import URDFError
-    from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+    from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 
     text = planar_biped_urdf(PLANAR_MODELS["hoap2"])
     block = re.search(r'<joint name="left_knee".*?</joint>', text, re.S).group(0)
@@ -447,7 +447,7 @@ def test_fuzz_user_numbers_that_size_arrays(rate, fps, shape):
     import time
 
     from gdimitate.export import export_motion
-    from gdimitate.kinematics import kinematic_contact
+    from gdimitate.model.kinematics import kinematic_contact
 
     hoap2 = HOAP2
     t = np.arange(40) / 60

@@ -44,8 +44,8 @@ from gdimitate.errors import (
     SolverError,
     UnitError,
 )
+from gdimitate.model.osim.model import MAX_OSIM_BYTES, read_osim
 from gdimitate.opensim import Markers, read_trc
-from gdimitate.opensim.model import MAX_OSIM_BYTES, read_osim
 from gdimitate.safety import MAX_TABLE_BYTES
 
 D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"

@@ -122,7 +122,7 @@ def test_urdf_beyond_the_size_limits_is_refused_before_pinocchio(tmp_path, case)
     else:
         text, count = biped(pelvis=boxes(3 * MAX_URDF_GEOMETRIES)), 3 * MAX_URDF_GEOMETRIES + 2
     path = _write(tmp_path, text)
-    o = call("gdimitate.robot:Robot.from_urdf", str(path))
+    o = call("gdimitate.model.robot:Robot.from_urdf", str(path))
     assert o.handled(), o
     assert "URDFLimitError" in o.mro, o
     limit = MAX_URDF_GEOMETRIES if case == "shapes" else MAX_URDF_DOF
@@ -136,7 +136,7 @@ def test_urdf_at_the_size_limits_loads_within_2_gib_and_30_s(tmp_path):
     library's own tables) under the child's cap — and one more of either is refused."""
     links, joints = tail(MAX_URDF_DOF - 6)
     at = _write(tmp_path, biped(links, joints, pelvis=boxes(MAX_URDF_GEOMETRIES - 2)))
-    o = call("gdimitate.robot:Robot.from_urdf", str(at))
+    o = call("gdimitate.model.robot:Robot.from_urdf", str(at))
     assert o.handled() and o.ok, o
     over = biped(links + '<link name="x">' + _inertial() + "</link>",
                  joints + _joint("xj", "pelvis", "x"))
@@ -461,7 +461,7 @@ def test_json_options_files_and_strings(tmp_path, data, said):
     """--legs/--contacts/body-map JSON: nested, not UTF-8, a 5000-digit number (Python's
     int-string limit), NaN/Infinity, overflow, truncated, oversized — InvalidInputError naming
     the source, from a file and from a string."""
-    from gdimitate.inputs import loads_json, read_json
+    from gdimitate.model.inputs import loads_json, read_json
 
     p = tmp_path / "legs.json"
     p.write_bytes(data)
@@ -487,18 +487,18 @@ def biped_path(tmp_path_factory) -> Path:
 
 
 API = [
-    ("gdimitate.robot:Robot.from_urdf", (123,), {}, "path"),
-    ("gdimitate.robot:Robot.from_urdf", (None,), {}, "path"),
-    ("gdimitate.robot:Robot.from_urdf", (b"robot.urdf",), {}, "path"),
-    ("gdimitate.robot:Robot.from_urdf", ("URDF",), {"contacts": "feet"}, "contacts="),
-    ("gdimitate.robot:Robot.from_urdf", ("URDF",), {"legs": "auto"}, "legs="),
-    ("gdimitate.robot:Robot.from_urdf", ("URDF",), {"legs": {"left": _nested(3)}}, "legs="),
-    ("gdimitate.robot:Robot.from_urdf", ("URDF",), {"floating": "yes"}, "floating"),
-    ("gdimitate.robot:Robot.from_urdf", ("URDF",), {"massless_joints": "left_knee"},
+    ("gdimitate.model.robot:Robot.from_urdf", (123,), {}, "path"),
+    ("gdimitate.model.robot:Robot.from_urdf", (None,), {}, "path"),
+    ("gdimitate.model.robot:Robot.from_urdf", (b"robot.urdf",), {}, "path"),
+    ("gdimitate.model.robot:Robot.from_urdf", ("URDF",), {"contacts": "feet"}, "contacts="),
+    ("gdimitate.model.robot:Robot.from_urdf", ("URDF",), {"legs": "auto"}, "legs="),
+    ("gdimitate.model.robot:Robot.from_urdf", ("URDF",), {"legs": {"left": _nested(3)}}, "legs="),
+    ("gdimitate.model.robot:Robot.from_urdf", ("URDF",), {"floating": "yes"}, "floating"),
+    ("gdimitate.model.robot:Robot.from_urdf", ("URDF",), {"massless_joints": "left_knee"},
      "massless_joints"),
-    ("gdimitate.robot:Robot.from_urdf", ("URDF",), {"package_dir": 5}, "package_dir"),
-    ("gdimitate.robot:Robot.load", (123,), {}, "robot spec"),
-    ("gdimitate.robot:Robot.from_library", (5,), {}, "robot name"),
+    ("gdimitate.model.robot:Robot.from_urdf", ("URDF",), {"package_dir": 5}, "package_dir"),
+    ("gdimitate.model.robot:Robot.load", (123,), {}, "robot spec"),
+    ("gdimitate.model.robot:Robot.from_library", (5,), {}, "robot name"),
     ("gdimitate:load_demonstration", (None,), {}, "path"),
     ("gdimitate:load_demonstration", (3.5,), {}, "path"),
     ("gdimitate:load_demonstration", ("walk.npz",), {"robot": "g1"}, "robot"),
@@ -569,8 +569,8 @@ def test_bounds_are_generous_for_real_robots():
     and every library robot are well inside the limits."""
     import xml.etree.ElementTree as ET
 
-    from gdimitate.library import erd_robots_dir
-    from gdimitate.urdfcheck import check_urdf_size, check_urdf_structure
+    from gdimitate.model.library import erd_robots_dir
+    from gdimitate.model.urdfcheck import check_urdf_size, check_urdf_structure
 
     paths = sorted(erd_robots_dir().rglob("*.urdf"))
     assert len(paths) > 30

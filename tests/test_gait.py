@@ -6,8 +6,8 @@ import pytest
 from gdimitate import InvalidInputError, TimeGridError
 from gdimitate.gait import human_walk, human_walk_path, read_mot, read_opensim
 from gdimitate.metrics import foot_heights
-from gdimitate.planar.sagittal import leg_angles
-from gdimitate.urdfgen import human_spec
+from gdimitate.model.sagittal import leg_angles
+from gdimitate.model.urdfgen import human_spec
 
 GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
 

@@ -10,7 +10,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.errors import InvalidInputError
-from gdimitate.heading import (
+from gdimitate.model.heading import (
     facing_yaw,
     forces_on_clock,
     on_clock,
@@ -20,8 +20,8 @@ from gdimitate.heading import (
     walk_heading,
     yaw_matrix,
 )
-from gdimitate.kinematics import frame_placements
-from gdimitate.robot import SIDES
+from gdimitate.model.kinematics import frame_placements
+from gdimitate.model.robot import SIDES
 
 
 @pytest.fixture(scope="module")

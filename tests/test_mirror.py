@@ -11,10 +11,10 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.errors import InvalidInputError
-from gdimitate.kinematics import frame_placements
-from gdimitate.mirror import MIRROR, mirror_forces, mirror_map, mirror_motion, partner
-from gdimitate.motion import Motion, robot_layout
-from gdimitate.robot import SIDES
+from gdimitate.model.kinematics import frame_placements
+from gdimitate.model.mirror import MIRROR, mirror_forces, mirror_map, mirror_motion, partner
+from gdimitate.model.motion import Motion, robot_layout
+from gdimitate.model.robot import SIDES
 
 
 @pytest.fixture(scope="module")

@@ -19,10 +19,10 @@ from gdimitate.errors import (
     TimeGridError,
     UnitError,
 )
+from gdimitate.model.osim.trc import read_trc
+from gdimitate.model.robot import Robot
 from gdimitate.opensim.coordinates import read_coordinates
 from gdimitate.opensim.grf import read_external_loads, read_grf
-from gdimitate.opensim.trc import read_trc
-from gdimitate.robot import Robot
 
 DATA = Path(__file__).parent / "data" / "opensim_files"
 Y_UP = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # OpenSim (X, Y, Z) → ours (x, y, z)
@@ -448,8 +448,8 @@ def opensim_id_comparison(apply_forces: bool = True):
     ``std_subject01_InverseDynamics.sto``: ``{coordinate: (r, rmse [N·m], range [N·m])}``."""
     import pinocchio as pin
 
-    from gdimitate.motion import differentiate
-    from gdimitate.opensim._table import read_table
+    from gdimitate.model.motion import differentiate
+    from gdimitate.model.osim._table import read_table
 
     robot, motion, forces = treadmill_walk()
     m = differentiate(robot.model, motion, cutoff_hz=6)

@@ -232,7 +232,7 @@ def test_an_npz_whose_header_promises_more_than_it_holds_is_refused(tmp_path):
 
     import gdimitate as gd
     from gdimitate.errors import FileFormatError
-    from gdimitate.motion import Motion
+    from gdimitate.model.motion import Motion
 
     robot = gd.Robot.from_library("hoap2")
     good = tmp_path / "good.npz"

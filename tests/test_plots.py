@@ -9,7 +9,7 @@ matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
 
-from gdimitate.contact import SoleContact  # noqa: E402
+from gdimitate.model.contact import SoleContact  # noqa: E402
 from gdimitate.plots import plot_sole_cop  # noqa: E402
 
 

@@ -8,10 +8,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.contact import cone_margin
-from gdimitate.kinematics import base_v_indices
+from gdimitate.model.contact import cone_margin
+from gdimitate.model.kinematics import base_v_indices
+from gdimitate.model.robot import SIDES, Robot
 from gdimitate.retarget.polish import make_consistent
-from gdimitate.robot import SIDES, Robot
 
 
 @pytest.fixture(scope="module")

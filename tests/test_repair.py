@@ -18,6 +18,7 @@ from gdimitate.audit import audit
 from gdimitate.cli import main
 from gdimitate.demonstration import load_demonstration
 from gdimitate.export import read_wrenches
+from gdimitate.model.motion import differentiate
 from gdimitate.repair import keypoint_frames, repair_rate, wrench_forces
 from gdimitate.sim.reference import Plan
 from gdimitate.verdict import EXIT_NOT_FEASIBLE
@@ -116,7 +117,7 @@ def test_estimated_wrenches_as_forces_turn_back_into_the_same_wrenches(g1_copy_s
     :func:`gdimitate.wrenches.measured_wrenches` (the adaptor's reading of measured forces):
     the same wrench within 1e-9 N / N·m wherever the foot pushes."""
     g1, copy = g1_copy_stride
-    m = gd.motion.differentiate(g1.model, copy.replace(
+    m = differentiate(g1.model, copy.replace(
         contact=gd.audit.dataset.stance_schedule(g1, copy)[0]))
     w = estimate_wrenches(g1, m).wrenches
     forces = wrench_forces(g1, m, w)

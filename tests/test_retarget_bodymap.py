@@ -200,7 +200,7 @@ def test_following_report(armed):
     ranges (the demonstrator's mapped and clipped to the imitator's limits), against NumPy on
     a synthetic pair of motions."""
     import gdimitate as gd
-    from gdimitate.kinematics import robot_motion
+    from gdimitate.model.kinematics import robot_motion
     from gdimitate.retarget.bodymap import following
 
     g1 = gd.Robot.from_library("g1")
@@ -323,7 +323,7 @@ def test_segment_targets_turn_the_imitators_own_frames(robot, armed, cmu, name, 
     ``torso_link``). Reference: Pinocchio's placements of the imitator's segment frames at its
     neutral pose with its base turned by the same world rotation as the demonstrator's.
     Copying the world rotation itself (the adaptor before) misses by up to 180°."""
-    from gdimitate.kinematics import frame_placements
+    from gdimitate.model.kinematics import frame_placements
     from gdimitate.retarget.targets import segment_rotations
 
     d, i = (armed if demo == "opensim" else cmu), robot(name)

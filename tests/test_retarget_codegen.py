@@ -81,7 +81,8 @@ def test_cache_dir_follows_the_environment(tmp_path, monkeypatch):
 def test_source_digest_covers_every_module_the_compiled_expressions_import():
     """The compiled-derivative cache key digests the source of the modules the per-knot
     expressions are written in; a module they import from gdimitate but the digest leaves out
-    (the cone rows moved to gdimitate/contact.py once) would let an edit load a stale library."""
+    (the cone rows moved to gdimitate/model/contact.py once) would let an edit load a stale
+    library."""
     import ast
     from pathlib import Path
 

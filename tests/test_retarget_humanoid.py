@@ -14,8 +14,8 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.metrics import force_direction
+from gdimitate.model.robot import SIDES
 from gdimitate.retarget import resample
-from gdimitate.robot import SIDES
 
 pytestmark = pytest.mark.slow
 
@@ -95,7 +95,7 @@ def test_screening_keeps_the_legs_apart_row(walk):
     back violated on iCub's result (0.075 leg lengths) and cost a second solve. Checked on G1
     (iCub's start: 0.06 leg lengths; its derivatives alone take ~280 s to compile on 2
     cores)."""
-    from gdimitate.kinematics import actuated_v_indices
+    from gdimitate.model.kinematics import actuated_v_indices
     from gdimitate.retarget import Contact, Limits, Weights, limits
     from gdimitate.retarget import problem as pb
     from gdimitate.retarget import solve as S

@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.symbolic import SymbolicModel
+from gdimitate.model.symbolic import SymbolicModel
 
 
 @pytest.mark.parametrize("name", ["talos", "hoap2"])

@@ -10,11 +10,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.contact import wrench_cone
+from gdimitate.model.contact import wrench_cone
+from gdimitate.model.robot import SIDES
 from gdimitate.retarget import parts as P
 from gdimitate.retarget.knot import Flags, Knot
 from gdimitate.retarget.problem import symbolic_model
-from gdimitate.robot import SIDES
 
 RNG = np.random.default_rng(7)
 

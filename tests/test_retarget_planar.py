@@ -23,10 +23,10 @@ import pytest
 
 from gdimitate.adapt import adapt
 from gdimitate.apps.cases import paper_case
-from gdimitate.contact import SoleContact
 from gdimitate.errors import ContactError, GdimitateError, InvalidInputError, UnknownNameError
+from gdimitate.model.contact import SoleContact
+from gdimitate.model.robot import SIDES
 from gdimitate.retarget import Contact, Limits, Weights, problem, resample, schedule
-from gdimitate.robot import SIDES
 
 
 def _slice(m, a, b):

@@ -20,8 +20,8 @@ import pytest
 import gdimitate as gd
 from gdimitate.audit import AuditTolerances
 from gdimitate.gait import one_stride
+from gdimitate.model.robot import SIDES, Robot
 from gdimitate.retarget import UnmappedJointsWarning
-from gdimitate.robot import SIDES, Robot
 
 pytestmark = pytest.mark.slow
 

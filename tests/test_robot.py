@@ -10,11 +10,11 @@ import yourdfpy
 
 import gdimitate
 from gdimitate import LegDetectionError, UnknownNameError, UnknownRobotError, URDFError
-from gdimitate.kinematics import frame_paths, joint_paths
-from gdimitate.library import library_entry
-from gdimitate.planar.sagittal import compose_q, leg_angles
-from gdimitate.robot import Robot
-from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+from gdimitate.model.kinematics import frame_paths, joint_paths
+from gdimitate.model.library import library_entry
+from gdimitate.model.robot import Robot
+from gdimitate.model.sagittal import compose_q, leg_angles
+from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY = ["human", "talos", "romeo", "icub", "g1", "bolt"]
@@ -24,7 +24,8 @@ LIBRARY = ["human", "talos", "romeo", "icub", "g1", "bolt"]
 def test_committed_urdf_matches_generator(name):
     committed = (ROOT / "urdf" / f"{name}.urdf").read_text()
     assert committed == planar_biped_urdf(PLANAR_MODELS[name]), (
-        f"urdf/{name}.urdf differs from the generator: run `python -m gdimitate.urdfgen urdf`")
+        f"urdf/{name}.urdf differs from the generator: run "
+        "`python -m gdimitate.model.urdfgen urdf`")
 
 
 @pytest.mark.parametrize("name", list(PLANAR_MODELS))
@@ -241,7 +242,7 @@ ERD_BIPEDS = {
 
 
 def test_every_erd_biped_is_listed():
-    from gdimitate.library import erd_robots_dir
+    from gdimitate.model.library import erd_robots_dir
 
     R = erd_robots_dir()
     shipped = {str(p.relative_to(R)) for d in ERD_BIPED_DIRS for p in (R / d).rglob("*.urdf")}
@@ -262,8 +263,8 @@ def test_every_erd_biped_loads_or_says_why(rel):
     import re
     import warnings
 
-    from gdimitate.library import erd_robots_dir
-    from gdimitate.robot import LEG_PRESETS, MASSLESS_PRESETS
+    from gdimitate.model.library import erd_robots_dir
+    from gdimitate.model.robot import LEG_PRESETS, MASSLESS_PRESETS
 
     R = erd_robots_dir()
     expect = ERD_BIPEDS[rel]

@@ -24,9 +24,9 @@ from gdimitate.errors import (
     ViewerError,
 )
 from gdimitate.gait import human_walk_path, read_mot
-from gdimitate.motion import Motion
-from gdimitate.robot import Robot
-from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
+from gdimitate.model.motion import Motion
+from gdimitate.model.robot import Robot
+from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 from gdimitate.viz import Viewer
 from gdimitate.viz.server import MeshcatServer
 
@@ -534,8 +534,8 @@ def test_every_shipped_data_file_loads():
     from pathlib import Path
 
     from gdimitate.gait import human_walk_3d_folder
-    from gdimitate.opensim._table import read_table
-    from gdimitate.opensim.trc import read_trc
+    from gdimitate.model.osim._table import read_table
+    from gdimitate.model.osim.trc import read_trc
 
     d3 = human_walk_3d_folder()
     sag = Path(human_walk_path())

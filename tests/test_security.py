@@ -31,14 +31,14 @@ from gdimitate.errors import (
     URDFError,
     URDFLimitError,
 )
-from gdimitate.library import library_entry
-from gdimitate.robot import Robot
+from gdimitate.model.library import library_entry
+from gdimitate.model.robot import Robot
+from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 from gdimitate.safety import (
     MAX_URDF_DEPTH,
     MAX_URDF_LINKS,
     atomic_write,
 )
-from gdimitate.urdfgen import PLANAR_MODELS, planar_biped_urdf
 from gdimitate.viz.server import MeshcatServer
 
 
@@ -97,7 +97,7 @@ def test_mesh_outside_is_never_opened(tmp_path):
     urdf = _urdf_with_mesh(tmp_path / "robot", str(fifo))
     code = textwrap.dedent(f"""
         from gdimitate.errors import MeshPathError
-        from gdimitate.robot import Robot
+        from gdimitate.model.robot import Robot
         try:
             Robot.from_urdf({str(urdf)!r})
         except MeshPathError as e:
@@ -484,7 +484,7 @@ def test_bvh_frame_time_is_bounded(tmp_path, frame_time):
 
 
 def _walk_with_contacts(t: np.ndarray) -> tuple[Robot, gd.Motion]:
-    from gdimitate.kinematics import kinematic_contact
+    from gdimitate.model.kinematics import kinematic_contact
 
     robot, motion = _hoap2_walk(t)
     return robot, motion.replace(contact=kinematic_contact(robot, motion.q))

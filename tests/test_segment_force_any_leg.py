@@ -20,10 +20,10 @@ import pytest
 from test_any_leg_axes import LEG, biped_urdf
 
 import gdimitate as gd
+from gdimitate.model.robot import SIDES
 from gdimitate.retarget import parts as P
 from gdimitate.retarget.knot import Flags, Knot
 from gdimitate.retarget.problem import symbolic_model
-from gdimitate.robot import SIDES
 
 SPLAY = 0.06  # [m] each ankle's lateral offset from its knee
 

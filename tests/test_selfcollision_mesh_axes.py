@@ -1,5 +1,5 @@
 """Self-collision geometry placed as the URDF means it, and which bodies are neighbours
-(gdimitate.selfcollision, issue 17).
+(gdimitate.model.selfcollision, issue 17).
 
 iCub's collision meshes are Collada files that declare ``<up_axis>Y_UP</up_axis>``; its URDF's
 ``<collision><origin>`` is written for the file's vertices turned to z-up by the COLLADA
@@ -23,7 +23,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.selfcollision import self_collision
+from gdimitate.model.selfcollision import self_collision
 
 #: The COLLADA specification's change of axes from a Y_UP asset to a Z_UP world:
 #: right +x stays x, up +y becomes z, "in" +z becomes −y.
@@ -145,7 +145,7 @@ def test_a_chain_of_joints_at_one_point_is_one_joint(name):
     joints the rule puts in one ball have the same world origin (1e-9 m) at every one, and
     each child joint whose origin stays on its parent's at every one is in its parent's
     ball."""
-    from gdimitate.selfcollision import _balls
+    from gdimitate.model.selfcollision import _balls
 
     robot = _robot(name)
     model, data = robot.model, robot.model.createData()
@@ -177,7 +177,7 @@ def test_icubs_thigh_and_root_link_are_neighbours_whose_meshes_touch():
     not a collision a motion could avoid."""
     import coal
 
-    from gdimitate.selfcollision import placement
+    from gdimitate.model.selfcollision import placement
 
     robot = _robot("icub")
     sc = self_collision(robot)

@@ -16,8 +16,8 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.apps.scenarios import kinematic_walk_plan, standing_plan, sway_plan
-from gdimitate.contact import ContactForces, FootForces, cone_margin
-from gdimitate.robot import SIDES
+from gdimitate.model.contact import ContactForces, FootForces, cone_margin
+from gdimitate.model.robot import SIDES
 from gdimitate.sim import Push, Reference, TrackingController, build_model, check_plan, simulate
 
 G = 9.81
@@ -231,8 +231,8 @@ def test_cop_margin_keeps_the_centre_of_pressure_inside_the_sole(robots):
     (closed form −τ_y/f_z, τ_x/f_z) within (1 − margin) of the sole's half-sizes; without
     it the same states put it further out (the check can fail). A margin of 1 or more is
     refused."""
-    from gdimitate.contact import centre_of_pressure
     from gdimitate.errors import SimulationError
+    from gdimitate.model.contact import centre_of_pressure
     from gdimitate.sim import ControllerGains
 
     robot = robots["hoap2"]

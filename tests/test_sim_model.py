@@ -1,4 +1,4 @@
-"""gdimitate.sim.model: the MuJoCo model built from a Robot agrees with Pinocchio.
+"""gdimitate.model.mjcf: the MuJoCo model built from a Robot agrees with Pinocchio.
 
 References: Pinocchio's ``rnea``/``crba``/forward kinematics on the same states (MuJoCo's
 ``mj_inverse``/``mj_fullM``/``mj_kinematics`` are an independent implementation), finite
@@ -15,9 +15,9 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.apps.scenarios import standing_plan
-from gdimitate.contact import SoleContact
 from gdimitate.errors import ContactError, PlanError, SimModelError
-from gdimitate.robot import SIDES
+from gdimitate.model.contact import SoleContact
+from gdimitate.model.robot import SIDES
 from gdimitate.sim import ModelOptions, build_model
 from gdimitate.sim.reference import Plan, check_plan
 

@@ -209,7 +209,7 @@ def _walk_3d_samples(layout):
     """The shipped 3-D walk (60 Hz) as samples of its OpenSim model's coordinates: the IK
     file's rows (degrees, metres), pelvis_tx moved as human_walk_3d turns the treadmill trial
     overground, its measured stance; and the configurations human_walk_3d gives."""
-    from gdimitate.opensim._table import read_table
+    from gdimitate.model.osim._table import read_table
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

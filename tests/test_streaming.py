@@ -15,7 +15,7 @@ import pytest
 import gdimitate as gd
 from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError, UnknownNameError
-from gdimitate.kinematics import robot_motion
+from gdimitate.model.kinematics import robot_motion
 
 SIDES = ("left", "right")
 FRAMES = 30  # the first step of the walk: single support, a touch-down, double support, lift-off

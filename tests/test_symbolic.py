@@ -1,4 +1,4 @@
-"""gdimitate.symbolic checked against Pinocchio's own numbers.
+"""gdimitate.model.symbolic checked against Pinocchio's own numbers.
 
 Tolerance: kinematic quantities (positions, rotations, Jacobians, com and its acceleration)
 agree to 1e-9 absolute; torques and momentum rates to 1e-9 relative to the largest entry of
@@ -17,8 +17,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gdimitate.errors import UnknownNameError, UnsupportedJointError
-from gdimitate.library import library_entry
-from gdimitate.symbolic import SUPPORTED_JOINTS, SymbolicModel
+from gdimitate.model.library import library_entry
+from gdimitate.model.symbolic import SUPPORTED_JOINTS, SymbolicModel
 
 TOL = 1e-9
 LIBRARY_ROBOTS = ["human", "talos", "g1", "icub", "bolt", "romeo"]

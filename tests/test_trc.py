@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gdimitate.errors import OpenSimDataError
-from gdimitate.opensim.trc import read_trc
+from gdimitate.model.osim.trc import read_trc
 
 KEYS = ["DataRate", "CameraRate", "NumFrames", "NumMarkers", "Units", "OrigDataRate",
         "OrigDataStartFrame", "OrigNumFrames"]

@@ -20,8 +20,8 @@ import umsgpack
 
 from gdimitate.errors import InvalidInputError, ViewerError
 from gdimitate.metrics import force_direction
+from gdimitate.model.robot import Robot
 from gdimitate.planar.walking import GaitSpec, walking_motion
-from gdimitate.robot import Robot
 from gdimitate.viz import (
     BrowserNotFoundError,
     MotionMismatchError,
@@ -334,7 +334,7 @@ def test_headless_chromium_plays_the_animation(scene, tmp_path):
 
 def test_y_up_collada_meshes_are_turned_z_up():
     """iCub's Collada files are Y_UP (the viewer's loader keeps them so; Pinocchio turns them)."""
-    from gdimitate.library import library_entry
+    from gdimitate.model.library import library_entry
 
     path, pkg = library_entry("icub")
     _, _, vm = pin.buildModelsFromUrdf(str(path), str(pkg), pin.JointModelFreeFlyer())

@@ -15,7 +15,7 @@ import pytest
 from printed import numbers
 
 from gdimitate.errors import InvalidInputError, PlanError
-from gdimitate.robot import SIDES
+from gdimitate.model.robot import SIDES
 from gdimitate.sim.periodic import PeriodicReference
 from gdimitate.walk import WalkNetwork, periodic_cycle, walk
 

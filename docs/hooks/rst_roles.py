@@ -1,5 +1,5 @@
 """A Griffe extension for the API reference (mkdocs.yml): gdimitate's docstrings are written
-in reStructuredText's inline markup (``code``, :class:`~gdimitate.robot.Robot`,
+in reStructuredText's inline markup (``code``, :class:`~gdimitate.model.robot.Robot`,
 :data:`X`), which Markdown would show with the role names; this turns each role into a code
 span of its target (``~`` keeps the last name, as Sphinx does). Docstrings themselves are
 unchanged: the rewrite happens on Griffe's copy when the site is built."""

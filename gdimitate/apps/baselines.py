@@ -11,7 +11,7 @@ output:
   (the map's signs come from the joint axes at the two neutral poses), the others stay at the
   imitator's neutral pose; the base turns as the demonstrator's pelvis turns (relative to the
   neutral poses) and is placed by the same rule as the planar copy
-  (:func:`gdimitate.planar.sagittal.ground_base`): the lowest stance sole on z = 0, the
+  (:func:`gdimitate.model.sagittal.ground_base`): the lowest stance sole on z = 0, the
   *anchor* foot (the stance foot down longest) staying where it landed in x and y. No joint
   limit is enforced (the audit reports them).
 - :func:`diff_ik` — a per-frame kinematic retargeter of the kind today's humanoid tools use
@@ -27,7 +27,7 @@ output:
   the frame period.
 
 Both give a :class:`BaselinePlan`: ``motion`` with ``v``, ``a`` (central differences,
-:func:`gdimitate.motion.differentiate`) and the demonstrator's stance schedule, and the
+:func:`gdimitate.model.motion.differentiate`) and the demonstrator's stance schedule, and the
 contact wrenches the motion implicitly asks of the floor —
 :func:`gdimitate.wrenches.estimate_wrenches` with ``method="lstsq"`` (no cone: feet may pull,
 the centre of pressure may leave the sole). A :class:`BaselinePlan` is a plan in the contract
@@ -44,12 +44,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..contact import SoleContact
 from ..errors import InvalidInputError, LegMatchError, SolverError
-from ..kinematics import anchored_base_offsets, frame_placements
-from ..motion import Motion, differentiate
+from ..model.contact import SoleContact
+from ..model.kinematics import anchored_base_offsets, frame_placements
+from ..model.motion import Motion, differentiate
+from ..model.robot import SIDES, Robot
 from ..retarget.targets import relative_rotations
-from ..robot import SIDES, Robot
 
 __all__ = ["BaselinePlan", "IKOptions", "joint_copy", "diff_ik", "kinematic_plan",
            "anchor_base", "scaled_keypoints", "leg_ratio"]
@@ -59,7 +59,7 @@ __all__ = ["BaselinePlan", "IKOptions", "joint_copy", "diff_ik", "kinematic_plan
 class BaselinePlan:
     """A kinematic baseline's result, in the plan contract of :func:`gdimitate.sim.simulate`.
 
-    ``motion``: the imitator's :class:`~gdimitate.motion.Motion` (``q`` ``(T, nq)``, ``v``,
+    ``motion``: the imitator's :class:`~gdimitate.model.motion.Motion` (``q`` ``(T, nq)``, ``v``,
     ``a`` ``(T, nv)``, ``contact`` = the demonstrator's stance schedule); ``wrenches`` ``{side:
     (T, 6)}`` [N, N·m]: the minimum-norm wrenches that explain the base rows of the inverse
     dynamics, in each sole frame at its origin (zeros in swing); ``contacts`` ``{side:
@@ -192,7 +192,7 @@ def _anchor_offsets(rel: dict[str, np.ndarray], contact: Mapping[str, np.ndarray
 def anchor_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray]) -> np.ndarray:
     """``q`` ``(T, nq)`` of a free-flyer with its base translation replaced so the motion walks
     on z = 0 without the anchor foot slipping — the 3-D form of
-    :func:`gdimitate.planar.sagittal.ground_base`: the lowest stance sole (contact frame
+    :func:`gdimitate.model.sagittal.ground_base`: the lowest stance sole (contact frame
     origin) on z = 0 (interpolated through flight); in x and y the anchor foot (the stance foot
     down longest) stays where it landed, and when it lifts off the other stance foot becomes the
     anchor where it stands (a second stance foot may slide: the audit and the simulation
@@ -211,7 +211,7 @@ def kinematic_plan(robot: Robot, motion: Motion, method: str, seconds: float,
                    residual: np.ndarray | None = None, relaxed: np.ndarray | None = None
                    ) -> BaselinePlan:
     """Wrap a kinematic ``motion`` (``q``, ``contact``) of ``robot`` as a :class:`BaselinePlan`:
-    ``v``, ``a`` by :func:`gdimitate.motion.differentiate` (no filter) and the minimum-norm
+    ``v``, ``a`` by :func:`gdimitate.model.motion.differentiate` (no filter) and the minimum-norm
     wrenches of :func:`gdimitate.wrenches.estimate_wrenches` (``method="lstsq"``)."""
     from ..wrenches import estimate_wrenches
 

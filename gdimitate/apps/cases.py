@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from ..errors import UnknownNameError
-from ..motion import Motion
+from ..model.motion import Motion
+from ..model.robot import Robot
 from ..planar.walking import HUMAN_GAIT, GaitSpec, walking_motion
-from ..robot import Robot
 
 __all__ = ["PAPER_CASES", "paper_case"]
 

@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # the command line reads DEFAULT_IMITATOR without loading Pinocchio
-    from ..motion import Motion
-    from ..robot import Robot
+    from ..model.motion import Motion
+    from ..model.robot import Robot
     from ..types import AdaptMethod
 
 __all__ = ["DEFAULT_IMITATOR", "WALK_IMITATOR", "default_demonstration", "run_demo",
@@ -86,7 +86,7 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     from .. import sim
     from ..adapt import adapt
     from ..cpg import entrain
-    from ..robot import Robot
+    from ..model.robot import Robot
     from ..safety import atomic_write, prepare_output_dir
     from ..verdict import solver_record, verdict
     from .baselines import joint_copy, kinematic_plan

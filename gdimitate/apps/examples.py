@@ -10,14 +10,14 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, NamedTuple
 
 from ..errors import UnknownNameError
-from ..library import list_robots
+from ..model.library import list_robots
 from ..types import AdaptMethod
 from .cases import PAPER_CASES
 
 if TYPE_CHECKING:  # the command line reads EXAMPLES without loading Pinocchio
-    from ..motion import Motion
+    from ..model.motion import Motion
+    from ..model.robot import Robot
     from ..result import AdaptedMotion
-    from ..robot import Robot
 
 __all__ = ["Example", "EXAMPLES", "example"]
 
@@ -43,7 +43,7 @@ def example(name: str = "human-walk", method: AdaptMethod = "analytic") -> Examp
     """Build a named example (see the module docstring) with the given adaptor method."""
     from ..adapt import adapt
     from ..gait import human_walk
-    from ..robot import Robot
+    from ..model.robot import Robot
     from .cases import paper_case
 
     if name not in EXAMPLES:

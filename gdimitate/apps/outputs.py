@@ -10,9 +10,9 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..motion import Motion
+from ..model.motion import Motion
+from ..model.robot import Robot
 from ..result import AdaptedMotion
-from ..robot import Robot
 from ..safety import atomic_write
 
 __all__ = ["ADAPT_FILES", "write_adapted"]

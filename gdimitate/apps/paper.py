@@ -11,10 +11,10 @@ import numpy as np
 from .. import plots
 from ..adapt import adapt
 from ..metrics import sole_paths
-from ..motion import Motion
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
+from ..model.sagittal import leg_angles
 from ..planar import eq1
-from ..planar.sagittal import leg_angles
-from ..robot import SIDES, Robot
 from .cases import PAPER_CASES, paper_case
 
 __all__ = ["step_length", "case_summary", "run_paper"]

@@ -18,9 +18,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..motion import Motion
+from ..model.motion import Motion
+from ..model.robot import Robot
 from ..repair import RepairResult
-from ..robot import Robot
 from ..verdict import EXIT_NOT_FEASIBLE, Verdict
 
 __all__ = ["input_plan", "repair_file", "repair_verdict", "simulate_both"]
@@ -42,7 +42,7 @@ def input_plan(robot: Robot, motion: Motion, r: RepairResult):
     where absent), the audit's stance schedule and the audit's estimated wrenches
     (``r.before.wrenches``)."""
     from ..audit.dataset import stance_schedule
-    from ..motion import differentiate
+    from ..model.motion import differentiate
     from ..sim.reference import Plan
 
     stance, _ = stance_schedule(robot, motion)

@@ -19,9 +19,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SimulationError
-from ..motion import Motion, differentiate
-from ..robot import SIDES, Robot
-from ..sim.model import _effort, _is_base
+from ..model.mjcf import _effort, _is_base
+from ..model.motion import Motion, differentiate
+from ..model.robot import SIDES, Robot
 from ..sim.reference import Plan, base_joint
 
 __all__ = ["kinematic_walk_plan", "split_wrenches", "standing_plan", "sway_plan"]
@@ -44,7 +44,7 @@ def split_wrenches(robot: Robot, motion: Motion) -> dict[str, np.ndarray]:
     onto that foot rather than loading the soles' edges. ``motion`` needs ``v`` and ``a``."""
     if motion.v is None or motion.a is None:
         raise SimulationError("split_wrenches needs the motion's v and a "
-                              "(gdimitate.motion.differentiate)")
+                              "(gdimitate.model.motion.differentiate)")
     V, A = motion.v, motion.a
     m, d = robot.model, robot.model.createData()
     contacts = robot.require_contacts()

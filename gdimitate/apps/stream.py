@@ -30,13 +30,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..kinematics import robot_motion
-from ..legs import hip_height
 from ..live.layout import LiveSourceError
 from ..live.source import LiveSource
-from ..motion import Motion
+from ..model.kinematics import robot_motion
+from ..model.legs import hip_height
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from ..result import AdaptedMotion
-from ..robot import SIDES, Robot
 from ..verdict import EXIT_NOT_FEASIBLE
 
 __all__ = ["LiveView", "StreamLog", "open_source", "run_stream", "stream_command",
@@ -217,7 +217,7 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
     ``mode="per_frame"`` result (``frame_feasible``: the audit of the assembled motion knot
     by knot — what the stream's verdicts are, frame for frame)."""
     from ..audit import audit
-    from ..footsteps import compare_gait
+    from ..model.footsteps import compare_gait
     from ..result import compare
     from ..retarget import SolverInfo, Unmet
 

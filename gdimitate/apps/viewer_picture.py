@@ -25,8 +25,8 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     arrows, centres of mass and foot paths."""
     from ..adapt import adapt
     from ..metrics import force_direction
+    from ..model.robot import Robot
     from ..planar.walking import walking_motion
-    from ..robot import Robot
     from ..viz.compare import compare
 
     demo = Robot.from_library(demonstrator)

@@ -2,7 +2,7 @@
 
 Friction is checked against Coulomb's circular cone ``‖f_t‖ ≤ μ f_z`` (the 16-row contact
 wrench cone's square pyramids admit up to √2·μ); centre of pressure and yaw moment against
-Caron et al.'s closed forms (:func:`gdimitate.contact.cone_margin`).
+Caron et al.'s closed forms (:func:`gdimitate.model.contact.cone_margin`).
 
 Every check turns a per-knot quantity into a :class:`~.report.Check` (its worst value and knot,
 pass/fail against the bound with tolerance, and a dimensionless violation that orders the
@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..contact import SoleContact, cone_margin
 from ..errors import InvalidInputError
-from ..motion import Motion
+from ..model.contact import SoleContact, cone_margin
+from ..model.motion import Motion
 from ..wrenches import base_dofs
 from .report import (
     AuditReport,
@@ -366,7 +366,7 @@ def _penetration_check(contacts: dict[str, SoleContact], pos: dict, rot: dict, T
 def _self_collision(robot, motion, margin, tol, add) -> SelfCollisionAudit | None:
     """The ``self_collision`` check (every knot's closest pair against ``margin``) and its
     summary; ``None`` (no check) for a robot without collision geometry."""
-    from ..selfcollision import self_collision
+    from ..model.selfcollision import self_collision
 
     if not (np.isfinite(margin) and margin >= 0):
         raise InvalidInputError(f"collision_margin must be a finite distance ≥ 0 [m]; got "

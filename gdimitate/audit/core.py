@@ -6,8 +6,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..contact import SoleContact
-from ..motion import Motion
+from ..model.contact import SoleContact
+from ..model.motion import Motion
 from .report import AuditReport, AuditTolerances
 
 __all__ = ["audit"]
@@ -21,7 +21,7 @@ def audit(robot, motion: Motion, wrenches: Mapping[str, np.ndarray],
     """Audit ``motion`` of ``robot`` (a :class:`gdimitate.Robot`) with its contact wrenches.
 
     - ``motion``: ``t`` ``(T,)`` [s], ``q`` ``(T, nq)``, ``v``/``a`` ``(T, nv)`` (Pinocchio
-      conventions; use :func:`gdimitate.motion.differentiate` to add them to a recorded
+      conventions; use :func:`gdimitate.model.motion.differentiate` to add them to a recorded
       motion), ``contact`` ``{"left": (T,) bool, "right": (T,) bool}`` (True in stance);
     - ``wrenches`` ``{side: (T, 6)}``: the wrench ``[f; τ]`` [N, N·m] the ground applies to
       each foot, in its contact frame (``contacts[side].frame``) at that frame's origin;
@@ -34,7 +34,7 @@ def audit(robot, motion: Motion, wrenches: Mapping[str, np.ndarray],
     - ``collision_margin`` [m]: the least distance between two of the robot's own collision
       geometries on different limbs, or on a limb and the trunk (pairs on neighbouring bodies
       or already closer at the neutral pose are left out and listed,
-      :func:`gdimitate.selfcollision.self_collision`); 0: they may touch, not overlap.
+      :func:`gdimitate.model.selfcollision.self_collision`); 0: they may touch, not overlap.
 
     Checks (their names in :attr:`AuditReport.binding`): ``base_residual``; per actuated joint
     ``torque:<joint>``, ``velocity:<joint>`` (|v| and forward differences of ``q``),

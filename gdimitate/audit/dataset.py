@@ -2,7 +2,7 @@
 
 :func:`audit_motion` takes a bare robot motion (joint trajectory, as GMR, holosoma or a
 BeyondMimic pipeline writes it): velocities and accelerations by differencing where the motion
-has none (:func:`gdimitate.motion.differentiate`), the stance schedule from the motion's own
+has none (:func:`gdimitate.model.motion.differentiate`), the stance schedule from the motion's own
 ``contact`` or else from the soles' height and speed (:func:`gdimitate.bvh.detect_contacts`),
 the contact wrenches that best explain its inverse dynamics inside each sole's cone
 (:func:`gdimitate.wrenches.estimate_wrenches`), then the independent audit
@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import SoleContact
 from ..errors import InvalidInputError
 from ..jsonable import jsonable
-from ..motion import Motion
+from ..model.contact import SoleContact
+from ..model.motion import Motion
 from ..wrenches import WrenchEstimate
 from .report import AuditReport, AuditTolerances
 
@@ -184,7 +184,7 @@ def audit_motion(robot, motion: Motion, contacts: Mapping[str, SoleContact] | No
     :class:`~gdimitate.errors.InvalidInputError` for a motion that is not the robot's, too
     short, or a fixed-base robot.
     """
-    from ..motion import differentiate
+    from ..model.motion import differentiate
     from ..wrenches import estimate_wrenches
     from .core import audit
 

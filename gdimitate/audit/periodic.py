@@ -18,8 +18,8 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 
-from ..motion import Motion
-from ..robot import SIDES, Robot
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from .report import AuditReport, Check
 
 __all__ = ["SEAM_TOL", "seam_errors", "seam_audit"]

@@ -24,7 +24,7 @@ __all__ = [
     "CORNER_NAMES",
 ]
 
-#: Names of the four sole corners in :meth:`gdimitate.contact.SoleContact.corners` order.
+#: Names of the four sole corners in :meth:`gdimitate.model.contact.SoleContact.corners` order.
 CORNER_NAMES = ("front-left", "front-right", "back-right", "back-left")
 
 
@@ -56,7 +56,7 @@ class AuditTolerances:
     - ``force_direction`` [rad]: angle of the push beyond the audit's ``cone_half_angle``;
     - ``swing_wrench`` [N, N·m]: largest |component| of a swing foot's wrench;
     - ``self_collision`` [m]: how far two of the robot's own collision geometries (limb–limb,
-      limb–trunk; :mod:`gdimitate.selfcollision`) may come closer than the audit's
+      limb–trunk; :mod:`gdimitate.model.selfcollision`) may come closer than the audit's
       ``collision_margin``.
     """
 
@@ -178,7 +178,7 @@ class ForceDirectionAudit:
 class FootAudit:
     """One foot: ``stance_knots``; the worst ``normal`` force [N] (smallest f_z in stance),
     ``friction`` ratio |f_t|/f_z [-] against ``mu``, ``cop`` margin [m] (inside positive),
-    ``yaw`` margin [N·m] (see :func:`gdimitate.contact.cone_margin`), ``slip`` [m] and
+    ``yaw`` margin [N·m] (see :func:`gdimitate.model.contact.cone_margin`), ``slip`` [m] and
     ``slip_rotation`` [rad] (drift of the sole frame since the stance began), ``stance_velocity``
     (largest sole-frame speed ``max(‖v‖ [m/s], ‖ω‖ [rad/s])`` at a stance knot), ``swing_wrench``
     (largest |component| while in swing), ``contact_gap`` [m] (highest sole corner above the
@@ -207,7 +207,7 @@ class SelfCollisionAudit:
     ``distance`` [m] (signed: negative where two overlap) between ``pair`` (geometry names) at
     ``knot``; ``margin`` [m] the bound; ``pairs``: how many pairs were checked; ``excluded``
     ``((a, b, distance at the neutral pose [m] or NaN for neighbouring bodies), …)``: the
-    pairs left out (:func:`gdimitate.selfcollision.self_collision`)."""
+    pairs left out (:func:`gdimitate.model.selfcollision.self_collision`)."""
 
     distance: float
     knot: int

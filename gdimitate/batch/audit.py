@@ -20,8 +20,8 @@ import numpy as np
 
 from ..audit.dataset import MotionAudit
 from ..errors import FileFormatError, InvalidInputError
-from ..motion import Motion
-from ..robot import Robot
+from ..model.motion import Motion
+from ..model.robot import Robot
 
 __all__ = ["AUDIT_FORMATS", "AUDIT_SUFFIXES", "AuditedFile", "audit_csv", "audit_files",
            "audit_table", "find_motion_files", "read_robot_motion"]
@@ -124,7 +124,7 @@ def read_robot_motion(path: Path, robot: Robot | None, fps: float = 30.0
     fmt = motion_format(path)
     if fmt == "npz":
         from ..demonstration import load_demonstration
-        from ..motion import RobotRecord
+        from ..model.motion import RobotRecord
 
         if robot is None and RobotRecord.from_npz(path) is None:
             raise InvalidInputError(f"{path} records no robot: pass the robot it was made "
@@ -154,7 +154,7 @@ def _read_beyondmimic(path: Path, robot: Robot) -> Motion:
     import mujoco
 
     from ..export import read_beyondmimic_npz
-    from ..sim.model import build_model
+    from ..model.mjcf import build_model
 
     bm = read_beyondmimic_npz(path)
     sim = build_model(robot)
@@ -180,7 +180,7 @@ def _read_beyondmimic(path: Path, robot: Robot) -> Motion:
 def _read_mujoco(path: Path, robot: Robot) -> Motion:
     """A MuJoCo qpos NPZ onto ``robot`` (the model :func:`gdimitate.sim.build_model` makes)."""
     from ..export import read_mujoco
-    from ..sim.model import build_model
+    from ..model.mjcf import build_model
 
     mm = read_mujoco(path)
     sim = build_model(robot)

@@ -189,7 +189,7 @@ def read_finished(path: str | os.PathLike, out_dir: str | os.PathLike,
 def load_robot(spec: str):
     """The robot named (or at the model path) ``spec``, built once per process
     (:meth:`gdimitate.Robot.load`)."""
-    from ..robot import Robot
+    from ..model.robot import Robot
 
     return Robot.load(spec)
 

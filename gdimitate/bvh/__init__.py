@@ -1,5 +1,5 @@
-"""BVH motion capture → a free-flyer :class:`~gdimitate.robot.Robot` and its
-:class:`~gdimitate.motion.Motion`.
+"""BVH motion capture → a free-flyer :class:`~gdimitate.model.robot.Robot` and its
+:class:`~gdimitate.model.motion.Motion`.
 
 ``robot, motion = gdimitate.bvh.read_bvh(path)``: the skeleton becomes a URDF (a link per BVH
 joint, one revolute joint per rotation channel in the file's order, the root as a

@@ -1,7 +1,7 @@
 """Masses and inertias of a BVH skeleton's links from de Leva's (1996) segment table.
 
 Each BVH joint's link is the segment from the joint to its children (joints and End Sites).
-Links are grouped by table segment (:func:`gdimitate.anthropometry.match_segment`, one group
+Links are grouped by table segment (:func:`gdimitate.model.anthropometry.match_segment`, one group
 per side for the limbs). A group's mass is its table fraction of the body mass, renormalised
 over the groups the skeleton has; inside a group the mass is shared in proportion to the links'
 lengths. A group of one link puts the centre of mass at the table's fraction along the segment
@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..anthropometry import DE_LEVA_MALE, match_segment, side_of
 from ..errors import BVHError
+from ..model.anthropometry import DE_LEVA_MALE, match_segment, side_of
 from .parse import BVHFile
 
 __all__ = ["TINY_MASS", "TINY_INERTIA", "LinkInertia", "segment_inertias"]

@@ -1,5 +1,6 @@
-"""``read_bvh``: a BVH motion-capture file → a free-flyer :class:`~gdimitate.robot.Robot` and its
-:class:`~gdimitate.motion.Motion`."""
+"""``read_bvh``: a BVH motion-capture file → a free-flyer :class:`~gdimitate.model.robot.Robot` and
+its
+:class:`~gdimitate.model.motion.Motion`."""
 
 from __future__ import annotations
 
@@ -12,11 +13,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.spatial.transform import Rotation
 
-from ..contact import SoleContact, sole_frame_name
 from ..errors import BVHError, InvalidInputError
-from ..kinematics import robot_motion
-from ..motion import Motion
-from ..robot import Robot
+from ..model.contact import SoleContact, sole_frame_name
+from ..model.kinematics import robot_motion
+from ..model.motion import Motion
+from ..model.robot import Robot
 from .contacts import ContactRule, detect_contacts, estimate_floor, sole_corners
 from .inertia import segment_inertias
 from .parse import BVHFile, parse_bvh
@@ -149,7 +150,7 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
 
     The skeleton becomes a URDF (see :mod:`gdimitate.bvh.urdf`: a link per BVH joint, one
     joint per channel in the file's order, the root's channels as the free-flyer), loaded as a
-    :class:`~gdimitate.robot.Robot` with ``legs=`` (hip/knee/ankle: the thigh's, shank's and
+    :class:`~gdimitate.model.robot.Robot` with ``legs=`` (hip/knee/ankle: the thigh's, shank's and
     foot's rotation channel whose axis is lateral at the zero pose) and ``contacts=`` (sole
     rectangles, :func:`gdimitate.bvh.skeleton.measure_sole`) given explicitly. The motion's
     ``q`` ``(T, nq)`` is Pinocchio's: free-flyer position [m] in our world (x forward, y left,
@@ -162,7 +163,8 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
       (:func:`is_reference_frame`). Times start at 0 on the first kept frame.
     - ``up``: the file's up axis, ``"y"`` (facing +Z) or ``"z"`` (facing −Y); see
       :data:`gdimitate.bvh.skeleton.UP_TURNS`. The subject keeps its walking direction; the
-      Robot's :attr:`~gdimitate.robot.Robot.base_rotation` measures its facing at the zero pose.
+      Robot's :attr:`~gdimitate.model.robot.Robot.base_rotation` measures its facing at the zero
+      pose.
     - ``name``: the robot's name (default: the file's stem). ``mass`` [kg]: total body mass,
       spread by de Leva's (1996) segment table (:mod:`gdimitate.bvh.inertia`).
     - ``contacts``: the stance masks ``{"left": (T,) bool, "right": (T,) bool}`` (after any
@@ -248,7 +250,7 @@ def hanging_extents(bvh: BVHFile, leg: LegChain, C: np.ndarray, fwd: np.ndarray
                     ) -> tuple[float, float]:
     """The thigh's and shank's extents in the sagittal plane [file units] with the leg
     hanging — turned about the subject's forward unit ``fwd`` ``(3,)`` (file axes) by
-    −:func:`~.skeleton.leg_splay` — which is what :class:`~gdimitate.legs.Leg`'s ``thigh`` and
+    −:func:`~.skeleton.leg_splay` — which is what :class:`~gdimitate.model.legs.Leg`'s ``thigh`` and
     ``shank`` mean (the reach walks are normalised by). Measured at a rest pose that splays the
     legs they would be short by the splay's cosine (CMU: 0.79 m instead of 0.84 m, so that
     the subject's hip height in stance read 1.02 legs, more than a leg's reach)."""

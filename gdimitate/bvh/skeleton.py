@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..anthropometry import match_segment, side_of
 from ..errors import BVHError, LegDetectionError
+from ..model.anthropometry import match_segment, side_of
 from .parse import BVHFile
 
 __all__ = ["UP_TURNS", "UNITS", "world_turn", "zero_pose", "detect_scale", "hip_height_units",
@@ -125,7 +125,7 @@ def find_legs(bvh: BVHFile, legs: Mapping[str, Mapping[str, str]] | None = None
               ) -> dict[str, LegChain]:
     """The two legs, from ``legs`` (``{"left": {"hip": …, "knee": …, "ankle": …, "toe": …},
     "right": …}``, BVH joint names, ``toe`` optional) or from the segment names
-    (:func:`gdimitate.anthropometry.match_segment`: the first thigh/shank/foot joint of each
+    (:func:`gdimitate.model.anthropometry.match_segment`: the first thigh/shank/foot joint of each
     side in file order; the toe is the ankle's first foot-segment child)."""
     names = [j.name for j in bvh.joints]
     out = {}

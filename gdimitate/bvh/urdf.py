@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 import yourdfpy as yd
 
-from ..contact import sole_frame_name
 from ..errors import BVHError
+from ..model.contact import sole_frame_name
 from .inertia import LinkInertia, tiny
 from .parse import BVHFile
 from .skeleton import Sole

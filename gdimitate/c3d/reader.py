@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import C3DFormatError, FileFormatError, ForceDataError, UnitError
-from ..opensim.grf import CONTACT_THRESHOLD, ground_to_world
-from ..opensim.trc import Markers, check_marker_values
+from ..model.osim.joints import ground_to_world
+from ..model.osim.trc import Markers, check_marker_values
+from ..opensim.grf import CONTACT_THRESHOLD
 
 __all__ = ["C3DTrial", "ForcePlate", "read_c3d"]
 

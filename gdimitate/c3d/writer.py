@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..opensim.trc import Markers
+from ..model.osim.trc import Markers
 from .reader import ForcePlate
 
 __all__ = ["write_c3d"]

@@ -25,7 +25,7 @@ from scipy.spatial.transform import Rotation
 
 from ..bvh import channel_rotation, parse_bvh, read_bvh
 from ..errors import GdimitateError
-from ..robot import Robot
+from ..model.robot import Robot
 from .stance import CausalStance
 
 __all__ = ["CONTACT_LABELS", "BVHLayout", "Layout", "LiveSourceError"]

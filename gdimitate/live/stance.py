@@ -13,8 +13,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..bvh.contacts import ContactRule
-from ..legs import hip_height
-from ..robot import SIDES, Robot
+from ..model.legs import hip_height
+from ..model.robot import SIDES, Robot
 
 __all__ = ["CausalStance"]
 

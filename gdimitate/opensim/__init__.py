@@ -26,15 +26,26 @@ Data files (:mod:`.coordinates`, :mod:`.grf`, :mod:`.trc`, :mod:`.treadmill`)::
                                              forces)        # belt speed added back
 """
 
-from ._table import Table, read_table
+from ..model.osim._table import Table, read_table
+from ..model.osim.joints import (
+    WORLD_FROM_OPENSIM,
+    Approximation,
+    follow_coordinates,
+    pelvis_to_freeflyer,
+)
+from ..model.osim.model import OsimModel, read_osim
+from ..model.osim.trc import Markers, read_trc
+from ..model.osim.urdf import (
+    EFFORT_LIMIT,
+    VELOCITY_LIMIT,
+    OsimConversion,
+    convert_osim,
+    opensim_to_urdf,
+)
 from .coordinates import read_coordinates
 from .grf import CONTACT_THRESHOLD, ExternalForceSpec, read_external_loads, read_grf
 from .ik import IKResult, inverse_kinematics
-from .joints import WORLD_FROM_OPENSIM, Approximation, follow_coordinates, pelvis_to_freeflyer
-from .model import OsimModel, read_osim
-from .trc import Markers, read_trc
 from .treadmill import belt_speed, treadmill_to_overground
-from .urdf import EFFORT_LIMIT, VELOCITY_LIMIT, OsimConversion, convert_osim, opensim_to_urdf
 
 __all__ = [
     "Table",

@@ -38,9 +38,9 @@ from ..errors import (
     OpenSimDataError,
     UnitError,
 )
-from ..kinematics import robot_motion
-from ..motion import Motion
-from ._table import Table, read_table
+from ..model.kinematics import robot_motion
+from ..model.motion import Motion
+from ..model.osim._table import Table, read_table
 
 __all__ = ["read_coordinates", "coordinate_columns", "robot_coordinates"]
 
@@ -163,11 +163,11 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
         else:
             q[:, i] = x
     if followed:  # spline-driven joints (a walker knee's coupled axes) follow their coordinate
-        from .joints import follow_coordinates
+        from ..model.osim.joints import follow_coordinates
 
         follow_coordinates(plans, q, robot.idx_q)
     if root_in:
-        from .joints import pelvis_to_freeflyer
+        from ..model.osim.joints import pelvis_to_freeflyer
 
         values = {c: table.data[:, cols[c]] * (scale if root_kind[c] == "rotational" else 1.0)
                   for c in root_in}
@@ -184,8 +184,8 @@ def _root_joint(robot, osim):
         osim = _robot_osim(robot)
         if osim is None:
             return None
-    from .joints import root_joint
-    from .model import OsimModel, read_osim
+    from ..model.osim.joints import root_joint
+    from ..model.osim.model import OsimModel, read_osim
 
     model = osim if isinstance(osim, OsimModel) else read_osim(osim)
     return root_joint(model), model

@@ -44,7 +44,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..contact import ContactForces, FootForces
 from ..errors import (
     CoordinateMismatchWarning,
     ForceDataError,
@@ -52,28 +51,18 @@ from ..errors import (
     ResourceLimitError,
     UnitError,
 )
+from ..model.contact import ContactForces, FootForces
+from ..model.osim._table import Table, read_table
+from ..model.osim.joints import ground_to_world
+from ..model.osim.model import MAX_OSIM_BYTES
 from ..safety import parse_xml, read_text_bounded
-from ._table import Table, read_table
-from .model import MAX_OSIM_BYTES
 
-__all__ = ["CONTACT_THRESHOLD", "ExternalForceSpec", "read_external_loads", "read_grf",
-           "ground_to_world"]
+__all__ = ["CONTACT_THRESHOLD", "ExternalForceSpec", "read_external_loads", "read_grf"]
 
 #: Vertical force above which a foot is in stance [N].
 CONTACT_THRESHOLD = 20.0
 SIDES = ("left", "right")
-_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 _FORCE = re.compile(r"^(?P<pre>.*?)ground_force_(?P<mid>(?:.*_)?)v(?P<ax>[xyz])$", re.I)
-
-
-def ground_to_world(up: str) -> np.ndarray:
-    """Rotation ``(3, 3)`` from a lab frame with X forward and ``up`` (``"Y"``: OpenSim's
-    ground, Z to the right; ``"Z"``: Y to the left) to our world (x forward, y left, z up)."""
-    if up.upper() == "Y":
-        return _Y_UP.copy()
-    if up.upper() == "Z":
-        return np.eye(3)
-    raise UnitError(f"up axis must be 'Y' or 'Z'; got {up!r}")
 
 
 @dataclass(frozen=True)

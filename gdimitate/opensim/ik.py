@@ -31,9 +31,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InvalidInputError, MarkerGapWarning, OpenSimDataError, SolverError
-from ..motion import Motion
-from .joints import follow_coordinates
-from .trc import Markers
+from ..model.motion import Motion
+from ..model.osim.joints import follow_coordinates
+from ..model.osim.trc import Markers
 
 __all__ = ["IKResult", "inverse_kinematics", "marker_frames"]
 

@@ -15,12 +15,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidInputError, LegMatchError
-from ..kinematics import robot_motion
-from ..motion import Motion
+from ..model.kinematics import robot_motion
+from ..model.motion import Motion
+from ..model.robot import Robot
+from ..model.sagittal import compose_q, ground_base, leg_angles, sagittal_leg
 from ..result import AdaptedMotion, compare
-from ..robot import Robot
 from ..types import SIDES, ForceModel, PlanarMethod
-from .sagittal import compose_q, ground_base, leg_angles, sagittal_leg
 from .twolink import eq1
 
 __all__ = ["adapt_planar", "check_pair"]

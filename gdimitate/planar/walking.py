@@ -17,11 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..kinematics import frame_paths, joint_paths, robot_motion
-from ..motion import Motion
-from ..robot import Robot
+from ..model.kinematics import frame_paths, joint_paths, robot_motion
+from ..model.motion import Motion
+from ..model.robot import Robot
+from ..model.sagittal import compose_q, sagittal_leg
 from ..types import SIDES
-from .sagittal import compose_q, sagittal_leg
 from .twolink import ik2
 
 __all__ = ["GaitSpec", "HUMAN_GAIT", "ROBOT_GAIT", "walking_motion"]

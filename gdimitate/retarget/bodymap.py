@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InvalidInputError, UnknownNameError
-from ..robot import Robot
+from ..model.robot import Robot
 
 __all__ = ["BodyMap", "body_map", "ROLES", "UnmappedJointsWarning", "HOLD_RANGE", "arms_down",
            "legs_down", "following", "JointFollowing"]
@@ -217,7 +217,7 @@ class BodyMap:
     @classmethod
     def from_json(cls, path: str | Path) -> BodyMap:
         """Read :meth:`from_dict`'s format from a JSON file."""
-        from ..inputs import read_json
+        from ..model.inputs import read_json
 
         p = Path(path)
         d = read_json(p, "body map")  # bounded: size, nesting, digits; no NaN

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import SoleContact
 from ..errors import InvalidInputError
-from ..robot import SIDES, Robot
+from ..model.contact import SoleContact
+from ..model.robot import SIDES, Robot
 from . import limits
 from .params import Contact
 

@@ -10,8 +10,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import GdimitateError
+from ..model.robot import SIDES, Robot
 from ..planar.analytic import adapt_planar
-from ..robot import SIDES, Robot
 from .targets import Targets
 
 

@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..kinematics import actuated_v_indices, base_v_indices
-from ..robot import SIDES, Robot
-from ..symbolic import SymbolicModel
+from ..model.kinematics import actuated_v_indices, base_v_indices
+from ..model.robot import SIDES, Robot
+from ..model.symbolic import SymbolicModel
 
 __all__ = ["Layout", "Knot", "Flags", "base_dofs"]
 
@@ -57,7 +57,7 @@ class Layout:
 
 def base_dofs(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """``(base velocity indices (nb,), actuated velocity indices (nv − nb,))`` of the
-    imitator (:func:`gdimitate.kinematics.base_v_indices`, :func:`~gdimitate.kinematics.
+    imitator (:func:`gdimitate.model.kinematics.base_v_indices`, :func:`~gdimitate.model.kinematics.
     actuated_v_indices`)."""
     return base_v_indices(robot), actuated_v_indices(robot)
 

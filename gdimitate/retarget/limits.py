@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidInputError, UnknownNameError
-from ..robot import Robot
+from ..model.robot import Robot
 from .params import Limits
 
 __all__ = ["Resolved", "resolve"]

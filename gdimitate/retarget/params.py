@@ -12,8 +12,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..contact import DEFAULT_MU
 from ..errors import InvalidInputError
+from ..model.contact import DEFAULT_MU
 
 __all__ = ["DEFAULT_RATE", "Weights", "Limits", "Contact", "IPOPT_DEFAULTS"]
 
@@ -141,7 +141,7 @@ class Contact:
     """Contact model and goal options.
 
     - ``mu`` [-]: friction coefficient of every foot (default
-      :data:`gdimitate.contact.DEFAULT_MU`); ``None`` keeps each :class:`SoleContact`'s own;
+      :data:`gdimitate.model.contact.DEFAULT_MU`); ``None`` keeps each :class:`SoleContact`'s own;
     - ``f_min`` [N]: minimum normal force of a stance foot (unilateral contact, default 1 N);
     - ``cop_margin`` [m]: keep the centre of pressure this far inside the sole rectangle;
     - ``clearance`` [m]: every sole corner of a swing foot at least this high (default 0);

@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contact import ContactForces, FootForces
 from ..errors import InvalidInputError
-from ..motion import Motion
-from ..robot import Robot
+from ..model.contact import ContactForces, FootForces
+from ..model.motion import Motion
+from ..model.robot import Robot
 from .parts.periodic import walking_direction
 from .polish import make_consistent
 

@@ -33,8 +33,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..contact import SoleContact
-from ..robot import SIDES, Robot
+from ..model.contact import SoleContact
+from ..model.robot import SIDES, Robot
 
 __all__ = ["make_consistent"]
 

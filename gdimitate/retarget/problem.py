@@ -26,10 +26,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .. import contact, footsteps, kinematics, selfcollision, symbolic
-from .. import robot as robot_module
-from ..robot import Robot
-from ..symbolic import SymbolicModel
+from ..model import contact, footsteps, kinematics, selfcollision, symbolic
+from ..model import robot as robot_module
+from ..model.robot import Robot
+from ..model.symbolic import SymbolicModel
 from . import bodymap, codegen
 from . import knot as knot_module
 from . import parts as parts_module

@@ -36,7 +36,7 @@ import daqp
 import numpy as np
 import pinocchio as pin
 
-from ..robot import SIDES
+from ..model.robot import SIDES
 
 __all__ = ["FrameQP", "Tasks", "SOLVED"]
 
@@ -122,7 +122,7 @@ class FrameQP:
 
     def __init__(self, robot, contacts: dict, base_idx: np.ndarray, act_idx: np.ndarray,
                  f_min: float, cop_margin: float, gains: Gains = Gains()):
-        from ..kinematics import base_joint_id
+        from ..model.kinematics import base_joint_id
 
         m = robot.model
         self.robot, self.m, self.g = robot, m, gains
@@ -145,7 +145,7 @@ class FrameQP:
         self.lim_v = np.flatnonzero(np.isfinite(vel) & (vel < 1e30) & (vel > 0))
         self.vel = vel[self.lim_v]
         self.pos = _position_rows(m, self.act_idx)
-        from ..selfcollision import self_collision
+        from ..model.selfcollision import self_collision
 
         self.sc = self_collision(robot)  # the audit's pairs (None: no collision geometry)
         if self.sc is not None:
@@ -352,7 +352,7 @@ class FrameQP:
 
     def _collisions(self, rows, q, v, h) -> None:
         """Each pair of the robot's own collision geometries (the audit's,
-        :mod:`gdimitate.selfcollision`) closer than :data:`COLLISION_WATCH` at knot j stays
+        :mod:`gdimitate.model.selfcollision`) closer than :data:`COLLISION_WATCH` at knot j stays
         :data:`COLLISION_MARGIN` apart at knot k, to first order: ``d + h ḋ(v_k) ≥ margin``
         with ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` from a to b), ``v_k = v + h a``.
         iCub's chest came down onto its swinging thigh (8 cm deep) when it leaned as the
@@ -485,7 +485,7 @@ def _solve(H, f, A, up, lo, sense, kind) -> tuple[np.ndarray, int]:
 def _cone(c, margin: float) -> np.ndarray:
     """``(16, 6)`` wrench cone rows ``A w ≤ 0`` of sole ``c`` with friction μ/√2 (the square
     pyramid inside the circular cone) and the centre-of-pressure rows ``margin`` inside."""
-    from ..contact import wrench_cone
+    from ..model.contact import wrench_cone
 
     return wrench_cone(c.half_length, c.half_width, c.mu / np.sqrt(2),
                        cop_length=c.half_length - margin, cop_width=c.half_width - margin)

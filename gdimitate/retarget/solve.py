@@ -12,14 +12,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import ContactForces, SoleContact
 from ..errors import InvalidInputError, SolverError, UnknownNameError
-from ..footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
-from ..heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
-from ..kinematics import actuated_v_indices, robot_motion
 from ..metrics import FORCE_MODELS
-from ..motion import Motion
-from ..robot import SIDES, Robot
+from ..model.contact import ContactForces, SoleContact
+from ..model.footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
+from ..model.heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
+from ..model.kinematics import actuated_v_indices, robot_motion
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from . import codegen, limits
 from . import problem as pb
 from .bodymap import body_map
@@ -47,7 +47,7 @@ STOPS = ("settled", "converged")
 several times slower, the same motion to within the audit's tolerances)."""
 
 GAIT_SCALING = "geometric"
-"""``gait_scaling=``'s default (:data:`gdimitate.footsteps.SCALINGS`): lengths × the legs'
+"""``gait_scaling=``'s default (:data:`gdimitate.model.footsteps.SCALINGS`): lengths × the legs'
 ratio r at the demonstrator's cadence (the paper's); ``"froude"`` also runs the
 demonstration's clock × √r (docs/design.md §13 says how the default was chosen)."""
 
@@ -440,7 +440,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     - ``gait_scaling`` (:data:`GAIT_SCALING`): ``"geometric"`` — the imitator's steps are
       the demonstrator's × r, the legs' ratio, at its cadence — or ``"froude"`` — also the
       demonstration's durations × √r (the motion's times then run on that clock); the
-      result's ``gait`` (:class:`~gdimitate.footsteps.GaitComparison`) measures the steps
+      result's ``gait`` (:class:`~gdimitate.model.footsteps.GaitComparison`) measures the steps
       against the demonstrator's so scaled;
     - ``periodic`` (default False): a periodic gait cycle (:mod:`.periodic`) — one stride,
       heel strike to heel strike of the right foot, whose last knot is its first shifted by
@@ -515,7 +515,7 @@ def heading_frame(demonstrator: Robot, imitator: Robot, demo: Motion,
                   forces: ContactForces | None, scaling: str
                   ) -> tuple[float, Motion, ContactForces | None]:
     """``(ψ, demo, forces)``: the demonstration (and its measured forces, or None) turned by
-    −ψ, its heading yaw (:func:`~gdimitate.heading.walk_heading`), about the vertical through
+    −ψ, its heading yaw (:func:`~gdimitate.model.heading.walk_heading`), about the vertical through
     its first base position — the frame the problem is written in (docs/design.md §13) —
     and on the clock of the gait ``scaling`` (Froude: durations × √r)."""
     psi, about = walk_heading(demonstrator, demo), demo.q[0, :2]

@@ -32,13 +32,13 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from ..contact import ContactForces, SoleContact
 from ..errors import GdimitateWarning, InvalidInputError, UnknownNameError
-from ..heading import facing_yaw, turn_configurations, yaw_matrix
-from ..kinematics import robot_motion
-from ..motion import Motion
+from ..model.contact import ContactForces, SoleContact
+from ..model.heading import facing_yaw, turn_configurations, yaw_matrix
+from ..model.kinematics import robot_motion
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from ..result import AdaptedMotion, compare
-from ..robot import SIDES, Robot
 from . import limits as limits_mod
 from .bodymap import BodyMap, body_map
 from .frameref import FrameReference, initial_pose, initial_velocity
@@ -175,7 +175,7 @@ class StreamingAdaptor:
 
         Nothing assumes a heading: the stream is adapted in the frame of its first
         configuration — the world turned about the vertical through the first base position
-        by the base's facing yaw there (:func:`~gdimitate.heading.facing_yaw`) — and each
+        by the base's facing yaw there (:func:`~gdimitate.model.heading.facing_yaw`) — and each
         ``q`` turned back, so a stream turned about the vertical gives the same motion up to
         that turn (velocities, accelerations and sole wrenches are in local frames)."""
         d = self.demonstrator
@@ -252,7 +252,7 @@ class StreamingAdaptor:
         m, data = self.imitator.model, self.imitator.model.createData()
         pin.framesForwardKinematics(m, data, q)
         feet = {s: data.oMf[self._fid[s]].copy() for s in SIDES}
-        from ..kinematics import base_joint_id
+        from ..model.kinematics import base_joint_id
 
         self._ref.start(f0, pin.centerOfMass(m, data, q), feet,
                         data.oMi[base_joint_id(self.imitator)].rotation.copy(), moving)

@@ -8,13 +8,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import ContactForces
 from ..errors import InvalidInputError
-from ..footsteps import sole_frames
-from ..kinematics import anchor_schedule, frame_placements
 from ..metrics import force_direction
-from ..motion import Motion
-from ..robot import SIDES, Robot
+from ..model.contact import ContactForces
+from ..model.footsteps import sole_frames
+from ..model.kinematics import anchor_schedule, frame_placements
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from .bodymap import BodyMap
 
 __all__ = ["Targets", "configurations_at", "resample", "schedule", "demonstration_targets",

@@ -44,10 +44,10 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..contact import SoleContact
 from ..errors import GdimitateError, InvalidInputError
-from ..kinematics import robot_motion
-from ..robot import SIDES, Robot
+from ..model.contact import SoleContact
+from ..model.kinematics import robot_motion
+from ..model.robot import SIDES, Robot
 from .threads import single_thread
 
 __all__ = ["InlineVerdicts", "VerdictWorker", "VerdictWorkerError", "knot_verdicts",

@@ -15,9 +15,9 @@ meshcat). Small plans for tests and demos live in :mod:`gdimitate.apps.scenarios
 (scenario code, not API).
 """
 
+from ..model.mjcf import ModelOptions, SimModel, build_model
 from .controller import ControllerGains, TrackingController, pendulum_frequency
 from .metrics import DirectionAgreement, FallCriteria, StanceSlip
-from .model import ModelOptions, SimModel, build_model
 from .reference import Plan, Reference, check_plan
 from .simulate import Push, SimMetrics, SimResult, measure_contacts, simulate
 

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..robot import SIDES, Robot
+from ..model.robot import SIDES, Robot
 from .simulate import SimResult
 
 if TYPE_CHECKING:

@@ -36,8 +36,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SimulationError
-from ..robot import SIDES, Robot
-from .model import SimModel
+from ..model.mjcf import SimModel
+from ..model.robot import SIDES, Robot
 from .reference import Sample, base_joint
 
 __all__ = ["ControllerGains", "TrackingController", "pendulum_frequency"]

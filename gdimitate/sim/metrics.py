@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import SoleContact, centre_of_pressure, cone_margin
 from ..errors import SimulationError
 from ..metrics import angle_down
+from ..model.contact import SoleContact, centre_of_pressure, cone_margin
 
 __all__ = [
     "DirectionAgreement",

@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 
 from ..errors import PlanError
-from ..robot import SIDES, Robot
+from ..model.robot import SIDES, Robot
 from .reference import Reference, Sample, check_plan
 
 __all__ = ["PeriodicReference"]

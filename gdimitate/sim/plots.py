@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..metrics import angle_down
-from ..robot import SIDES
+from ..model.robot import SIDES
 from ..safety import atomic_write
 from .metrics import frontal_angle, stance_intervals
 from .simulate import SimResult

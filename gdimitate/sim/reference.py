@@ -1,6 +1,6 @@
 """The plan a simulation tracks: validation of the plan contract and its references in time.
 
-A plan (an adaptor's output) has ``motion`` — a :class:`~gdimitate.motion.Motion` with ``t``
+A plan (an adaptor's output) has ``motion`` — a :class:`~gdimitate.model.motion.Motion` with ``t``
 ``(T,)`` [s], ``q`` ``(T, nq)``, ``v``, ``a`` ``(T, nv)`` in Pinocchio's conventions and the
 stance schedule ``contact`` ``{"left": (T,) bool, "right": …}`` —, ``wrenches`` ``{"left":
 (T, 6), "right": (T, 6)}`` (the wrench [f; τ] the ground applies to each foot, in that foot's
@@ -22,11 +22,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..contact import SoleContact
 from ..errors import PlanError
-from ..kinematics import base_joint_id
-from ..motion import Motion
-from ..robot import SIDES, Robot
+from ..model.contact import SoleContact
+from ..model.kinematics import base_joint_id
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 
 __all__ = ["Plan", "Reference", "Sample", "base_joint", "check_plan"]
 
@@ -73,7 +73,7 @@ def check_plan(robot: Robot, plan: Any) -> Plan:
                         f"{list(robot.joint_names)[:4]}…")
     if mo.v is None or mo.a is None:
         raise PlanError("plan.motion has no v/a; add them with "
-                        "gdimitate.motion.differentiate(robot.model, motion)")
+                        "gdimitate.model.motion.differentiate(robot.model, motion)")
     if mo.v.shape != (mo.T, m.nv) or mo.a.shape != (mo.T, m.nv):
         raise PlanError(f"plan.motion.v/a must be ({mo.T}, {m.nv}); got {mo.v.shape}, "
                         f"{mo.a.shape}")

@@ -1,6 +1,6 @@
 """``simulate``: replay a plan in MuJoCo under the whole-body tracking controller and measure it.
 
-The loop: the MuJoCo model of :mod:`~gdimitate.sim.model` steps every ``dt`` [s] (default
+The loop: the MuJoCo model of :mod:`~gdimitate.model.mjcf` steps every ``dt`` [s] (default
 1 ms); every ``control_period`` [s] (default 1 ms, i.e. 1 kHz) the
 :class:`~gdimitate.sim.controller.TrackingController` reads the simulated state, solves its QP
 against the plan sampled at that time and sets the motor torques, held until the next control
@@ -23,11 +23,12 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from ..contact import ContactForces
 from ..errors import GdimitateWarning, PlanError, SimulationError
 from ..jsonable import jsonable
-from ..motion import Motion
-from ..robot import SIDES, Robot
+from ..model.contact import ContactForces
+from ..model.mjcf import ModelOptions, SimModel, build_model
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from ..safety import check_array_size
 from .controller import ControllerGains, TrackingController
 from .metrics import (
@@ -40,7 +41,6 @@ from .metrics import (
     saturation_fraction,
     stance_slip,
 )
-from .model import ModelOptions, SimModel, build_model
 from .reference import Reference, check_plan
 
 __all__ = ["Push", "SimMetrics", "SimResult", "simulate", "measure_contacts"]
@@ -178,7 +178,7 @@ class SimResult:
     joint_nq: tuple[int, ...]
 
     def motion(self) -> Motion:
-        """The simulated trajectory as a :class:`~gdimitate.motion.Motion` (stance = the
+        """The simulated trajectory as a :class:`~gdimitate.model.motion.Motion` (stance = the
         measured contact: normal force above 1 N)."""
         contact = {s: self.contact_wrenches[s][:, 2] > 1.0 for s in SIDES}
         return Motion(t=self.t, joint_names=self.joint_names, q=self.q, contact=contact,

@@ -29,7 +29,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..errors import ViewerError
-from ..meshes import collada_y_up
+from ..model.meshes import collada_y_up
 from .decimate import decimated_stl
 
 __all__ = [

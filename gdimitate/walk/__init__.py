@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import warnings
 
-from ..robot import Robot
+from ..model.robot import Robot
 from .loop import WalkPush, run_loop
 from .network import WalkNetwork
 from .result import WalkResult

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..robot import Robot
+from ..model.robot import Robot
 from ..verdict import EXIT_NOT_FEASIBLE
 from . import WALK_RATE
 

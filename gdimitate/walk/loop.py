@@ -41,10 +41,10 @@ import mujoco
 import numpy as np
 
 from ..errors import SimulationError
-from ..robot import SIDES, Robot
+from ..model.mjcf import build_model
+from ..model.robot import SIDES, Robot
 from ..sim.controller import ControllerGains, TrackingController
 from ..sim.metrics import FallCriteria
-from ..sim.model import build_model
 from ..sim.periodic import PeriodicReference
 from ..sim.simulate import measure_contacts, mujoco_warnings
 from .network import WalkNetwork

@@ -27,9 +27,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidInputError
+from ..model.robot import PLANAR_BASE, Robot
 from ..oscillator import SelfAdjustResult, self_adjust
 from ..oscillator.bank import _rhs
-from ..robot import PLANAR_BASE, Robot
 
 __all__ = ["WalkNetwork", "cycle_joints"]
 

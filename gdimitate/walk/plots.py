@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..robot import SIDES  # noqa: E402
+from ..model.robot import SIDES  # noqa: E402
 from ..safety import atomic_write  # noqa: E402
 
 __all__ = ["plot_walk"]

@@ -20,11 +20,11 @@ from typing import Any
 
 import numpy as np
 
-from ..contact import ContactForces
 from ..jsonable import jsonable
-from ..motion import Motion
+from ..model.contact import ContactForces
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from ..result import AdaptedMotion
-from ..robot import SIDES, Robot
 from ..safety import atomic_write
 from ..sim.periodic import PeriodicReference
 from .loop import Trace, step_bounds

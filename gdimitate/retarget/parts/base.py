@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...robot import SIDES
+from ...model.robot import SIDES
 
 __all__ = ["Spec", "Part", "Cost", "Constraint", "PairConstraint", "Bound", "per_side_labels"]
 

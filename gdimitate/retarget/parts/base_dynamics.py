@@ -1,6 +1,6 @@
 """Whole-body dynamics, base rows: ``rnea(q, v, a) − Σ_c J_c(q)ᵀ w_c`` (Featherstone's
 recursive Newton-Euler with the contact wrenches inside the recursion,
-:meth:`gdimitate.symbolic.SymbolicModel.rnea_contact_expr`, built once per knot by
+:meth:`gdimitate.model.symbolic.SymbolicModel.rnea_contact_expr`, built once per knot by
 :meth:`Knot.torques <gdimitate.retarget.knot.Knot.torques>`) has vanishing unactuated base
 rows, in N and N·m (so that the optimiser's absolute tolerance is the audit's; :meth:`scale`
 m·g turns them into scaled units for reports). Equalities, never relaxed."""

@@ -6,10 +6,10 @@ wrench ``[f; τ]`` at the sole centre in the sole frame, half-lengths X, Y and f
 
     |f_x| ≤ μ f_z, |f_y| ≤ μ f_z, |τ_x| ≤ Y f_z, |τ_y| ≤ X f_z, τ_min ≤ τ_z ≤ τ_max
 
-(16 linear rows, :func:`gdimitate.contact.wrench_cone_rows`: the cone is written there once),
+(16 linear rows, :func:`gdimitate.model.contact.wrench_cone_rows`: the cone is written there once),
 plus ``f_z ≥ f_min``. The centre-of-pressure rows use X − margin, Y − margin. X, Y and μ are
 parameters. Planar models keep the in-plane rows (friction along x, centre of pressure along
-x: :data:`gdimitate.contact.PLANAR_CONE_ROWS`; f_z ≥ f_min). Rows are divided by m·g;
+x: :data:`gdimitate.model.contact.PLANAR_CONE_ROWS`; f_z ≥ f_min). Rows are divided by m·g;
 relaxable. Swing feet carry no wrench (their variables are bounded to 0).
 """
 
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...contact import PLANAR_CONE_ROWS, wrench_cone_rows
-from ...robot import SIDES
+from ...model.contact import PLANAR_CONE_ROWS, wrench_cone_rows
+from ...model.robot import SIDES
 from .base import Constraint, per_side_labels
 
 
@@ -32,7 +32,7 @@ def rows_per_side(planar: bool) -> int:
 
 def cone_rows(w, X, Y, mu, Xc, Yc, f_min, planar: bool) -> list:
     """The rows (each ≤ 0 inside the cone) of a sole wrench ``w = [f; τ]`` (6,) [N, N·m]:
-    :func:`gdimitate.contact.wrench_cone_rows` (the one formula of the cone; planar models
+    :func:`gdimitate.model.contact.wrench_cone_rows` (the one formula of the cone; planar models
     keep its rows :data:`~gdimitate.contact.PLANAR_CONE_ROWS`), then ``f_min − f_z``."""
     rows = wrench_cone_rows(w, X, Y, mu, cop_length=Xc, cop_width=Yc)
     if planar:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...robot import SIDES
+from ...model.robot import SIDES
 from .base import PairConstraint
 
 

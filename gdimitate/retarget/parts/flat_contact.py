@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...robot import SIDES
+from ...model.robot import SIDES
 from .base import Constraint, per_side_labels
 
 __all__ = ["FlatContact", "velocity_knots", "liftoff_knots", "PLANAR_VELOCITY_ROWS"]

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...robot import SIDES
+from ...model.robot import SIDES
 from .base import Constraint, per_side_labels
 from .shank import unit_segment
 

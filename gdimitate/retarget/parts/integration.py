@@ -4,7 +4,7 @@ manifold), not by finite-difference matrices:
     v_k = v_{k−1} + h_k a_{k−1},        q_k = q_{k−1} ⊕ h_k v_k     (h_k = t_k − t_{k−1})
 
 with ⊕ Pinocchio's ``integrate`` written symbolically
-(:attr:`gdimitate.symbolic.SymbolicModel.integrate`: the SE(3) exponential map for a
+(:attr:`gdimitate.model.symbolic.SymbolicModel.integrate`: the SE(3) exponential map for a
 free-flyer). So the forward difference ``pin.difference(q_k, q_{k+1}) / h`` *is*
 ``v_{k+1}`` and the forward difference of ``v`` is ``a_k``: velocity limits on ``v`` bound the
 velocities the motion really has, the dynamics at knot k use exactly these

@@ -3,7 +3,8 @@
 the stance soles (their mean in double support), along the demonstrator's facing there (the
 horizontal normal of the line from its right hip to its left), over
 the imitator's leg length, minus the same of the demonstrator relative to its footprints
-(:func:`gdimitate.footsteps.footprints`) over its leg length (parameters ``over_feet`` ``(1,)``
+(:func:`gdimitate.model.footsteps.footprints`) over its leg length (parameters ``over_feet``
+``(1,)``
 the target, ``over_feet_dir`` ``(2,)`` the facing, ``over_feet_w`` ``(2,)`` the left and
 right soles' shares, ``over_feet_on`` ``(1,)``; weight ``over_feet``).
 
@@ -21,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...kinematics import frame_paths
-from ...robot import SIDES
+from ...model.kinematics import frame_paths
+from ...model.robot import SIDES
 from .base import Cost
 from .steps import bounded, footprint_places
 

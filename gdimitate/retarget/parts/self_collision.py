@@ -1,5 +1,5 @@
 """Self-collision as a constraint of the adaptor: pairs of spheres that enclose the robot's
-collision geometries (limb–limb and limb–trunk pairs of :mod:`gdimitate.selfcollision`) kept
+collision geometries (limb–limb and limb–trunk pairs of :mod:`gdimitate.model.selfcollision`) kept
 at least ``margin`` apart at every knot.
 
 Each collision geometry is covered by up to :data:`MAX_SPHERES` spheres, one per cluster of its
@@ -8,7 +8,7 @@ cylinder's rims) lies inside one of them. Only geometry pairs that come within :
 of each other at the neutral pose (arms against the trunk and the thighs) get rows, unless they
 meet where the limbs meet the trunk (:data:`PROXIMAL`, :data:`PROXIMAL_ARM`), and of their
 spheres those within :data:`ACTIVE_SPHERES`. The audit's rule applies
-(:mod:`gdimitate.selfcollision`): geometry pairs already closer than the margin at the neutral
+(:mod:`gdimitate.model.selfcollision`): geometry pairs already closer than the margin at the neutral
 pose are left out and listed (:func:`left_out_sphere_pairs`); sphere pairs closer than the
 margin at the neutral pose (the spheres' slack over the hulls) keep at least their neutral gap.
 The two legs get no sphere pairs: their covers overlap by centimetres where the hulls pass each
@@ -77,7 +77,7 @@ class SelfCollision(Constraint):
     exceeds the smallest clearance, so the row admits no sphere overlap a row per sphere pair
     would forbid, and it lies at most ``log(n) / SHARPNESS`` below it (Talos: 315 sphere pairs
     in 42 frame pairs, up to 29 in one). The centres are taken in the root joint's frame
-    (:meth:`~gdimitate.symbolic.SymbolicModel.root_placement`): a distance between two bodies
+    (:meth:`~gdimitate.model.symbolic.SymbolicModel.root_placement`): a distance between two bodies
     does not depend on the base's pose, and so its row's derivatives carry no base column."""
 
     pairs: tuple = ()
@@ -220,7 +220,7 @@ def _proximal(robot) -> dict[int, str | None]:
     :data:`PROXIMAL` joints or another limb's first :data:`PROXIMAL_ARM`,
     ``"limb:<top>@<trunk joint it hangs from>"``; for a trunk joint, ``"trunk@<joint>"``;
     else ``None``."""
-    from ...selfcollision import TRUNK, limb_groups
+    from ...model.selfcollision import TRUNK, limb_groups
 
     groups = limb_groups(robot)
     legs = _leg_limbs(robot)
@@ -238,8 +238,8 @@ def _proximal(robot) -> dict[int, str | None]:
 
 
 def _leg_limbs(robot) -> set[str]:
-    """The limb labels (:func:`~gdimitate.selfcollision.limb_groups`) of the robot's legs."""
-    from ...selfcollision import limb_groups
+    """The limb labels (:func:`~gdimitate.model.selfcollision.limb_groups`) of the robot's legs."""
+    from ...model.selfcollision import limb_groups
 
     groups = limb_groups(robot)
     return {groups[robot.model.getJointId(leg.hip)] for leg in robot.legs.values()
@@ -272,7 +272,7 @@ def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tup
     in place of the two legs' sphere pairs (:func:`_two_legs`); legs already within ``margin``
     at the neutral pose keep their neutral separation; empty when the legs' closest pair there
     is ``active`` or more apart."""
-    from ...selfcollision import limb_groups, self_collision
+    from ...model.selfcollision import limb_groups, self_collision
 
     sc = self_collision(robot)
     if sc is None or set(robot.legs) != {"left", "right"}:
@@ -314,9 +314,9 @@ def left_out_sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE,
 
 def _active_pairs(robot, sc) -> list[tuple[str, str, int, int]]:
     """``[(geometry a, geometry b, joint a, joint b)]``: the pairs of ``sc`` (a
-    :class:`gdimitate.selfcollision.SelfCollision`) that may get sphere rows — not where limbs
+    :class:`gdimitate.model.selfcollision.SelfCollision`) that may get sphere rows — not where limbs
     meet the trunk (:func:`_near_root`), not across the two legs (:func:`_two_legs`)."""
-    from ...selfcollision import limb_groups
+    from ...model.selfcollision import limb_groups
 
     cm = robot.collision_model
     prox, legs, limbs = _proximal(robot), _leg_limbs(robot), limb_groups(robot)
@@ -337,7 +337,7 @@ def rest_pose(robot, margin: float = MARGIN, clear: float = REST_CLEAR) -> np.nd
     within 1 cm of its thighs (8.7–9.6 mm): those pairs would get no rows; its rest pose moves
     each arm joint by ≤ 0.05 rad. The neutral pose where no pair is that close (G1, Romeo,
     iCub). Cached on the robot."""
-    from ...selfcollision import TRUNK, limb_groups, self_collision
+    from ...model.selfcollision import TRUNK, limb_groups, self_collision
 
     cache = robot.__dict__.setdefault("_rest_pose", {})
     if (margin, clear) in cache:
@@ -388,7 +388,7 @@ def _sphere_pairs(robot, margin: float, active: float, q: np.ndarray | None = No
                   ) -> tuple[tuple, tuple]:
     """``(kept, left out)`` sphere pairs (:func:`sphere_pairs`, :func:`left_out_sphere_pairs`)
     at the pose ``q`` (default neutral), cached on the robot per ``(margin, active, q)``."""
-    from ...selfcollision import placement, self_collision
+    from ...model.selfcollision import placement, self_collision
 
     q = np.asarray(robot.neutral if q is None else q, float)
     cache = robot.__dict__.setdefault("_sphere_pairs", {})

@@ -1,7 +1,7 @@
 """Gait cost: the steps of the demonstrator scaled to the imitator's legs (docs/design.md
 §13). At every knot where both feet are in stance, the horizontal place of the left sole
 relative to the right, over the imitator's leg length, minus the demonstrator's footprints'
-(:func:`gdimitate.footsteps.footprints`: the mean place of each stance phase) over its leg
+(:func:`gdimitate.model.footsteps.footprints`: the mean place of each stance phase) over its leg
 length (parameters ``steps`` ``(2,)`` and ``steps_on`` ``(1,)``, 1 in double support, else
 0; weight ``steps``). A flat stance sole keeps its place, so the cost asks every step's length
 and width, and with them the distance walked, of the imitator scaled by the legs' ratio;
@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...footsteps import footprints
-from ...robot import SIDES
+from ...model.footsteps import footprints
+from ...model.robot import SIDES
 from .base import Cost
 
 DELTA = 0.1

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from ...robot import SIDES
+from ...model.robot import SIDES
 from .base import Cost
 from .shank import unit_segment
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from ...robot import SIDES
+from ...model.robot import SIDES
 from .base import Cost
 
 

@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from .errors import UnknownNameError, UnsupportedJointError
+from ..errors import UnknownNameError, UnsupportedJointError
 
 __all__ = ["SymbolicModel", "SUPPORTED_JOINTS"]
 

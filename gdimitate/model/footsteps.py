@@ -8,7 +8,7 @@ between them, and the gait of an imitator against its demonstrator scaled to its
 - A **step** begins where a foot lands: from that footprint's first knot to the next landing
   of the other foot (its ``duration``); ``length`` and ``width`` are the landing footprint's
   place relative to the other foot's footprint at that moment, along and across the walk's
-  heading there (the demonstrator's base facing, :func:`gdimitate.heading.facing_yaw`, at the
+  heading there (the demonstrator's base facing, :func:`gdimitate.model.heading.facing_yaw`, at the
   landing); ``stride`` the landing footprint's place relative to the same foot's previous one,
   along the heading.
 - **Scaling** (:data:`SCALINGS`): lengths × r, the legs' ratio (imitator over demonstrator,

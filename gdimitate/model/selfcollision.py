@@ -19,7 +19,7 @@ are left out and listed (:attr:`SelfCollision.excluded`): no motion could keep t
 Distances are computed by coal (GJK/EPA, signed: negative inside each other) between convex
 shapes: meshes are replaced by their convex hulls (conservative — a hull is never farther from
 anything than its mesh), primitives (spheres, cylinders, boxes, capsules) are kept. A Y-up
-Collada mesh is turned back as the URDF placed it (:mod:`gdimitate.meshes`, the same rotation
+Collada mesh is turned back as the URDF placed it (:mod:`gdimitate.model.meshes`, the same rotation
 the sole measurement and the viewer apply): as loaded, iCub's meshes lie 90° off their links —
 thighs horizontal, the chest in front of the torso, each foot across its leg — so the left
 thigh sat 1.5 cm from the chest and the left foot 1 mm from the right ankle at the neutral
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 from .meshes import ASSIMP_Y_UP_UNDO, collada_y_up
 
 __all__ = ["SelfCollision", "self_collision", "limb_groups", "placement", "TRUNK"]
@@ -153,7 +153,7 @@ def _convex(geom: pin.GeometryModel) -> pin.GeometryModel:
 def placement(g: pin.GeometryObject) -> pin.SE3:
     """The placement of a geometry object's vertices (as Pinocchio loaded them) in its parent
     joint's frame: ``g.placement``, times the rotation back to the file's raw coordinates for
-    a Y-up Collada mesh (:data:`gdimitate.meshes.ASSIMP_Y_UP_UNDO`)."""
+    a Y-up Collada mesh (:data:`gdimitate.model.meshes.ASSIMP_Y_UP_UNDO`)."""
     if g.meshPath and collada_y_up(g.meshPath):
         return g.placement * pin.SE3(ASSIMP_Y_UP_UNDO, np.zeros(3))
     return g.placement

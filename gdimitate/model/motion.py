@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InvalidInputError, TimeGridError, UnknownNameError
+from ..errors import InvalidInputError, TimeGridError, UnknownNameError
 
 __all__ = ["Motion", "RobotRecord", "check_base_quaternion", "check_motion_layout",
            "check_time", "differentiate", "robot_layout"]
@@ -261,7 +261,8 @@ class Motion:
         if self.v is None or self.a is None:
             raise InvalidInputError(
                 f"{who} needs the motion's velocity and acceleration (motion.v, motion.a); add "
-                "them with gdimitate.motion.differentiate(robot.model, motion, cutoff_hz=...)")
+                "them with gdimitate.model.motion.differentiate(robot.model, motion, "
+                "cutoff_hz=...)")
         return self.v, self.a
 
     def replace(self, **changes) -> Motion:
@@ -314,8 +315,8 @@ class Motion:
                 free-flyer base quaternion that is not of unit norm,
                 :func:`check_base_quaternion`).
         """
-        from .errors import FileFormatError
-        from .safety import open_npz
+        from ..errors import FileFormatError
+        from ..safety import open_npz
 
         with open_npz(path, ("t", "q", "joint_names", "joint_nq", "base_nq")) as z:
             contact = {k[8:]: z[k] for k in z.files if k.startswith("contact_")}
@@ -431,7 +432,7 @@ class RobotRecord:
     def from_npz(cls, path) -> RobotRecord | None:
         """The record stored in an NPZ motion file, or ``None`` if it has none (a file
         written without ``robot=``)."""
-        from .safety import open_npz
+        from ..safety import open_npz
 
         with open_npz(path) as z:
             if "robot_name" not in z.files:

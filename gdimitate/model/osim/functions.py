@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import OsimError
+from ...errors import OsimError
 
 __all__ = ["Function", "parse_function", "SUPPORTED_FUNCTIONS"]
 

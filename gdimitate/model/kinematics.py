@@ -13,7 +13,8 @@ The one place for what many modules need of a robot's configurations ``q`` ``(T,
   (:func:`kinematic_contact`);
 - a robot's configurations as a :class:`~gdimitate.Motion` (:func:`robot_motion`).
 
-It takes the robot as an argument and imports :mod:`gdimitate.robot` for type annotations only,
+It takes the robot as an argument and imports :mod:`gdimitate.model.robot` for type annotations
+only,
 so loaders below :class:`~gdimitate.Robot` (``gdimitate.opensim``) can use it without a cycle.
 """
 
@@ -24,9 +25,10 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from .errors import InvalidInputError, UnknownNameError
+from ..errors import InvalidInputError, UnknownNameError
+from ..types import SIDES
 from .motion import Motion
-from .types import SIDES
+from .urdfgen import PLANAR_BASE
 
 if TYPE_CHECKING:
     from .robot import Robot
@@ -35,9 +37,6 @@ __all__ = ["Placements", "actuated_v_indices", "anchor_schedule", "anchored_base
            "base_joint_id", "base_nq", "base_v_indices", "check_q", "frame_paths",
            "frame_placements", "frame_rotations", "joint_paths", "kinematic_contact",
            "robot_motion", "PLANAR_BASE"]
-
-#: Joint names of our planar floating base (x, z, pitch), in q order.
-PLANAR_BASE = ("base_x", "base_z", "base_pitch")
 
 
 def check_q(robot: Robot, q: np.ndarray) -> np.ndarray:

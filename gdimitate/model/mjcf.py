@@ -1,4 +1,4 @@
-"""A MuJoCo model built from a :class:`~gdimitate.robot.Robot`'s Pinocchio model.
+"""A MuJoCo model built from a :class:`~gdimitate.model.robot.Robot`'s Pinocchio model.
 
 The :class:`mujoco.MjSpec` is assembled programmatically from the ``pin.Model`` — bodies,
 joint axes, placements, masses and inertias in Pinocchio's joint order — so it works for any
@@ -45,9 +45,9 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from ..contact import SoleContact
 from ..errors import SimModelError
-from ..robot import PLANAR_BASE, SIDES, Robot
+from .contact import SoleContact
+from .robot import PLANAR_BASE, SIDES, Robot
 
 __all__ = ["ModelOptions", "SimModel", "build_model"]
 

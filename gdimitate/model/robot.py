@@ -1,17 +1,17 @@
 """``Robot``: a Pinocchio model with its legs and soles, for any leg joint axes.
 
 Each leg is named by its hip, knee and ankle joints and its sole frame (detected from the
-model's names and chains, or given: :mod:`gdimitate.legs`) and measured at the neutral pose
-(:class:`~gdimitate.legs.Leg`). The robot's own "forward/left/up" is measured too (legs point
+model's names and chains, or given: :mod:`gdimitate.model.legs`) and measured at the neutral pose
+(:class:`~gdimitate.model.legs.Leg`). The robot's own "forward/left/up" is measured too (legs point
 down, the left hip is on the left), so Y-up models such as example-robot-data's ``human`` or
 iCub (x backwards) are turned to face +x with z up by a constant base rotation
 :attr:`Robot.base_rotation`. The soles' rectangles are measured from the feet's geometry
-(:func:`gdimitate.contact.sole_contacts`).
+(:func:`gdimitate.model.contact.sole_contacts`).
 
 Nothing here asks a leg to move in the sagittal plane: the paper's planar measurements (joint
 signs and offsets for Eq. (1)) are :func:`gdimitate.planar.sagittal_leg`'s, computed when asked.
-Loading from files is :mod:`gdimitate.loading`'s (the ``from_*``/``load`` class methods),
-the URDF checks :mod:`gdimitate.urdfcheck`'s.
+Loading from files is :mod:`gdimitate.model.loading`'s (the ``from_*``/``load`` class methods),
+the URDF checks :mod:`gdimitate.model.urdfcheck`'s.
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ..errors import ContactError, UnknownNameError
+from ..types import BaseKind
 from . import loading
 from .contact import SoleContact, sole_contacts
-from .errors import ContactError, UnknownNameError
-from .kinematics import PLANAR_BASE
 from .legs import (
     LEG_PRESETS,
     SIDES,
@@ -37,13 +37,13 @@ from .legs import (
     sole_from_geometry,
 )
 from .library import MASSLESS_PRESETS
-from .types import BaseKind
 from .urdfcheck import INERTIA_TOL, check_urdf_joints, check_urdf_physics
-from .urdfgen import PlanarBipedSpec
+from .urdfgen import PLANAR_BASE, PlanarBipedSpec
 
 #: ``Leg``, ``SIDES``, ``PLANAR_BASE``, the presets and the URDF checks are re-exported (their
-#: homes: :mod:`gdimitate.legs`, :mod:`gdimitate.kinematics`, :mod:`gdimitate.library`,
-#: :mod:`gdimitate.urdfcheck`)
+#: homes: :mod:`gdimitate.model.legs`, :mod:`gdimitate.model.kinematics`,
+#: :mod:`gdimitate.model.library`,
+#: :mod:`gdimitate.model.urdfcheck`)
 __all__ = ["INERTIA_TOL", "LEG_PRESETS", "Leg", "MASSLESS_PRESETS", "PLANAR_BASE", "Robot",
            "SIDES", "base_kind", "check_urdf_joints", "check_urdf_physics"]
 
@@ -71,7 +71,7 @@ class Robot:
     the model to face +x with z up); ``neutral`` (``(nq,)``, the neutral pose standing on
     z = 0); ``package_dir``; ``urdf_path`` (``None`` for in-memory models); ``contacts``
     (``{"left": SoleContact, "right": SoleContact}``, the flat-foot contacts of
-    :mod:`gdimitate.contact`, measured from the feet's geometry unless given; empty for
+    :mod:`gdimitate.model.contact`, measured from the feet's geometry unless given; empty for
     point-footed robots such as Bolt; ``contact_problems`` says why a foot has none);
     ``collision_model`` (``pin.GeometryModel`` or ``None``).
 
@@ -131,7 +131,7 @@ class Robot:
         Before Pinocchio reads the file it is checked (``docs/security.md``): its size, link
         count and depth (:mod:`gdimitate.safety`), its inertial data
         (:func:`check_urdf_physics`), and every mesh reference, which must resolve inside the
-        URDF's folder or a package directory (:func:`gdimitate.meshes.confine_meshes`).
+        URDF's folder or a package directory (:func:`gdimitate.model.meshes.confine_meshes`).
 
         Raises:
             URDFError: naming the file and the link or mesh at fault

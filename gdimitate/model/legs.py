@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .errors import LegDetectionError, UnknownNameError
-from .types import SIDES
+from ..errors import LegDetectionError, UnknownNameError
+from ..types import SIDES
 
 __all__ = ["LEG_PRESETS", "Leg", "SIDES", "hip_height", "legs_example", "measure_leg",
            "measure_orientation", "resolve_leg_names", "side_of", "sole_from_geometry"]

@@ -14,7 +14,7 @@ vertical by the heading yaw ψ (:func:`walk_heading`), x along the walk, y to it
   heading frame. Pinocchio's free-flyer velocities are in the base's local frame, the sole
   wrenches in the sole's: a turn leaves them as they are.
 - :func:`on_clock`, :func:`forces_on_clock`: a demonstration on a clock running ``scale``
-  times as long (Froude's time scaling of a gait, :mod:`gdimitate.footsteps`).
+  times as long (Froude's time scaling of a gait, :mod:`gdimitate.model.footsteps`).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..errors import InvalidInputError
 from .contact import ContactForces, FootForces
-from .errors import InvalidInputError
 from .motion import Motion
 
 __all__ = ["MIN_TRAVEL", "walk_heading", "facing_yaw", "yaw_matrix", "turn_motion",

@@ -63,7 +63,7 @@ class MeshReference(NamedTuple):
 
 
 def _erd_package_dir() -> Path | None:
-    from .errors import URDFError
+    from ..errors import URDFError
     from .library import erd_robots_dir
 
     try:
@@ -84,7 +84,7 @@ def resolve_mesh(filename: str, urdf_dir: Path, package_dirs: Sequence[Path]
     Raises:
         MeshPathError: another URL scheme.
     """
-    from .errors import MeshPathError
+    from ..errors import MeshPathError
 
     roots = [urdf_dir, *package_dirs]
     scheme, sep, rest = filename.partition("://")
@@ -128,7 +128,7 @@ def confine_meshes(root: ET.Element, urdf_path: Path, package_dirs: Sequence[Pat
             (``package://../..``, an absolute path, ``file://`` elsewhere, a symlink out) or
             a missing file.
     """
-    from .errors import MeshPathError
+    from ..errors import MeshPathError
 
     urdf_dir = Path(os.path.realpath(urdf_path.parent))
     owner = {c: p for p in root.iter() for c in p}

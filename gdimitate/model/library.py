@@ -14,7 +14,7 @@ import importlib.metadata
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import UnknownRobotError, URDFError
+from ..errors import UnknownRobotError, URDFError
 
 __all__ = ["LibraryEntry", "LIBRARY", "MASSLESS_PRESETS", "erd_robots_dir", "library_entry",
            "list_robots"]
@@ -53,7 +53,7 @@ LIBRARY: dict[str, LibraryEntry] = {
 }
 
 #: Joints of library robots whose subtrees are massless on purpose (Romeo's hands: every
-#: finger link has mass 0); see :func:`gdimitate.urdfcheck.check_urdf_physics`.
+#: finger link has mass 0); see :func:`gdimitate.model.urdfcheck.check_urdf_physics`.
 MASSLESS_PRESETS: dict[str, tuple[str, ...]] = {
     "romeo": tuple(f"{s}{j}" for s in "LR" for j in ("Hand", "Finger21", "Finger31", "Thumb1")),
 }

@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OsimError, OsimLimitError
-from ..safety import parse_xml
+from ...errors import OsimError, OsimLimitError
+from ...safety import parse_xml
 from .functions import Function, parse_function
 
 __all__ = ["OsimBody", "OsimCoordinate", "TransformAxis", "OsimJoint", "OsimMarker",
@@ -242,7 +242,7 @@ def _load_xml(path: Path) -> ET.Element:
     size = path.stat().st_size
     if size > MAX_OSIM_BYTES:
         raise OsimLimitError(f"{path}: {size:,} bytes is over the {MAX_OSIM_BYTES:,} bytes an "
-                             "OpenSim model may have (gdimitate.opensim.model.MAX_OSIM_BYTES; "
+                             "OpenSim model may have (gdimitate.model.osim.model.MAX_OSIM_BYTES; "
                              "real models are a few MB): is it a model file?")
     try:
         raw = path.read_bytes()

@@ -25,9 +25,9 @@ from typing import cast
 
 import numpy as np
 
-from .errors import UnlimitedJointWarning, URDFError, URDFLimitError
-from .kinematics import PLANAR_BASE
-from .safety import MAX_URDF_DOF, MAX_URDF_GEOMETRIES
+from ..errors import UnlimitedJointWarning, URDFError, URDFLimitError
+from ..safety import MAX_URDF_DOF, MAX_URDF_GEOMETRIES
+from .urdfgen import PLANAR_BASE
 
 __all__ = ["INERTIA_TOL", "JOINT_DOF", "MAX_LINK_INERTIA", "MAX_LINK_MASS_KG",
            "MAX_URDF_LENGTH_M", "check_urdf_joints", "check_urdf_physics", "check_urdf_size",
@@ -83,14 +83,14 @@ def _inertial(link: ET.Element, source: object) -> tuple[float, np.ndarray]:
         raise URDFError(f"{source}: link {name!r} has mass {m:g} kg; a mass must be >= 0")
     if m > MAX_LINK_MASS_KG:
         raise URDFError(f"{source}: link {name!r} has mass {m:g} kg; the limit is "
-                        f"{MAX_LINK_MASS_KG:g} kg (gdimitate.urdfcheck.MAX_LINK_MASS_KG): is "
+                        f"{MAX_LINK_MASS_KG:g} kg (gdimitate.model.urdfcheck.MAX_LINK_MASS_KG): is "
                         "the unit right?")
     i = el.find("inertia")
     c = {k: num(i, k, f"<inertia {k}>") for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")}
     big = [k for k, v in c.items() if abs(v) > MAX_LINK_INERTIA]
     if big:
         raise URDFError(f"{source}: link {name!r}: <inertia {big[0]}={c[big[0]]:g}> kg·m² "
-                        f"exceeds {MAX_LINK_INERTIA:g} kg·m² (gdimitate.urdfcheck."
+                        f"exceeds {MAX_LINK_INERTIA:g} kg·m² (gdimitate.model.urdfcheck."
                         "MAX_LINK_INERTIA): is the unit right?")
     origin = el.find("origin")
     for key in ("xyz", "rpy"):
@@ -210,7 +210,7 @@ def check_urdf_joints(root: ET.Element, source: object) -> None:
                 if tag == "origin" and max(map(abs, vals)) > MAX_URDF_LENGTH_M:
                     raise URDFError(f"{source}: {what}: <origin xyz={given!r}>"
                                     f" is more than {MAX_URDF_LENGTH_M:g} m from its parent "
-                                    "(gdimitate.urdfcheck.MAX_URDF_LENGTH_M): is the unit "
+                                    "(gdimitate.model.urdfcheck.MAX_URDF_LENGTH_M): is the unit "
                                     "right?")
                 if tag == "axis" and math.hypot(*vals) < 1e-9 and el.tag == "joint" and \
                         el.get("type") != "fixed":
@@ -290,7 +290,7 @@ def _geometry(what: str, geo: ET.Element, source: object) -> None:
         if bad:
             what_range = f"±({lo:g}…{hi:g})" if signed else f"{lo:g}…{hi:g}{unit}"
             raise URDFError(f"{source}: {what}: <{el.tag} {key}={text!r}>: {bad[0]:g} is outside "
-                            f"{what_range} (gdimitate.urdfcheck.{bound}): is the unit right?")
+                            f"{what_range} (gdimitate.model.urdfcheck.{bound}): is the unit right?")
 
     for shape in geo:
         if shape.tag == "box":

@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from .errors import GdimitateError, InvalidInputError
+from ..errors import GdimitateError, InvalidInputError
 
 __all__ = ["MAX_FRICTION", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_JSON_DIGITS",
            "MAX_SOLE_HALF_SIZE_M", "check_contacts", "check_legs", "loads_json", "path_arg",
@@ -92,11 +92,11 @@ def loads_json(text: str | bytes, where: str,
                     ) from None
     if len(text) > MAX_JSON_BYTES:
         raise error(f"{where}: {len(text):,} characters of JSON; the limit is "
-                    f"{MAX_JSON_BYTES:,} (gdimitate.inputs.MAX_JSON_BYTES)")
+                    f"{MAX_JSON_BYTES:,} (gdimitate.model.inputs.MAX_JSON_BYTES)")
     d = _depth(text)
     if d > MAX_JSON_DEPTH:
         raise error(f"{where}: JSON nested {d:,} deep; the limit is {MAX_JSON_DEPTH} "
-                    "(gdimitate.inputs.MAX_JSON_DEPTH)")
+                    "(gdimitate.model.inputs.MAX_JSON_DEPTH)")
 
     def number(s: str) -> float:
         v = float(s)
@@ -131,7 +131,7 @@ def read_json(path: str | os.PathLike, what: str,
         size = p.stat().st_size
         if size > MAX_JSON_BYTES:
             raise error(f"{what} {p}: {size:,} bytes; the limit for a JSON option file is "
-                        f"{MAX_JSON_BYTES:,} (gdimitate.inputs.MAX_JSON_BYTES)")
+                        f"{MAX_JSON_BYTES:,} (gdimitate.model.inputs.MAX_JSON_BYTES)")
         data = p.read_bytes()
     except OSError as e:
         raise error(f"{what} {p}: cannot read it ({e.strerror or e})") from None
@@ -207,4 +207,4 @@ def check_contacts(contacts: object, where: str = "contacts=") -> None:
             if not (math.isfinite(x) and 0 < x <= hi):
                 raise InvalidInputError(
                     f"{where}[{side!r}][{key!r}] = {v!r:.40} must be a finite number in (0, "
-                    f"{hi:g}]{unit} (gdimitate.inputs.{bound}): is the unit right?")
+                    f"{hi:g}]{unit} (gdimitate.model.inputs.{bound}): is the unit right?")

@@ -62,16 +62,27 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import OsimError
+from ...errors import OsimError, UnitError
 from .functions import Function
 from .model import OsimJoint, OsimModel, read_osim
 
-__all__ = ["WORLD_FROM_OPENSIM", "Step", "Approximation", "JointPlan", "plan_joint",
+__all__ = ["WORLD_FROM_OPENSIM", "ground_to_world", "Step", "Approximation", "JointPlan",
+           "plan_joint",
            "joint_transform", "pelvis_to_freeflyer", "root_joint", "follow_coordinates"]
 
 #: Rotation turning OpenSim's ground axes (X forward, Y up, Z right) into ours (x forward,
 #: y left, z up): v_ours = WORLD_FROM_OPENSIM @ v_osim, i.e. x = X, y = −Z, z = Y.
 WORLD_FROM_OPENSIM = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+
+def ground_to_world(up: str) -> np.ndarray:
+    """Rotation ``(3, 3)`` from a lab frame with X forward and ``up`` (``"Y"``: OpenSim's
+    ground, Z to the right; ``"Z"``: Y to the left) to our world (x forward, y left, z up)."""
+    if up.upper() == "Y":
+        return WORLD_FROM_OPENSIM.copy()
+    if up.upper() == "Z":
+        return np.eye(3)
+    raise UnitError(f"up axis must be 'Y' or 'Z'; got {up!r}")
 
 
 def rotations(axis: np.ndarray, angle: np.ndarray | float) -> np.ndarray:
@@ -351,7 +362,7 @@ def pelvis_to_freeflyer(values: Mapping[str, np.ndarray],
     ``values``: root-joint coordinate name → (T,) values in radians and metres (e.g.
     ``pelvis_tilt``, ``pelvis_list``, ``pelvis_rotation``, ``pelvis_tx``, ``pelvis_ty``,
     ``pelvis_tz``; convert degrees first); missing ones take their default values.
-    ``model``: the :class:`~gdimitate.opensim.model.OsimModel` or ``.osim`` path whose root
+    ``model``: the :class:`~gdimitate.model.osim.model.OsimModel` or ``.osim`` path whose root
     joint defines the coordinates (its axes, order, offsets). Returns ``(T, 7)``
     ``[x, y, z, qx, qy, qz, qw]``: the pose of the URDF root link written by
     :func:`~gdimitate.opensim.opensim_to_urdf`, position = C·p, rotation = C·R·Cᵀ with

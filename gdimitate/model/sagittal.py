@@ -24,18 +24,18 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InvalidInputError, LegDetectionError
-from ..kinematics import (
+from ..types import SIDES
+from .kinematics import (
     anchored_base_offsets,
     frame_paths,
     joint_paths,
     kinematic_contact,
     robot_motion,
 )
-from ..kinematics import check_q as _check_q
-from ..types import SIDES
+from .kinematics import check_q as _check_q
 
 if TYPE_CHECKING:
-    from ..robot import Robot
+    from .robot import Robot
 
 __all__ = ["SagittalLeg", "compose_q", "frame_paths", "ground_base", "joint_paths",
            "kinematic_contact", "leg_angles", "robot_motion", "sagittal_leg", "torso_angle"]
@@ -188,7 +188,7 @@ def ground_base(robot: Robot, q: np.ndarray, contact: Mapping[str, np.ndarray],
     Base height: the lowest stance sole touches z = 0 (interpolated through flight phases).
     Base x: the *anchor* foot — the stance foot that has been down longest — stays where it
     landed; when it lifts off, the other stance foot becomes the anchor where it stands
-    (:func:`gdimitate.kinematics.anchored_base_offsets`). In double support the second foot
+    (:func:`gdimitate.model.kinematics.anchored_base_offsets`). In double support the second foot
     may slide if the legs disagree: that is what the metrics report. ``x0``: initial x of the
     base [m]. Returns a new ``(T, nq)`` array.
     """

@@ -25,17 +25,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import (
+from ...errors import (
     MarkerGapWarning,
     OpenSimDataError,
     ResourceLimitError,
     TimeGridError,
     UnitError,
 )
+from ...safety import MAX_TABLE_BYTES, read_text_bounded
 from ..motion import check_time
-from ..safety import MAX_TABLE_BYTES, read_text_bounded
 from ._table import iter_lines
-from .grf import ground_to_world
+from .joints import ground_to_world
 
 __all__ = ["Markers", "read_trc"]
 
@@ -77,7 +77,7 @@ class Markers:
         try:
             return self.xyz[:, self.names.index(name)]
         except ValueError:
-            from ..errors import UnknownNameError
+            from ...errors import UnknownNameError
 
             raise UnknownNameError("marker", name, self.names) from None
 
@@ -196,7 +196,7 @@ def _rows(it, cap: int, n: int, path: Path) -> tuple[np.ndarray, int]:
         raise ResourceLimitError(
             f"{path}: {cap:,} lines of {n} markers would need {8e-9 * cap * (1 + 3 * n):.2f} "
             f"GB as numbers; the limit is {MAX_TRC_ARRAY_BYTES / 1e9:g} GB "
-            "(gdimitate.opensim.trc.MAX_TRC_ARRAY_BYTES): cut the trial or drop markers")
+            "(gdimitate.model.osim.trc.MAX_TRC_ARRAY_BYTES): cut the trial or drop markers")
     data = np.empty((cap, 1 + 3 * n))
     rows = 0
     for lineno, ln in ((k + 5, x) for k, x in it):

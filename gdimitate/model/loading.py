@@ -5,7 +5,7 @@ Each loader builds Pinocchio models from its source and hands them to the class 
 (``cls``, :class:`~gdimitate.Robot` or a subclass), whose constructor detects and measures the
 legs and soles. The ``Robot.from_urdf``/``from_osim``/``from_spec``/``from_library``/``load``
 class methods are these functions with ``cls`` bound. This module imports
-:mod:`gdimitate.robot` for type annotations only, so the model class does not depend on the
+:mod:`gdimitate.model.robot` for type annotations only, so the model class does not depend on the
 file formats it can be read from (OpenSim is imported when an ``.osim`` is loaded).
 """
 
@@ -15,34 +15,52 @@ import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import pinocchio as pin
 
-from .errors import InvalidInputError, MeshPathError, UnknownRobotError, URDFError, URDFLimitError
+from ..errors import InvalidInputError, MeshPathError, UnknownRobotError, URDFError, URDFLimitError
+from ..safety import MAX_URDF_BYTES, check_urdf_bounds, parse_xml, read_text_bounded
+from ..types import SIDES
 from .inputs import check_contacts, check_legs, path_arg
-from .kinematics import PLANAR_BASE
 from .legs import LEG_PRESETS
 from .library import LIBRARY, MASSLESS_PRESETS, library_entry, list_robots
 from .meshes import confine_meshes
-from .safety import MAX_URDF_BYTES, check_urdf_bounds, parse_xml, read_text_bounded
-from .types import SIDES
 from .urdfcheck import (
     check_urdf_joints,
     check_urdf_physics,
     check_urdf_size,
     check_urdf_structure,
 )
-from .urdfgen import PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
+from .urdfgen import PLANAR_BASE, PLANAR_MODELS, PlanarBipedSpec, planar_biped_urdf
 
 if TYPE_CHECKING:
     from .contact import SoleContact
-    from .robot import Robot
 
 __all__ = ["from_library", "from_osim", "from_spec", "from_urdf", "load", "read_urdf"]
 
 LegNames = Mapping[str, Mapping[str, str | None]]
 Contacts = Mapping[str, "SoleContact | Mapping"]
+
+
+class Built(Protocol):
+    """The class a loader is given (:class:`~gdimitate.Robot` or a subclass): its constructor's
+    arguments and the attributes the loaders set. A protocol, so that this module does not
+    import :mod:`.robot`, whose class methods are these loaders."""
+
+    urdf_path: Path | None
+    osim: Any
+    spec: PlanarBipedSpec
+    load_args: dict[str, Any]
+
+    def __init__(self, name: str, model: pin.Model, visual_model: pin.GeometryModel | None,
+                 legs: LegNames | None = None, package_dir: Path | None = None,
+                 urdf_path: Path | None = None, contacts: Contacts | None = None,
+                 collision_model: pin.GeometryModel | None = None) -> None: ...
+
+
+#: the class a loader builds, and returns an instance of
+R = TypeVar("R", bound=Built)
 
 
 def _package_dirs(path: Path, package_dir: str | Path | Sequence[str | Path] | None
@@ -120,11 +138,11 @@ def _read_checked(path: Path, root: ET.Element,
     return model, geoms[0], geoms[1], pkgs
 
 
-def from_urdf(cls: type[Robot], path: str | Path, legs: LegNames | None = None, *,
+def from_urdf(cls: type[R], path: str | Path, legs: LegNames | None = None, *,
               name: str | None = None,
               package_dir: str | Path | Sequence[str | Path] | None = None,
               floating: bool | None = None, contacts: Contacts | None = None,
-              massless_joints: Iterable[str] = ()) -> Robot:
+              massless_joints: Iterable[str] = ()) -> R:
     """:meth:`gdimitate.Robot.from_urdf` (its docstring): :func:`read_urdf`, then ``cls``.
     The arguments' types are checked first (:class:`InvalidInputError` naming the argument)."""
     path = path_arg("path", path)
@@ -139,11 +157,11 @@ def from_urdf(cls: type[Robot], path: str | Path, legs: LegNames | None = None, 
                path, contacts=contacts, collision_model=collision)
 
 
-def from_osim(cls: type[Robot], path: str | Path, *, name: str | None = None,
-              markers: Any = None) -> Robot:
+def from_osim(cls: type[R], path: str | Path, *, name: str | None = None,
+              markers: Any = None) -> R:
     """:meth:`gdimitate.Robot.from_osim` (its docstring): the model converted into a temporary
     folder by :func:`gdimitate.opensim.convert_osim`, loaded with its legs and sole boxes."""
-    from .opensim import convert_osim
+    from .osim.urdf import convert_osim
 
     with tempfile.TemporaryDirectory(prefix="gdimitate_osim_") as tmp:
         conv = convert_osim(path, Path(tmp) / f"{Path(path).stem}.urdf", markers=markers)
@@ -158,7 +176,7 @@ def from_osim(cls: type[Robot], path: str | Path, *, name: str | None = None,
     return robot
 
 
-def from_spec(cls: type[Robot], spec: PlanarBipedSpec) -> Robot:
+def from_spec(cls: type[R], spec: PlanarBipedSpec) -> R:
     """:meth:`gdimitate.Robot.from_spec`: one of our planar bipeds from its spec (the same text
     ``urdf/`` holds)."""
     xml = planar_biped_urdf(spec)
@@ -171,10 +189,10 @@ def from_spec(cls: type[Robot], spec: PlanarBipedSpec) -> Robot:
     return robot
 
 
-def from_library(cls: type[Robot], name: str) -> Robot:
+def from_library(cls: type[R], name: str) -> R:
     """:meth:`gdimitate.Robot.from_library`: our planar models or an example-robot-data model
-    with its presets (:data:`gdimitate.legs.LEG_PRESETS`,
-    :data:`gdimitate.library.MASSLESS_PRESETS`)."""
+    with its presets (:data:`gdimitate.model.legs.LEG_PRESETS`,
+    :data:`gdimitate.model.library.MASSLESS_PRESETS`)."""
     if not isinstance(name, str):
         raise InvalidInputError(f"robot name must be a str; got {type(name).__name__} "
                                 f"{name!r:.80}; library names: {list_robots()}")
@@ -187,9 +205,9 @@ def from_library(cls: type[Robot], name: str) -> Robot:
                      floating=True, massless_joints=MASSLESS_PRESETS.get(name, ()))
 
 
-def load(cls: type[Robot], spec: str | Path, *, package_dir: str | Path | None = None,
+def load(cls: type[R], spec: str | Path, *, package_dir: str | Path | None = None,
          contacts: Contacts | None = None, legs: LegNames | None = None,
-         massless_joints: Iterable[str] = ()) -> Robot:
+         massless_joints: Iterable[str] = ()) -> R:
     """:meth:`gdimitate.Robot.load` (its docstring): a library name or a ``.urdf``/``.osim``
     path; the arguments kept as ``robot.load_args``."""
     if isinstance(spec, bytes) or not isinstance(spec, str | Path):
@@ -212,9 +230,9 @@ def _joint_names(names: Iterable[str]) -> tuple[str, ...]:
     return tuple(names)
 
 
-def _dispatch(cls: type[Robot], text: str, package_dir: str | Path | None,
+def _dispatch(cls: type[R], text: str, package_dir: str | Path | None,
               contacts: Contacts | None, legs: LegNames | None,
-              massless: tuple[str, ...] = ()) -> Robot:
+              massless: tuple[str, ...] = ()) -> R:
     p = Path(text).expanduser()
     if text in list_robots() and not p.suffix:
         if legs is None and contacts is None and package_dir is None and not massless:

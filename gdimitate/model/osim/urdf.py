@@ -2,7 +2,7 @@
 
 * Every body becomes a link of the same name (mass, centre of mass, inertia about it).
 * The ground→pelvis joint becomes the free-flyer: the URDF starts at the root body, and
-  :func:`~gdimitate.opensim.joints.pelvis_to_freeflyer` maps the six root coordinates to
+  :func:`~gdimitate.model.osim.joints.pelvis_to_freeflyer` maps the six root coordinates to
   Pinocchio's ``q[:7]``.
 * Every other joint becomes a chain of revolute/prismatic URDF joints named after the
   coordinates, through massless links ``<joint>__<coordinate>``, then a fixed joint
@@ -12,7 +12,7 @@
   Coordinate ranges become joint limits; OpenSim has no torque or speed limits (muscles drive
   the model), so the URDF carries nominal ones, :data:`EFFORT_LIMIT` and :data:`VELOCITY_LIMIT`.
 * OpenSim's Y-up axes are turned to ours (x forward, y left, z up) by conjugating every
-  constant transform with :data:`~gdimitate.opensim.joints.WORLD_FROM_OPENSIM`; each link
+  constant transform with :data:`~gdimitate.model.osim.joints.WORLD_FROM_OPENSIM`; each link
   frame is the OpenSim body frame with its axes renamed, so the model stands upright facing +x
   at q = 0.
 * Markers become frames (links on fixed joints) named after the markers.
@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import yourdfpy
 
-from ..errors import OsimError
+from ...errors import OsimError
 from .joints import (
     WORLD_FROM_OPENSIM,
     Approximation,
@@ -67,7 +67,7 @@ class OsimConversion:
     """What :func:`convert_osim` wrote and found.
 
     ``urdf``: the file; ``model``: the parsed OpenSim model; ``plans``: one
-    :class:`~gdimitate.opensim.joints.JointPlan` per non-root joint; ``approximations``: the
+    :class:`~gdimitate.model.osim.joints.JointPlan` per non-root joint; ``approximations``: the
     joints whose coupled motions were approximated (with their measured errors); ``root``:
     the root body; ``root_joint``: the OpenSim joint replaced by the free-flyer; ``legs``:
     ``{"left": {"hip", "knee", "ankle", "sole", "contact", "foot"}, "right": …}`` (URDF joint
@@ -222,7 +222,7 @@ def _foot_box(model, poses, foot: str, floor: dict[str, float] | None = None):
 
 def marker_floor_heights(markers) -> dict[str, float]:
     """``{marker: its lowest recorded height [m]}`` over a marker trial (a ``.trc`` path or
-    :class:`~gdimitate.opensim.trc.Markers`; our world frame, the lab floor at z = 0 as
+    :class:`~gdimitate.model.osim.trc.Markers`; our world frame, the lab floor at z = 0 as
     OpenSim's ground has it) — the 1st percentile of its heights, robust to a stray frame.
     Markers never seen are left out."""
     from .trc import Markers, read_trc
@@ -296,7 +296,7 @@ def convert_osim(osim_path: str | Path, out: str | Path | None = None, *,
                  markers=None) -> OsimConversion:
     """Convert an ``.osim`` file to a URDF; see the module docstring. ``out``: the URDF path
     (default: ``<stem>.urdf`` in a new temporary folder). ``markers``: a marker trial of the
-    model's subject (``.trc`` path or :class:`~gdimitate.opensim.trc.Markers`, lab floor at
+    model's subject (``.trc`` path or :class:`~gdimitate.model.osim.trc.Markers`, lab floor at
     z = 0) that places each sole on the floor below the foot's markers
     (:func:`marker_floor_heights`); without one the soles lie at the bones. Returns an
     :class:`OsimConversion`."""
@@ -402,8 +402,8 @@ def opensim_to_urdf(osim_path: str | Path, out: str | Path | None = None) -> Pat
     ``out``: where to write (default ``<stem>.urdf`` in a new temporary folder). Load the
     result with ``Robot.from_osim`` (free-flyer, legs and soles set) or Pinocchio with a
     ``JointModelFreeFlyer`` root. Joint names are the OpenSim coordinate names; see the module
-    docstring of :mod:`gdimitate.opensim.urdf` for frames and shapes and
-    :mod:`gdimitate.opensim.joints` for approximated couplings (gait2354 knees: a fixed hinge
+    docstring of :mod:`gdimitate.model.osim.urdf` for frames and shapes and
+    :mod:`gdimitate.model.osim.joints` for approximated couplings (gait2354 knees: a fixed hinge
     within 3.2 mm of the spline knee over its range, 1.6 mm over subject01's walk). Raises
     :class:`~gdimitate.errors.OsimError` on malformed models.
     """

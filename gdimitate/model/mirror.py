@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..errors import InvalidInputError
 from .contact import ContactForces, FootForces
-from .errors import InvalidInputError
 from .motion import Motion
 from .robot import Robot
 

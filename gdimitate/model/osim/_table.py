@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OpenSimDataError, OpenSimFormatError, ResourceLimitError, TimeGridError
-from ..safety import MAX_TABLE_BYTES, read_text_bounded
+from ...errors import OpenSimDataError, OpenSimFormatError, ResourceLimitError, TimeGridError
+from ...safety import MAX_TABLE_BYTES, read_text_bounded
 
 __all__ = ["Table", "read_table"]
 

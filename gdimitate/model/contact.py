@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .errors import ContactError, InvalidInputError
+from ..errors import ContactError, InvalidInputError
 from .meshes import ASSIMP_Y_UP_UNDO, collada_y_up
 
 __all__ = [
@@ -234,7 +234,7 @@ class ContactForces:
 def geometry_vertices(geom: object, placement: pin.SE3, mesh_path: str = ""
                       ) -> np.ndarray | None:
     """Vertices ``(n, 3)`` of an hpp-fcl geometry (meshes: their vertices, Y-up Collada files
-    turned back as :mod:`gdimitate.meshes` explains; boxes: 8 corners; cylinders, capsules,
+    turned back as :mod:`gdimitate.model.meshes` explains; boxes: 8 corners; cylinders, capsules,
     spheres: enclosing polygons) mapped by ``placement``; None when the shape has no extent we
     can read."""
     v = None
