@@ -43,11 +43,11 @@ _CHILD = textwrap.dedent("""
     import gdimitate as gd
     case, N = sys.argv[1], int(sys.argv[2])
     if case == "hoap2":
-        from gdimitate.gait import human_walk
+        from gdimitate.io.gait import human_walk
         h, demo = human_walk(); fs = None; robot = gd.Robot.from_library("hoap2")
         kw = dict(force="segment")
     elif case == "cmu":
-        from gdimitate.demonstration import load_demonstration
+        from gdimitate.io.demonstration import load_demonstration
         d = load_demonstration("gdimitate/data/gait/cmu_02_01/cmu_02_01.bvh")
         h, demo, fs = d.robot, d.motion, d.forces
         robot = gd.Robot.from_library("g1")

@@ -22,7 +22,7 @@ from pathlib import Path
 from results import add_flag, recording
 
 from gdimitate.batch import BatchOptions, run_batch
-from gdimitate.gait import human_walk_path
+from gdimitate.io.gait import human_walk_path
 
 
 def write_inputs(folder: Path, files: int, frames: int) -> None:

@@ -46,7 +46,7 @@ _CHILD = textwrap.dedent("""
     from gdimitate.model.contact import ContactForces, FootForces
     clip, variant, name, scaling, simulate = sys.argv[1:6]
     if clip == "cmu":
-        from gdimitate.demonstration import load_demonstration
+        from gdimitate.io.demonstration import load_demonstration
         d = load_demonstration("gdimitate/data/gait/cmu_02_01/cmu_02_01.bvh")
         h, demo, fs, force = d.robot, d.motion, d.forces, "segment"
     else:

@@ -57,7 +57,7 @@ _CHILD = textwrap.dedent("""
     warnings.simplefilter("ignore")
     import gdimitate as gd
     from gdimitate.audit import audit
-    from gdimitate.model.kinematics import robot_motion
+    from gdimitate.kinematics import robot_motion
     name, frames, force, mode, start, use_v = sys.argv[1:7]
     frames, start, use_v, warm = int(frames), float(start), use_v == "1", 5
     h, m, f = gd.gait.human_walk_3d()

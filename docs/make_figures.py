@@ -122,8 +122,8 @@ def arms_g1() -> Path:
     import matplotlib.pyplot as plt
 
     import gdimitate as gd
+    from gdimitate.io.opensim import read_coordinates, read_grf
     from gdimitate.model.selfcollision import self_collision
-    from gdimitate.opensim import read_coordinates, read_grf
     from gdimitate.retarget.bodymap import body_map, following
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "opensim_ref"))

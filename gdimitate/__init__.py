@@ -10,7 +10,7 @@ The pipeline (docs/design.md §2)::
     cpg = gdimitate.entrain(robot, adapted.motion)           # Matsuoka network, free replay
 
 Gait-lab data: ``gdimitate.load_demonstration("model.osim", markers="trial.c3d")`` (marker
-inverse kinematics, force plates to feet; :mod:`gdimitate.c3d`, imported on first use).
+inverse kinematics, force plates to feet; :mod:`gdimitate.io.c3d`, imported on first use).
 The paper's planar case: ``gdimitate.adapt(demo, robot_m, imitator, "analytic")`` (Eq. 1).
 Viewers live in :mod:`gdimitate.viz` (imported on demand: it starts meshcat servers).
 Scenario code (the demo, the paper's figures, the baselines) lives in :mod:`gdimitate.apps`,
@@ -49,11 +49,7 @@ from .errors import (
 if TYPE_CHECKING:
     from . import (
         audit,
-        bvh,
-        c3d,
-        gait,
         metrics,
-        opensim,
         oscillator,
         planar,
         retarget,
@@ -64,8 +60,9 @@ if TYPE_CHECKING:
     from .apps.cases import paper_case
     from .audit.dataset import MotionAudit, audit_motion
     from .cpg import CPGReplay, entrain
-    from .demonstration import Demonstration, load_demonstration
     from .export import export_motion
+    from .io import bvh, c3d, gait, opensim
+    from .io.demonstration import Demonstration, load_demonstration
     from .metrics import ForceDirection
     from .model import contact
     from .model.contact import ContactForces, FootForces, SoleContact
@@ -94,8 +91,8 @@ _LAZY_NAMES: dict[str, str] = {
     "SoleContact": ".model.contact",
     "CPGReplay": ".cpg",
     "entrain": ".cpg",
-    "Demonstration": ".demonstration",
-    "load_demonstration": ".demonstration",
+    "Demonstration": ".io.demonstration",
+    "load_demonstration": ".io.demonstration",
     "export_motion": ".export",
     "list_robots": ".model.library",
     "ForceDirection": ".metrics",
@@ -120,12 +117,12 @@ _LAZY_NAMES: dict[str, str] = {
 #: public subpackages / modules (``gdimitate.sim`` etc.) -> where they live, imported on first use
 _LAZY_MODULES: dict[str, str] = {
     "audit": ".audit",
-    "bvh": ".bvh",
-    "c3d": ".c3d",
+    "bvh": ".io.bvh",
+    "c3d": ".io.c3d",
     "contact": ".model.contact",
-    "gait": ".gait",
+    "gait": ".io.gait",
     "metrics": ".metrics",
-    "opensim": ".opensim",
+    "opensim": ".io.opensim",
     "oscillator": ".oscillator",
     "planar": ".planar",
     "retarget": ".retarget",

@@ -149,11 +149,11 @@ def _add_demonstration_args(p: argparse.ArgumentParser, positional: str, default
 
 
 def _demonstration(path: str | None, a: argparse.Namespace):
-    """The command's demonstration (:func:`gdimitate.demonstration.load_demonstration`);
+    """The command's demonstration (:func:`gdimitate.io.demonstration.load_demonstration`);
     ``None`` → ``None``."""
     if path is None:
         return None
-    from .demonstration import load_demonstration
+    from .io.demonstration import load_demonstration
     from .model.robot import Robot
 
     robot = None

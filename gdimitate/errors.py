@@ -112,7 +112,7 @@ class CoordinateMismatchWarning(UserWarning):
 
 class BVHError(GdimitateError, ValueError):
     """A BVH motion-capture file that is missing or malformed (the message gives the line
-    number and what to fix), or a skeleton :func:`gdimitate.bvh.read_bvh` cannot convert."""
+    number and what to fix), or a skeleton :func:`gdimitate.io.bvh.read_bvh` cannot convert."""
 
 
 class MarkerGapWarning(UserWarning):
@@ -190,7 +190,7 @@ class PlanError(SimulationError, InvalidInputError):
 
 
 class DemonstrationFormatError(InvalidInputError):
-    """A demonstration file of a kind :func:`gdimitate.demonstration.load_demonstration`
+    """A demonstration file of a kind :func:`gdimitate.io.demonstration.load_demonstration`
     cannot read (the message lists the supported extensions), or arguments that format cannot
     use (e.g. ``coordinates=`` without an ``.osim``)."""
 

@@ -9,7 +9,7 @@ call :func:`export_motion`):
   written as the same 3-D pose, y = 0), then every joint [rad or m] in Pinocchio order (an
   unbounded revolute as its angle). A fixed base has no base columns. :func:`read_csv`.
 - ``"npz"``: :meth:`Motion.to_npz` with the robot recorded (name, source, fingerprint: read
-  back with :func:`gdimitate.demonstration.load_demonstration` without naming the robot),
+  back with :func:`gdimitate.io.demonstration.load_demonstration` without naming the robot),
   ``v``/``a`` ``(T, nv)`` where the motion has them, and, for an adaptor's output, the contact
   wrenches ``wrench_left``/``wrench_right`` ``(T, 6)`` ``[f; τ]`` [N, N·m] in each sole frame
   (``wrench_frame_left``/``_right`` name it) with, where the motion has ``v`` and ``a``,

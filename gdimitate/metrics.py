@@ -187,7 +187,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
         raise InvalidInputError("force_direction needs motion.contact for 'left' and 'right'")
     if model == "measured" and forces is None:
         raise InvalidInputError("force model 'measured' needs forces= (the demonstrator's "
-                                "measured ContactForces, e.g. from gdimitate.opensim.read_grf)")
+                                "measured ContactForces, e.g. from gdimitate.io.opensim.read_grf)")
     stance = {s: np.asarray(motion.contact[s], bool) for s in SIDES}
     push: dict[str, np.ndarray] = {}
     if model == "segment":

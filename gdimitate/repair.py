@@ -178,7 +178,7 @@ def repair_schedule(robot: Robot, motion: Motion, flat: float = FLAT_HEIGHT
     stance, _ = stance_schedule(robot, motion)
     if all(s in motion.contact for s in SIDES):
         return stance
-    from .bvh.contacts import estimate_floor, sole_corners
+    from .io.bvh.contacts import estimate_floor, sole_corners
 
     hip = hip_height(robot)
     corners = sole_corners(robot, motion.q)

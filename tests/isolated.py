@@ -2,7 +2,7 @@
 crash (a segfault inside a compiled reader), a hang or a huge allocation fails the test that
 provoked it instead of the whole suite (issue 33).
 
-``call("gdimitate.c3d:read_c3d", "trial.c3d")`` imports the function in a fresh interpreter,
+``call("gdimitate.io.c3d:read_c3d", "trial.c3d")`` imports the function in a fresh interpreter,
 calls it with the (JSON-able) arguments and reports what happened as an :class:`Outcome`.
 The child's address space is capped with ``RLIMIT_AS`` (``mem`` bytes) and its wall time
 with ``timeout`` seconds; BLAS and OpenMP run one thread so that their per-thread reserves

@@ -17,7 +17,7 @@ import gdimitate as gd
 from gdimitate.apps.cases import paper_case
 from gdimitate.audit import audit
 from gdimitate.cli import main
-from gdimitate.demonstration import load_demonstration
+from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
 from gdimitate.verdict import EXIT_NOT_FEASIBLE
 from gdimitate.wrenches import estimate_wrenches

@@ -319,7 +319,7 @@ def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
 
 
 def test_measured_forces_beside_a_demonstration_are_used(tmp_path):
-    from gdimitate.demonstration import load_demonstration
+    from gdimitate.io.demonstration import load_demonstration
 
     folder = gd.gait.human_walk_path().parent
     demos = tmp_path / "demos"
@@ -360,7 +360,7 @@ def _bvh_slices(folder: Path, starts: list[int], frames: int) -> list[Path]:
 
 @pytest.mark.slow
 def test_bvh_batch_optimal_matches_direct_adaptation(tmp_path):
-    from gdimitate.demonstration import load_demonstration
+    from gdimitate.io.demonstration import load_demonstration
 
     demos = tmp_path / "demos"
     demos.mkdir()

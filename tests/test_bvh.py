@@ -1,4 +1,4 @@
-"""gdimitate.bvh: BVH → Robot + Motion.
+"""gdimitate.io.bvh: BVH → Robot + Motion.
 
 References: the kinematics are checked against a few-line forward kinematics written here
 (offsets and per-channel rotations composed with numpy, from the skeleton and the numbers the
@@ -18,8 +18,8 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.bvh import read_bvh
 from gdimitate.errors import BVHError
+from gdimitate.io.bvh import read_bvh
 
 CMU = Path(gd.__file__).parent / "data" / "gait" / "cmu_02_01" / "cmu_02_01.bvh"
 # x_ours = C x_bvh
@@ -653,7 +653,7 @@ def test_cmu_asf_names_and_unit_report(tmp_path, caplog, recwarn):
     values = synthetic_values(joints, 12, 1 / 120, ROOT_6, 0.056444)
     path = tmp_path / "asf.bvh"
     write_bvh(path, joints, ROOT_6, values, 1 / 120)
-    with caplog.at_level("INFO", logger="gdimitate.bvh"):
+    with caplog.at_level("INFO", logger="gdimitate.io.bvh"):
         robot, motion = read_bvh(path)
     assert "CMU units" in caplog.text  # the detected unit is said
     assert not [w for w in recwarn if "anthropometric" in str(w.message)]  # all names known
@@ -696,7 +696,7 @@ def test_contacts_survive_mocap_noise(noise):
     the same phases, each end within 6 frames (0.05 s); a phase cut by the clip's end and
     shorter than 0.1 s may be lost. Without the low-pass filter 3 mm left no stance at all
     (every sole's speed above its threshold)."""
-    from gdimitate.bvh.contacts import detect_contacts, sole_corners
+    from gdimitate.io.bvh.contacts import detect_contacts, sole_corners
     from gdimitate.model.footsteps import stance_phases
 
     robot, m = gd.bvh.read_bvh(CMU)

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.bvh import read_bvh
+from gdimitate.io.bvh import read_bvh
 from gdimitate.model.robot import Robot
 from gdimitate.retarget.bodymap import body_map, legs_down
 
@@ -108,7 +108,7 @@ def test_cmu_clip_hip_roll_targets_are_near_zero(g1):
     """The shipped CMU clip (rest pose splayed 20°: OFFSET 2.597 -7.136 per thigh): the
     mapped G1 hip-roll targets, averaged over the clip, are within 5° of G1's neutral — the
     subject's legs hang under its hips (before: -23.4° / +21.8°, 23° of adduction)."""
-    from gdimitate.gait import human_walk_path
+    from gdimitate.io.gait import human_walk_path
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -130,7 +130,7 @@ def test_cmu_soles_flat_in_stance_and_legs_reach():
     hip→ankle distance exceeds it (before: 0.790 m against up to 0.838 m), within 1 mm of
     the bones' 3-D lengths (file OFFSETs: |(2.5972, −7.13576)| + |(2.49236, −6.8477)| CMU
     units of 0.056444 m)."""
-    from gdimitate.gait import human_walk_path
+    from gdimitate.io.gait import human_walk_path
     from gdimitate.model.kinematics import frame_placements
 
     with warnings.catch_warnings():

@@ -21,12 +21,12 @@ import numpy as np
 import pytest
 
 from gdimitate import Robot
-from gdimitate.c3d import ForcePlate, read_c3d, write_c3d
-from gdimitate.c3d.plates import assign_plates
 from gdimitate.cli import main
-from gdimitate.demonstration import load_demonstration
 from gdimitate.errors import FileFormatError, ForceDataError
-from gdimitate.opensim import Markers, read_grf, read_trc
+from gdimitate.io.c3d import ForcePlate, read_c3d, write_c3d
+from gdimitate.io.c3d.plates import assign_plates
+from gdimitate.io.demonstration import load_demonstration
+from gdimitate.io.opensim import Markers, read_grf, read_trc
 
 W2 = Path(__file__).parent / "data/c3d/opensim_walking2"
 D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
@@ -184,7 +184,7 @@ def test_plate_under_both_feet_is_refused(tmp_path):
     robot, markers, ta, feet = _subject01()
     path = write_c3d(tmp_path / "one.c3d", markers, _plates(ta, feet, [("right", "left")]))
     trial = read_c3d(path)
-    from gdimitate.opensim import inverse_kinematics
+    from gdimitate.io.opensim import inverse_kinematics
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -124,7 +124,7 @@ def test_paper_summary_matches_eq1_on_the_same_inputs(tmp_path):
 
 
 def test_adapt_command_and_errors(tmp_path, capsys):
-    from gdimitate.gait import human_walk_path
+    from gdimitate.io.gait import human_walk_path
 
     sag = human_walk_path()  # the default demonstration is the 3-D walk now: name this one
     # exit 3: written, but HOAP-2's knee limit (0 rad) is exceeded by the copied knee angles
@@ -170,7 +170,7 @@ def test_entrain_command(tmp_path, capsys):
     assert taught.min() - margin <= replay.min() and replay.max() <= taught.max() + margin
     assert np.ptp(replay) > 0.8 * np.ptp(taught)  # and it really swings, not a damped copy
     # the replay records its robot: read back without naming it
-    from gdimitate.demonstration import load_demonstration
+    from gdimitate.io.demonstration import load_demonstration
 
     assert load_demonstration(tmp_path / "replay_motion.npz").robot.name == "hoap2"
 
@@ -235,7 +235,7 @@ def test_view_prints_the_numbers_adapt_reports(tmp_path, capsys):
     those numbers are the ones recomputed here from the written motion and HOAP-2's position
     limits in Pinocchio's model."""
     import gdimitate as gd
-    from gdimitate.gait import human_walk_path
+    from gdimitate.io.gait import human_walk_path
 
     sag = human_walk_path()
     assert main(["adapt", str(sag), "--grf", str(sag.parent / "walk_gait1018_subject01_grf.mot"),
@@ -280,7 +280,7 @@ def test_simulate_command(tmp_path, capsys):
     assert (tmp_path / "sim" / "simulation.png").stat().st_size > 0
     # the documented reference: --coordinates/--grf belong to the --reference (issue 33: they
     # were applied to the plan, "coordinates= goes with an .osim model; plan.npz is .npz")
-    from gdimitate.gait import human_walk_3d_folder
+    from gdimitate.io.gait import human_walk_3d_folder
 
     d3 = human_walk_3d_folder()
     assert main(["simulate", str(path), "--reference", str(d3 / "subject01.osim"),

@@ -9,7 +9,7 @@ import json
 import pytest
 
 from gdimitate.cli import main
-from gdimitate.gait import human_walk_path
+from gdimitate.io.gait import human_walk_path
 
 SAG = human_walk_path()
 SAG_GRF = SAG.parent / "walk_gait1018_subject01_grf.mot"
@@ -92,7 +92,7 @@ def test_advice_names_only_what_the_command_line_can_do(tmp_path, capsys):
                  "--method", "copy", "--out", str(tmp_path / "o")]) == 3
     assert "position:RKneePitch" in capsys.readouterr().out
     out = tmp_path / "o" / "imitator_motion.npz"
-    from gdimitate.demonstration import load_demonstration
+    from gdimitate.io.demonstration import load_demonstration
 
     again = load_demonstration(out)  # the record brings the option along
     assert again.robot.load_args["massless_joints"] == tuple(advice.split(","))

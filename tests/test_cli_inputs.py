@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from gdimitate.cli import build_parser, main
-from gdimitate.demonstration import load_demonstration
 from gdimitate.export import read_csv
-from gdimitate.gait import human_walk_3d_folder, human_walk_path
+from gdimitate.io.demonstration import load_demonstration
+from gdimitate.io.gait import human_walk_3d_folder, human_walk_path
 from gdimitate.model.motion import RobotRecord
 from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 

@@ -17,7 +17,7 @@ from printed import numbers
 
 import gdimitate as gd
 from gdimitate.cli import EXIT_STATUS, build_parser, main
-from gdimitate.gait import human_walk_path
+from gdimitate.io.gait import human_walk_path
 
 SAG = human_walk_path()
 SAG_GRF = SAG.parent / "walk_gait1018_subject01_grf.mot"
@@ -26,7 +26,7 @@ SAG_GRF = SAG.parent / "walk_gait1018_subject01_grf.mot"
 def _stride_from_forces(path=SAG_GRF) -> float:
     """The stride frequency measured from the force plates: 1 / the mean time between
     successive heel strikes (vertical force rising through 20 N) of the same foot."""
-    from gdimitate.opensim import read_grf
+    from gdimitate.io.opensim import read_grf
 
     cf = read_grf(path, gd.Robot.from_library("hoap2"))
     gaps = []
@@ -394,7 +394,7 @@ def test_adapt_prints_the_gait_the_report_holds(tmp_path, capsys):
     step ratios, the travel itself) is report.json's `gait`, and the travel ratio is the one
     recomputed here from the written motion and the demonstration (docs/design.md §13: the
     imitator's base travel over the demonstrator's × the legs' ratio)."""
-    from gdimitate.gait import human_walk
+    from gdimitate.io.gait import human_walk
     from gdimitate.model.footsteps import leg_ratio
 
     out = tmp_path / "g"

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from gdimitate import Robot
-from gdimitate.demonstration import SUPPORTED, load_demonstration
 from gdimitate.errors import (
     DemonstrationFormatError,
     InvalidInputError,
@@ -21,7 +20,8 @@ from gdimitate.errors import (
     RobotMismatchError,
     UnknownRobotError,
 )
-from gdimitate.gait import human_walk_3d_folder, human_walk_path
+from gdimitate.io.demonstration import SUPPORTED, load_demonstration
+from gdimitate.io.gait import human_walk_3d_folder, human_walk_path
 from gdimitate.model.library import list_robots
 from gdimitate.model.motion import Motion, RobotRecord
 

@@ -16,7 +16,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from gdimitate import Robot, adapt
-from gdimitate.demonstration import load_demonstration
 from gdimitate.errors import ExportError, FileFormatError
 from gdimitate.export import (
     BASE_COLUMNS,
@@ -27,7 +26,8 @@ from gdimitate.export import (
     read_mujoco,
     read_wrenches,
 )
-from gdimitate.gait import human_walk
+from gdimitate.io.demonstration import load_demonstration
+from gdimitate.io.gait import human_walk
 from gdimitate.model.motion import Motion, differentiate
 from gdimitate.sim import build_model
 

@@ -10,7 +10,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.errors import InvalidInputError, UnknownNameError
-from gdimitate.gait import human_walk_path, read_mot, read_opensim
+from gdimitate.io.gait import human_walk_path, read_mot, read_opensim
 from gdimitate.metrics import ForceDirection, angle_between, force_direction
 from gdimitate.model.contact import ContactForces, FootForces
 from gdimitate.model.kinematics import joint_paths

@@ -22,13 +22,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import gdimitate as gd
-from gdimitate.bvh import read_bvh
 from gdimitate.cli import main
 from gdimitate.errors import BVHError, GdimitateError
-from gdimitate.gait import read_mot, read_opensim
+from gdimitate.io.bvh import read_bvh
+from gdimitate.io.gait import read_mot, read_opensim
+from gdimitate.io.opensim import read_coordinates, read_grf
 from gdimitate.model.motion import Motion
 from gdimitate.model.robot import Robot
-from gdimitate.opensim import read_coordinates, read_grf
 
 FAST = settings(max_examples=200, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -366,7 +366,7 @@ def _chain_bvh(frames: str, frame_time: str, depth: int) -> str:
 def test_fuzz_bvh_sizes_are_bounded(frames, frame_time, depth):
     """Headers claiming huge frame counts, absurd frame times or deep chains: a
     GdimitateError (never MemoryError/RecursionError), without a large allocation."""
-    from gdimitate.bvh.parse import parse_bvh
+    from gdimitate.io.bvh.parse import parse_bvh
 
     with sandbox(**{"c.bvh": _chain_bvh(frames, frame_time, depth)}) as (paths, _):
         with _cheap():
@@ -483,7 +483,7 @@ def test_no_dtd_or_entity_in_any_encoding(tmp_path, enc, kind, root):
     """A UTF-16 .osim with <!DOCTYPE>/<!ENTITY> was accepted and the entity expanded (the
     guard scanned the raw bytes for ASCII): now every XML reader — URDF, OpenSim model,
     ExternalLoads — refuses a declaration in whatever encoding the file declares."""
-    from gdimitate.opensim.grf import read_external_loads
+    from gdimitate.io.opensim.grf import read_external_loads
 
     text = _BOMB.format(enc=enc, big="x" * 1000, root=root)
     codec = {"UTF-16": "utf-16", "UTF-16LE": "utf-16-le", "UTF-16BE": "utf-16-be",

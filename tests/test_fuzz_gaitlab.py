@@ -33,8 +33,6 @@ import numpy as np
 import pytest
 from isolated import call
 
-from gdimitate.c3d import ForcePlate, read_c3d, write_c3d
-from gdimitate.c3d.layout import C3DLayout, check_c3d
 from gdimitate.errors import (
     C3DFormatError,
     ForceDataError,
@@ -44,8 +42,10 @@ from gdimitate.errors import (
     SolverError,
     UnitError,
 )
+from gdimitate.io.c3d import ForcePlate, read_c3d, write_c3d
+from gdimitate.io.c3d.layout import C3DLayout, check_c3d
+from gdimitate.io.opensim import Markers, read_trc
 from gdimitate.model.osim.model import MAX_OSIM_BYTES, read_osim
-from gdimitate.opensim import Markers, read_trc
 from gdimitate.safety import MAX_TABLE_BYTES
 
 D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
@@ -107,7 +107,7 @@ def test_c3d_truncated_at_every_section_boundary(tmp_path):
             need = int(msg.split("expected ")[1].split(" bytes")[0].replace(",", ""))
             assert need > n and need in (512, pstart + 512, pend, dend), msg
     for n in (522, 700, dstart + (dend - dstart) // 2, dend - 1):  # crashed, hung, lost frames
-        o = call("gdimitate.c3d:read_c3d", str(tmp_path / f"cut{n}.c3d"))
+        o = call("gdimitate.io.c3d:read_c3d", str(tmp_path / f"cut{n}.c3d"))
         assert o.handled() and not o.ok, o
         assert o.type == "C3DFormatError" and "truncated" in o.message, o
     whole = tmp_path / "padding.c3d"
@@ -125,7 +125,7 @@ _FLOATS = [math.nan, math.inf, -math.inf, 1e38, -1e38, 0.0, -0.0, 1e-38]
 
 def _param_offsets(data: bytes) -> dict[tuple[str, str], tuple[int, int, tuple[int, ...]]]:
     """{(GROUP, NAME): (data offset in the file, type, dims)} of a C3D file's parameters."""
-    from gdimitate.c3d.layout import _Reader, _walk
+    from gdimitate.io.c3d.layout import _Reader, _walk
 
     pstart = (data[0] - 1) * 512
     sec = data[pstart:pstart + data[pstart + 2] * 512]
@@ -184,7 +184,7 @@ def test_c3d_breaking_numbers_in_every_header_field_and_parameter(tmp_path):
 
 _CHILD = """
 import warnings
-from gdimitate.c3d import read_c3d
+from gdimitate.io.c3d import read_c3d
 from gdimitate.errors import GdimitateError
 for p in FILES:
     try:
@@ -286,7 +286,7 @@ def test_marker_ik_on_a_corrupt_frame_is_our_error():
     """pink's NoSolutionFound (or a non-finite step) becomes a SolverError naming the file,
     the frame and the markers farthest off."""
     from gdimitate import Robot
-    from gdimitate.opensim import inverse_kinematics
+    from gdimitate.io.opensim import inverse_kinematics
 
     robot = Robot.from_osim(D3 / "subject01.osim")
     with warnings.catch_warnings():
@@ -393,8 +393,8 @@ def test_size_bounds_checked_before_reading(tmp_path):
     """A table or marker file over MAX_TABLE_BYTES (192 MiB: reading peaks at 5.4 (.mot) and
     8.4 (.trc) bytes a byte) and an .osim over MAX_OSIM_BYTES (64 MiB; none existed) are
     refused from their size on disk, before a byte is read."""
-    from gdimitate.gait import read_mot
-    from gdimitate.opensim import read_table
+    from gdimitate.io.gait import read_mot
+    from gdimitate.io.opensim import read_table
 
     assert MAX_TABLE_BYTES <= 2 * 10**9 / 8.4 and MAX_OSIM_BYTES <= 2 * 10**9 / 16
     big = MAX_TABLE_BYTES + 1
@@ -427,7 +427,7 @@ def test_trc_rows_that_would_unpack_beyond_the_bound(tmp_path):
 def test_all_zero_grf_is_called_unloaded(tmp_path):
     """An all-zero force file (an unloaded or unconnected plate) was told its forces 'must be
     negated'; so were forces below the stance threshold."""
-    from gdimitate.opensim import read_grf
+    from gdimitate.io.opensim import read_grf
 
     src = (D3 / "subject01_walk1_grf.mot").read_text().splitlines()
     end = next(i for i, ln in enumerate(src) if ln.strip().lower() == "endheader")
@@ -449,7 +449,7 @@ def test_all_zero_grf_is_called_unloaded(tmp_path):
 def test_mot_breaking_numbers(tmp_path, cell):
     """A cell of a .mot set to NaN/inf/huge/unicode/hex/comma: our error naming the file,
     never a bare exception (full-width digits are numbers to Python and read as such)."""
-    from gdimitate.opensim import read_table
+    from gdimitate.io.opensim import read_table
 
     p = tmp_path / "c.mot"
     rows = ["0\t1\t2", f"0.01\t{cell}\t2", "0.02\t1\t2"]
@@ -465,7 +465,7 @@ def test_mot_breaking_numbers(tmp_path, cell):
 def test_mot_line_endings_and_truncation(tmp_path):
     """CRLF and lone-CR line ends read as LF ones; a table cut at every line boundary and
     mid-row raises our error or reads the rows it has."""
-    from gdimitate.opensim import read_table
+    from gdimitate.io.opensim import read_table
 
     text = "version=1\ninDegrees=no\nendheader\ntime\ta\n" + \
         "".join(f"{k / 10:.1f}\t{k}\n" for k in range(5))

@@ -280,7 +280,7 @@ def test_bvh_fields_refused_naming_line_and_field(tmp_path, mutation):
     """Unicode digits (Python's int()/float() accept them), overflowing and absurd numbers:
     BVHError naming the line and the field (they raised ValueError, Pinocchio's "not a valid
     URDF model", or passed)."""
-    from gdimitate.bvh.parse import parse_bvh
+    from gdimitate.io.bvh.parse import parse_bvh
 
     key, old, new = mutation
     text = CMU.read_text()
@@ -303,7 +303,7 @@ def test_bvh_fields_refused_naming_line_and_field(tmp_path, mutation):
 def test_bvh_size_is_bounded_before_reading(tmp_path):
     """A 300 MB BVH hit MemoryError at ~5 GB (reading peaks at up to 16 bytes per byte);
     beyond MAX_BVH_BYTES it is refused from its size alone."""
-    from gdimitate.bvh.parse import parse_bvh
+    from gdimitate.io.bvh.parse import parse_bvh
 
     path = tmp_path / "huge.bvh"
     with open(path, "wb") as f:

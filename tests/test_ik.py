@@ -23,10 +23,10 @@ import pinocchio as pin
 import pytest
 
 from gdimitate import Robot
-from gdimitate.demonstration import load_demonstration
 from gdimitate.errors import InvalidInputError, MarkerGapWarning, OpenSimDataError
-from gdimitate.opensim import WORLD_FROM_OPENSIM as C
-from gdimitate.opensim import Markers, inverse_kinematics, read_trc
+from gdimitate.io.demonstration import load_demonstration
+from gdimitate.io.opensim import WORLD_FROM_OPENSIM as C
+from gdimitate.io.opensim import Markers, inverse_kinematics, read_trc
 
 D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
 SCRIPT = Path(__file__).parent / "opensim_ref/osim_ik.py"
@@ -171,7 +171,7 @@ def test_walker_knee_followers_follow_their_coordinate():
     followers set from the knee angle after every step (gdimitate.opensim.follow_coordinates):
     markers made by Pinocchio of a knee sweep are fitted (residual < 0.1 mm) and every
     follower equals its spline of the fitted knee angle."""
-    from gdimitate.opensim import follow_coordinates
+    from gdimitate.io.opensim import follow_coordinates
 
     robot = Robot.from_osim(Path(__file__).parent / "data/osim/rajagopal_like.osim")
     names = list(robot.osim.markers)

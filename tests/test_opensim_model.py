@@ -28,8 +28,8 @@ import pytest
 
 from gdimitate import Robot
 from gdimitate.errors import OsimError, URDFError
-from gdimitate.opensim import WORLD_FROM_OPENSIM as C
-from gdimitate.opensim import (
+from gdimitate.io.opensim import WORLD_FROM_OPENSIM as C
+from gdimitate.io.opensim import (
     convert_osim,
     follow_coordinates,
     opensim_to_urdf,
@@ -331,7 +331,7 @@ def test_subject01_feet_on_the_force_plate_floor():
     contact) the sole rectangle's centre is within 1 cm of the force plates' surface (the
     height of the measured centres of pressure). Measured: left 5.4 / 6.0 mm above, right
     −1.3…+0.2 mm. From the bones alone (no markers) the soles stood 4.6–5.4 cm above it."""
-    from gdimitate.opensim import read_coordinates, read_grf
+    from gdimitate.io.opensim import read_coordinates, read_grf
 
     def heights(robot):
         motion = read_coordinates(IK, robot)

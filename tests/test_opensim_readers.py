@@ -19,10 +19,10 @@ from gdimitate.errors import (
     TimeGridError,
     UnitError,
 )
+from gdimitate.io.opensim.coordinates import read_coordinates
+from gdimitate.io.opensim.grf import read_external_loads, read_grf
 from gdimitate.model.osim.trc import read_trc
 from gdimitate.model.robot import Robot
-from gdimitate.opensim.coordinates import read_coordinates
-from gdimitate.opensim.grf import read_external_loads, read_grf
 
 DATA = Path(__file__).parent / "data" / "opensim_files"
 Y_UP = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # OpenSim (X, Y, Z) → ours (x, y, z)
@@ -331,7 +331,7 @@ def test_malformed_grf_files(tmp_path, bad):
 def test_grf_shipped_sagittal_file_numbered_convention():
     """OpenSim's gait10dof18musc GRF file (``ground_force_*`` right, ``1_ground_force_*`` left)
     against its own columns read with numpy."""
-    from gdimitate.gait import human_walk_path
+    from gdimitate.io.gait import human_walk_path
 
     p = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
     lines = p.read_text().splitlines()
@@ -413,7 +413,7 @@ def test_malformed_trc(tmp_path, bad):
 
 
 def test_sagittal_reader_refuses_full_body_files(tmp_path):
-    from gdimitate.gait import read_opensim
+    from gdimitate.io.gait import read_opensim
 
     t = np.linspace(0, 1, 11)
     a = _angles(t)
@@ -436,7 +436,7 @@ LEG_MOMENTS = [f"{c}_{s}" for c in ("hip_flexion", "hip_adduction", "knee_angle"
 def treadmill_walk():
     """(robot, motion, forces) of the shipped trial, NOT turned overground (OpenSim's inverse
     dynamics used the treadmill kinematics)."""
-    from gdimitate.gait import human_walk_3d
+    from gdimitate.io.gait import human_walk_3d
 
     return human_walk_3d(overground=False)
 
@@ -523,7 +523,7 @@ def test_model_markers_follow_measured_markers():
 
 
 def test_human_walk_3d_overground():
-    from gdimitate.gait import human_walk_3d
+    from gdimitate.io.gait import human_walk_3d
 
     robot, motion, forces = human_walk_3d()
     assert "turned overground" in forces.frame_note
@@ -545,7 +545,7 @@ def test_human_walk_3d_overground():
     ref = float(np.median(np.concatenate(vm)))
     assert 0.8 < speed < 2.0 and speed == pytest.approx(ref, rel=0.05)
     # base x gained speed·(t − t0); the rest of q and the forces themselves are unchanged
-    from gdimitate.opensim.treadmill import belt_speed
+    from gdimitate.io.opensim.treadmill import belt_speed
 
     exact = belt_speed(robot, tread, tforces.contact)
     assert speed == pytest.approx(exact, abs=5e-4)  # the note rounds to 1 mm/s
@@ -573,7 +573,7 @@ def test_human_walk_3d_overground():
 
 def test_overground_needs_forces_on_the_motion_times():
     from gdimitate.errors import InvalidInputError
-    from gdimitate.opensim.treadmill import treadmill_to_overground
+    from gdimitate.io.opensim.treadmill import treadmill_to_overground
 
     robot, motion, forces = treadmill_walk()
     cf = read_grf(WALK / "subject01_walk1_grf.mot", robot, WALK / "subject01_walk1_grf.xml")
@@ -582,7 +582,7 @@ def test_overground_needs_forces_on_the_motion_times():
 
 
 def test_sagittal_reader_refuses_the_shipped_3d_file():
-    from gdimitate.gait import read_opensim
+    from gdimitate.io.gait import read_opensim
 
     with pytest.raises(OpenSimDataError, match="read_coordinates"):
         read_opensim(WALK / "subject01_walk1_ik.mot")

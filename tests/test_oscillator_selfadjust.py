@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from gdimitate.errors import OscillatorError
-from gdimitate.gait import human_walk_path, read_mot
+from gdimitate.io.gait import human_walk_path, read_mot
 from gdimitate.oscillator import SelfAdjustResult, fit_teacher, self_adjust
 
 JOINTS = ["hip_flexion_r", "knee_angle_r", "hip_flexion_l", "knee_angle_l"]

@@ -24,7 +24,7 @@ import pytest
 
 from gdimitate.cli import main
 from gdimitate.errors import OutputError
-from gdimitate.gait import human_walk_path
+from gdimitate.io.gait import human_walk_path
 from gdimitate.safety import LOCK_NAME, atomic_write, output_job
 
 SAG = human_walk_path()
@@ -253,7 +253,7 @@ def test_an_npz_whose_header_promises_more_than_it_holds_is_refused(tmp_path):
 
 
 def _sagittal(robot):
-    from gdimitate.gait import human_walk
+    from gdimitate.io.gait import human_walk
 
     human, walk = human_walk()
     return walk, human, robot

@@ -16,8 +16,8 @@ import gdimitate as gd
 from gdimitate.apps.baselines import joint_copy
 from gdimitate.audit import audit
 from gdimitate.cli import main
-from gdimitate.demonstration import load_demonstration
 from gdimitate.export import read_wrenches
+from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
 from gdimitate.repair import keypoint_frames, repair_rate, wrench_forces
 from gdimitate.sim.reference import Plan

@@ -138,8 +138,8 @@ def armed():
 
 @pytest.fixture(scope="module")
 def cmu():
-    from gdimitate.bvh.reader import read_bvh
-    from gdimitate.gait import human_walk_path
+    from gdimitate.io.bvh.reader import read_bvh
+    from gdimitate.io.gait import human_walk_path
 
     return read_bvh(human_walk_path().parents[1] / "cmu_02_01" / "cmu_02_01.bvh")[0]
 
@@ -234,7 +234,7 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
     from pathlib import Path
 
     import gdimitate as gd
-    from gdimitate.opensim import read_coordinates, read_grf
+    from gdimitate.io.opensim import read_coordinates, read_grf
     from gdimitate.retarget.bodymap import HOLD_RANGE, following
     from gdimitate.retarget.parts.self_collision import rest_pose
 

@@ -19,7 +19,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.audit import AuditTolerances
-from gdimitate.gait import one_stride
+from gdimitate.io.gait import one_stride
 from gdimitate.model.robot import SIDES, Robot
 from gdimitate.retarget import UnmappedJointsWarning
 

@@ -23,7 +23,7 @@ from gdimitate.errors import (
     URDFError,
     ViewerError,
 )
-from gdimitate.gait import human_walk_path, read_mot
+from gdimitate.io.gait import human_walk_path, read_mot
 from gdimitate.model.motion import Motion
 from gdimitate.model.robot import Robot
 from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
@@ -289,7 +289,7 @@ def test_grf_unloaded_rows_with_arbitrary_cop_load_loaded_mm_refused(tmp_path, u
     file loads (its loaded centres of pressure exact), one whose loaded rows are in mm is
     refused."""
     from gdimitate.errors import UnitError
-    from gdimitate.opensim import read_grf
+    from gdimitate.io.opensim import read_grf
 
     robot = Robot.from_library("hoap2")
     t = np.linspace(0, 1.2, 241)
@@ -309,8 +309,8 @@ def test_grf_unloaded_rows_with_arbitrary_cop_load_loaded_mm_refused(tmp_path, u
 def test_every_shipped_grf_file_loads():
     from pathlib import Path
 
-    from gdimitate.gait import human_walk, human_walk_3d_folder
-    from gdimitate.opensim import read_grf
+    from gdimitate.io.gait import human_walk, human_walk_3d_folder
+    from gdimitate.io.opensim import read_grf
 
     robot = Robot.from_library("hoap2")
     files = sorted(Path(human_walk_path()).parent.glob("*grf*.mot")) + sorted(
@@ -326,8 +326,8 @@ def test_adapt_of_read_coordinates_motion_says_how_to_get_contacts():
     """adapt() of a motion read by gd.opensim.read_coordinates (no contact schedule yet)
     failed with "motion.contact has no 'left' schedule"; now the message says what to do —
     for every method, and for a motion that lacks one side only."""
-    from gdimitate.gait import human_walk_3d_folder
-    from gdimitate.opensim import read_coordinates
+    from gdimitate.io.gait import human_walk_3d_folder
+    from gdimitate.io.opensim import read_coordinates
 
     folder = human_walk_3d_folder()
     human = Robot.from_osim(folder / "subject01.osim")
@@ -533,7 +533,7 @@ def test_every_shipped_data_file_loads():
     markers, OpenSim's inverse dynamics table), the CMU BVH clip."""
     from pathlib import Path
 
-    from gdimitate.gait import human_walk_3d_folder
+    from gdimitate.io.gait import human_walk_3d_folder
     from gdimitate.model.osim._table import read_table
     from gdimitate.model.osim.trc import read_trc
 

@@ -448,7 +448,7 @@ def _bvh(frames: str = "3", frame_time: str = "0.0083333", depth: int = 3,
 @pytest.mark.parametrize("frames", ["100000000", "1000000000000"])
 def test_bvh_frame_count_is_bounded_before_allocating(tmp_path, frames):
     """A header claiming 1e8 or 1e12 frames raised numpy's bare MemoryError."""
-    from gdimitate.bvh.parse import parse_bvh
+    from gdimitate.io.bvh.parse import parse_bvh
 
     p = tmp_path / "big.bvh"
     for frame_time in ("0.0083333", "0.00001"):  # over the duration bound, or the array bound
@@ -462,7 +462,7 @@ def test_bvh_hierarchy_depth_is_bounded():
     parses with every joint."""
     import tempfile
 
-    from gdimitate.bvh.parse import MAX_BVH_DEPTH, parse_bvh
+    from gdimitate.io.bvh.parse import MAX_BVH_DEPTH, parse_bvh
 
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "deep.bvh"
@@ -475,7 +475,7 @@ def test_bvh_hierarchy_depth_is_bounded():
 
 @pytest.mark.parametrize("frame_time", ["1000000", "2.5", "1e-9"])
 def test_bvh_frame_time_is_bounded(tmp_path, frame_time):
-    from gdimitate.bvh.parse import parse_bvh
+    from gdimitate.io.bvh.parse import parse_bvh
 
     p = tmp_path / "slow.bvh"
     p.write_text(_bvh(frame_time=frame_time))
@@ -582,7 +582,7 @@ def test_opensim_model_loads_leave_nothing_in_the_temp_folder(tmp_path, monkeypa
     after one afternoon)."""
     import tempfile
 
-    from gdimitate.gait import human_walk_3d_folder
+    from gdimitate.io.gait import human_walk_3d_folder
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     robot = Robot.from_osim(human_walk_3d_folder() / "subject01.osim")

@@ -22,8 +22,8 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.audit import audit
-from gdimitate.demonstration import load_demonstration
 from gdimitate.export import read_wrenches
+from gdimitate.io.demonstration import load_demonstration
 
 CMU = str(gd.gait.cmu_walk_path())  # 120 Hz
 PERIOD_S = 1 / 120
@@ -114,7 +114,7 @@ def test_an_lsl_stream_on_loopback_with_a_slow_consumer_drops_frames_and_says_so
     1 s — every frame is received, the ones not adapted are counted dropped, and it never
     falls behind (were the 120 frames queued, the last would wait ~2 s: the largest latency
     stays under 0.5 s). The stream ends 2 s after its last frame (--timeout)."""
-    from gdimitate.live.lsl import BVHOutlet
+    from gdimitate.io.live.lsl import BVHOutlet
 
     name = f"gdimitate-test-{uuid.uuid4().hex[:8]}"
     outlet = BVHOutlet(CMU, name, frames=120, loopback=True, stance=False).start()
@@ -145,7 +145,7 @@ def test_the_meshcat_view_follows_the_stream(tmp_path):
     import umsgpack
 
     from gdimitate.apps.stream import run_stream, stream_lines
-    from gdimitate.live import BVHFileSource
+    from gdimitate.io.live import BVHFileSource
     from gdimitate.viz import Viewer
     from gdimitate.viz.animate import sample_frames
 
@@ -190,8 +190,8 @@ def test_a_frame_received_is_the_configuration_read_bvh_gives_that_frame():
     """The layout's decoding of each of the CMU walk's frame lines (as a live source delivers
     them, one at a time) is read_bvh's configuration of that frame, to 1e-12, and its
     stance read_bvh's."""
-    from gdimitate.bvh import read_bvh
-    from gdimitate.live import BVHLayout
+    from gdimitate.io.bvh import read_bvh
+    from gdimitate.io.live import BVHLayout
 
     layout = BVHLayout(CMU)
     with warnings.catch_warnings():
@@ -234,8 +234,8 @@ def test_opensim_coordinates_over_lsl(tmp_path):
     goes on), stopped by SIGTERM 1.5 s after the last frame was sent:
     every frame received, adapted or counted dropped, the printed numbers report.json's, the
     verdicts the written motion's audit."""
-    from gdimitate.live import OpenSimLayout
-    from gdimitate.live.lsl import LayoutOutlet
+    from gdimitate.io.live import OpenSimLayout
+    from gdimitate.io.live.lsl import LayoutOutlet
 
     osim = str(gd.gait.human_walk_3d_folder() / "subject01.osim")
     with warnings.catch_warnings():
@@ -272,8 +272,8 @@ def test_the_stance_detected_frame_by_frame_is_the_recorded_one_on_nine_frames_i
     and the ones before) agrees with read_bvh's detection over the whole CMU clip (measured
     0.945 left, 0.936 right) and with the 3-D walk's measured stance (force > 20 N; measured
     0.934, 0.938) on at least 90 % of the frames, each foot."""
-    from gdimitate.bvh import read_bvh
-    from gdimitate.live.stance import CausalStance
+    from gdimitate.io.bvh import read_bvh
+    from gdimitate.io.live.stance import CausalStance
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -290,7 +290,7 @@ def test_the_stance_detected_frame_by_frame_is_the_recorded_one_on_nine_frames_i
 def test_an_lsl_outlet_that_goes_away_ends_the_stream():
     """The source reads a real outlet's frames (drained, the newest kept, the rest counted),
     and says the stream ended when the outlet is destroyed (liblsl's lost stream)."""
-    from gdimitate.live.lsl import BVHOutlet, LSLSource
+    from gdimitate.io.live.lsl import BVHOutlet, LSLSource
 
     name = f"gdimitate-test-{uuid.uuid4().hex[:8]}"
     outlet = BVHOutlet(CMU, name, frames=30, loopback=True).start()

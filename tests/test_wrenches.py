@@ -15,7 +15,7 @@ import pytest
 
 from gdimitate.audit import audit
 from gdimitate.errors import InvalidInputError, UnknownNameError
-from gdimitate.gait import human_walk, human_walk_3d, human_walk_path, read_mot, read_opensim
+from gdimitate.io.gait import human_walk, human_walk_3d, human_walk_path, read_mot, read_opensim
 from gdimitate.model.motion import Motion, differentiate
 from gdimitate.model.robot import Robot
 from gdimitate.wrenches import WrenchEstimate, base_dofs, estimate_wrenches, measured_wrenches

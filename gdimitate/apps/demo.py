@@ -44,7 +44,7 @@ def default_demonstration():
     strike to heel strike of the right foot) of the shipped real 3-D walk (OpenSim subject01:
     its own model, IK angles, measured ground reaction forces, turned overground); what
     ``gdimitate demo`` adapts, and ``adapt``/``entrain``/``view`` when given no file."""
-    from .. import gait
+    from ..io import gait
 
     robot, walk, forces = gait.human_walk_3d()
     motion, forces = gait.one_stride(walk, forces)

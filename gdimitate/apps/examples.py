@@ -42,7 +42,7 @@ EXAMPLES = _names()
 def example(name: str = "human-walk", method: AdaptMethod = "analytic") -> Example:
     """Build a named example (see the module docstring) with the given adaptor method."""
     from ..adapt import adapt
-    from ..gait import human_walk
+    from ..io.gait import human_walk
     from ..model.robot import Robot
     from .cases import paper_case
 

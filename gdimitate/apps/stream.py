@@ -5,7 +5,7 @@ it, and — when it stops — the same outputs as ``adapt`` for the frames strea
 Each frame that arrives goes through :meth:`gdimitate.retarget.StreamingAdaptor.step` (the
 default constructor: its verdicts from the worker process, off the hot path). The loop always
 takes the newest frame: the ones that arrived while it was busy are dropped and counted
-(:mod:`gdimitate.live.source`), so it never falls behind. A frame's latency runs from its
+(:mod:`gdimitate.io.live.source`), so it never falls behind. A frame's latency runs from its
 arrival (a BVH file: the moment its frame is due; LSL: its push time stamp, on this machine's
 clock) to the step's return — the robot's command (``q``, ``v``). The meshcat view, if asked
 for, is drawn by a thread from the newest command (:class:`LiveView`), off the loop.
@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInputError
-from ..live.layout import LiveSourceError
-from ..live.source import LiveSource
+from ..io.live.layout import LiveSourceError
+from ..io.live.source import LiveSource
 from ..model.kinematics import robot_motion
 from ..model.legs import hip_height
 from ..model.motion import Motion
@@ -363,12 +363,12 @@ def open_source(spec: str, *, skeleton: str | None = None, osim: str | None = No
     ``frames``), or ``lsl:NAME`` (the LSL stream called NAME, in the channels of the BVH
     ``skeleton`` or of the OpenSim model ``osim``'s coordinates; ``timeout`` [s] to find it
     and of silence; ``loopback``: discovery on this machine only,
-    :func:`gdimitate.live.lsl.configure`)."""
-    from ..live.layout import BVHLayout, Layout
-    from ..live.source import BVHFileSource
+    :func:`gdimitate.io.live.lsl.configure`)."""
+    from ..io.live.layout import BVHLayout, Layout
+    from ..io.live.source import BVHFileSource
 
     if spec.startswith("lsl:"):
-        from ..live.lsl import LSLSource
+        from ..io.live.lsl import LSLSource
 
         if not spec[4:]:
             raise InvalidInputError("lsl:NAME needs the stream's name after 'lsl:'")
@@ -380,7 +380,7 @@ def open_source(spec: str, *, skeleton: str | None = None, osim: str | None = No
         if skeleton is not None:
             layout: Layout = BVHLayout(skeleton)
         else:
-            from ..live.coordinates import OpenSimLayout
+            from ..io.live.coordinates import OpenSimLayout
 
             layout = OpenSimLayout(str(osim))
         return LSLSource(spec[4:], layout, timeout=timeout, loopback=loopback)

@@ -3,7 +3,7 @@
 :func:`audit_motion` takes a bare robot motion (joint trajectory, as GMR, holosoma or a
 BeyondMimic pipeline writes it): velocities and accelerations by differencing where the motion
 has none (:func:`gdimitate.model.motion.differentiate`), the stance schedule from the motion's own
-``contact`` or else from the soles' height and speed (:func:`gdimitate.bvh.detect_contacts`),
+``contact`` or else from the soles' height and speed (:func:`gdimitate.io.bvh.detect_contacts`),
 the contact wrenches that best explain its inverse dynamics inside each sole's cone
 (:func:`gdimitate.wrenches.estimate_wrenches`), then the independent audit
 (:func:`gdimitate.audit.audit`). :class:`MotionAudit` holds the report, the wrenches and a few
@@ -154,11 +154,11 @@ def summarise(report: AuditReport, wrenches: WrenchEstimate, motion: Motion,
 def stance_schedule(robot, motion: Motion) -> tuple[dict[str, np.ndarray], str]:
     """The stance flags ``{side: (T,) bool}`` of ``motion`` and where they came from: the
     motion's own ``contact`` when it has both feet, else the sole corners' height and speed
-    (:func:`gdimitate.bvh.detect_contacts`, thresholds in hip heights); a foot that never
+    (:func:`gdimitate.io.bvh.detect_contacts`, thresholds in hip heights); a foot that never
     stands still there (a treadmill) → height alone."""
     if all(s in motion.contact for s in SIDES):
         return {s: np.asarray(motion.contact[s], bool) for s in SIDES}, "motion"
-    from ..bvh.contacts import kinematic_stance
+    from ..io.bvh.contacts import kinematic_stance
 
     if motion.T < 3:
         raise InvalidInputError(f"a motion of {motion.T} frame(s) cannot be audited: its "

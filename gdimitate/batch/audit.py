@@ -123,7 +123,7 @@ def read_robot_motion(path: Path, robot: Robot | None, fps: float = 30.0
 
     fmt = motion_format(path)
     if fmt == "npz":
-        from ..demonstration import load_demonstration
+        from ..io.demonstration import load_demonstration
         from ..model.motion import RobotRecord
 
         if robot is None and RobotRecord.from_npz(path) is None:

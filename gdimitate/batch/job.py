@@ -211,9 +211,9 @@ def grf_file(path: Path) -> Path | None:
 
 def _load(path: Path, options: BatchOptions):
     """``(demonstrator, motion, forces)`` of one input file
-    (:func:`gdimitate.demonstration.load_demonstration`, with its GRF file where one lies
+    (:func:`gdimitate.io.demonstration.load_demonstration`, with its GRF file where one lies
     beside it)."""
-    from ..demonstration import load_demonstration
+    from ..io.demonstration import load_demonstration
 
     robot = load_robot(options.demonstrator) if options.demonstrator else None
     grf = grf_file(path) if path.suffix.lower() in (".mot", ".sto") else None
@@ -253,7 +253,7 @@ def _sim_metrics(m) -> dict[str, Any]:
 def _save(adapted, path: Path) -> None:
     """The adapted motion as NPZ (:meth:`AdaptedMotion.save`: the motion with ``v``/``a``,
     the contact wrenches and the imitator's record, read back by
-    :func:`gdimitate.demonstration.load_demonstration` and :meth:`Motion.from_npz`)."""
+    :func:`gdimitate.io.demonstration.load_demonstration` and :meth:`Motion.from_npz`)."""
     from ..safety import atomic_write
 
     with atomic_write(path) as tmp:

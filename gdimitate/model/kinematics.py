@@ -15,7 +15,7 @@ The one place for what many modules need of a robot's configurations ``q`` ``(T,
 
 It takes the robot as an argument and imports :mod:`gdimitate.model.robot` for type annotations
 only,
-so loaders below :class:`~gdimitate.Robot` (``gdimitate.opensim``) can use it without a cycle.
+so loaders below :class:`~gdimitate.Robot` (``gdimitate.io.opensim``) can use it without a cycle.
 """
 
 from __future__ import annotations

@@ -160,7 +160,7 @@ def from_urdf(cls: type[R], path: str | Path, legs: LegNames | None = None, *,
 def from_osim(cls: type[R], path: str | Path, *, name: str | None = None,
               markers: Any = None) -> R:
     """:meth:`gdimitate.Robot.from_osim` (its docstring): the model converted into a temporary
-    folder by :func:`gdimitate.opensim.convert_osim`, loaded with its legs and sole boxes."""
+    folder by :func:`gdimitate.io.opensim.convert_osim`, loaded with its legs and sole boxes."""
     from .osim.urdf import convert_osim
 
     with tempfile.TemporaryDirectory(prefix="gdimitate_osim_") as tmp:

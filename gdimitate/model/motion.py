@@ -282,7 +282,7 @@ class Motion:
         name or model file path —, ``robot_urdf``, ``robot_fingerprint``,
         ``robot_package_dir``, ``robot_legs``, ``robot_contacts``) is stored so that the
         file is read back without naming the robot
-        (:func:`gdimitate.demonstration.load_demonstration`). ``extra``: more arrays to store
+        (:func:`gdimitate.io.demonstration.load_demonstration`). ``extra``: more arrays to store
         (e.g. ``wrench_left``); their names must not clash."""
         arrays: dict[str, Any] = dict(t=self.t, q=self.q,
                                       joint_names=np.array(self.joint_names),

@@ -146,9 +146,9 @@ class Robot:
     def from_osim(cls, path: str | Path, *, name: str | None = None,
                   markers: Any = None) -> Robot:
         """An OpenSim model (``.osim``, 3.x or 4.x) converted by
-        :func:`gdimitate.opensim.convert_osim` (into a temporary folder that is removed once
+        :func:`gdimitate.io.opensim.convert_osim` (into a temporary folder that is removed once
         the URDF is loaded: :attr:`urdf_path` is ``None``; write the URDF yourself with
-        :func:`gdimitate.opensim.opensim_to_urdf`) and loaded with a free-flyer. Joint names
+        :func:`gdimitate.io.opensim.opensim_to_urdf`) and loaded with a free-flyer. Joint names
         are the OpenSim coordinate names; the legs (hip flexion, knee and ankle joints from the
         model's topology, the sole frame under the ankle) and the sole rectangles (the foot
         boxes) are passed explicitly. The conversion report is kept as ``robot.osim``

@@ -175,7 +175,7 @@ class StreamingAdaptor:
 
         Nothing assumes a heading: the stream is adapted in the frame of its first
         configuration — the world turned about the vertical through the first base position
-        by the base's facing yaw there (:func:`~gdimitate.model.heading.facing_yaw`) — and each
+        by the base's facing yaw there (:func:`~gdimitate.heading.facing_yaw`) — and each
         ``q`` turned back, so a stream turned about the vertical gives the same motion up to
         that turn (velocities, accelerations and sole wrenches are in local frames)."""
         d = self.demonstrator

@@ -29,12 +29,12 @@ def periodic_cycle(demo=None, demonstrator: Robot | None = None,
                    imitator: str | Robot = "g1", forces=None, rate: float = WALK_RATE):
     """The periodic cycle (an :class:`~gdimitate.adapt.AdaptedMotion`) of a demonstration on
     ``imitator``: the measured push directions kept (``force="measured"``) when ``forces``
-    are given. Without ``demo``: one stride (:func:`gdimitate.gait.one_stride`) of the shipped
-    3-D walk (:func:`gdimitate.gait.human_walk_3d`). Returns ``(cycle, forces)``."""
+    are given. Without ``demo``: one stride (:func:`gdimitate.io.gait.one_stride`) of the shipped
+    3-D walk (:func:`gdimitate.io.gait.human_walk_3d`). Returns ``(cycle, forces)``."""
     from ..adapt import adapt
 
     if demo is None:
-        from .. import gait
+        from ..io import gait
 
         demonstrator, whole, forces = gait.human_walk_3d()
         demo, forces = gait.one_stride(whole, forces)

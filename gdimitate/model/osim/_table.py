@@ -87,7 +87,7 @@ def _in_degrees(header: Mapping[str, str], text: list[str], path: Path) -> bool 
 
 def read_table(path: str | Path, *, min_rows: int = 2) -> Table:
     """Read an OpenSim ``.mot``/``.sto`` file → :class:`Table` (the package's one reader of
-    OpenSim tables: coordinates, forces and :func:`gdimitate.gait.read_mot` read through it).
+    OpenSim tables: coordinates, forces and :func:`gdimitate.io.gait.read_mot` read through it).
 
     ``min_rows``: the fewest data rows accepted (2: a motion needs a time step).
     Raises :class:`~gdimitate.errors.OpenSimFormatError` (not UTF-8 text, no column names,

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ForceDataError
-from ..model.contact import ContactForces, FootForces
-from ..model.kinematics import frame_paths
+from ...errors import ForceDataError
+from ...model.contact import ContactForces, FootForces
+from ...model.kinematics import frame_paths
 from ..opensim.grf import CONTACT_THRESHOLD, _cop_on_plane
 
 __all__ = ["MAJORITY", "MAX_DISTANCE", "assign_plates"]

@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ...errors import GdimitateError
+from ...model.robot import Robot
 from ..bvh import channel_rotation, parse_bvh, read_bvh
-from ..errors import GdimitateError
-from ..model.robot import Robot
 from .stance import CausalStance
 
 __all__ = ["CONTACT_LABELS", "BVHLayout", "Layout", "LiveSourceError"]

@@ -44,18 +44,18 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import (
+from ...errors import (
     CoordinateMismatchWarning,
     ForceDataError,
     OpenSimDataError,
     ResourceLimitError,
     UnitError,
 )
-from ..model.contact import ContactForces, FootForces
-from ..model.osim._table import Table, read_table
-from ..model.osim.joints import ground_to_world
-from ..model.osim.model import MAX_OSIM_BYTES
-from ..safety import parse_xml, read_text_bounded
+from ...model.contact import ContactForces, FootForces
+from ...model.osim._table import Table, read_table
+from ...model.osim.joints import ground_to_world
+from ...model.osim.model import MAX_OSIM_BYTES
+from ...safety import parse_xml, read_text_bounded
 
 __all__ = ["CONTACT_THRESHOLD", "ExternalForceSpec", "read_external_loads", "read_grf"]
 

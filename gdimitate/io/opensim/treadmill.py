@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from ..model.contact import ContactForces, FootForces
-from ..model.kinematics import frame_paths
-from ..model.motion import Motion
+from ...errors import InvalidInputError
+from ...model.contact import ContactForces, FootForces
+from ...model.kinematics import frame_paths
+from ...model.motion import Motion
 
 __all__ = ["belt_speed", "treadmill_to_overground"]
 

@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from ..model.kinematics import frame_placements
-from ..model.legs import hip_height
+from ...errors import InvalidInputError
+from ...model.kinematics import frame_placements
+from ...model.legs import hip_height
 
 __all__ = ["ContactRule", "detect_contacts", "estimate_floor", "sole_corners", "close_gaps",
            "kinematic_stance",

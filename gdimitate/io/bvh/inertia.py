@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import BVHError
-from ..model.anthropometry import DE_LEVA_MALE, match_segment, side_of
+from ...errors import BVHError
+from ...model.anthropometry import DE_LEVA_MALE, match_segment, side_of
 from .parse import BVHFile
 
 __all__ = ["TINY_MASS", "TINY_INERTIA", "LinkInertia", "segment_inertias"]

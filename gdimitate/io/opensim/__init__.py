@@ -2,7 +2,7 @@
 
 Model conversion (:mod:`.model`, :mod:`.joints`, :mod:`.urdf`)::
 
-    from gdimitate.opensim import opensim_to_urdf, pelvis_to_freeflyer, read_osim
+    from gdimitate.io.opensim import opensim_to_urdf, pelvis_to_freeflyer, read_osim
     urdf_path = opensim_to_urdf("subject01.osim")          # -> Path (temporary folder)
     robot = gdimitate.Robot.from_osim("subject01.osim")      # free-flyer, legs, soles set
 
@@ -26,16 +26,16 @@ Data files (:mod:`.coordinates`, :mod:`.grf`, :mod:`.trc`, :mod:`.treadmill`)::
                                              forces)        # belt speed added back
 """
 
-from ..model.osim._table import Table, read_table
-from ..model.osim.joints import (
+from ...model.osim._table import Table, read_table
+from ...model.osim.joints import (
     WORLD_FROM_OPENSIM,
     Approximation,
     follow_coordinates,
     pelvis_to_freeflyer,
 )
-from ..model.osim.model import OsimModel, read_osim
-from ..model.osim.trc import Markers, read_trc
-from ..model.osim.urdf import (
+from ...model.osim.model import OsimModel, read_osim
+from ...model.osim.trc import Markers, read_trc
+from ...model.osim.urdf import (
     EFFORT_LIMIT,
     VELOCITY_LIMIT,
     OsimConversion,

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from ..model.osim.trc import Markers
+from ...errors import InvalidInputError
+from ...model.osim.trc import Markers
 from .reader import ForcePlate
 
 __all__ = ["write_c3d"]

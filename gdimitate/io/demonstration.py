@@ -5,30 +5,30 @@ One entry point, :func:`load_demonstration`, dispatches on the file's extension:
 
 - ``.mot`` / ``.sto`` (OpenSim coordinates): with ``robot=`` (a Robot converted from the
   subject's ``.osim``, :meth:`Robot.from_osim`) the full-body reader
-  :func:`gdimitate.opensim.read_coordinates`; without one, the sagittal reader
-  :func:`gdimitate.gait.read_opensim` (planar human scaled to 1.75 m), which refuses a
+  :func:`gdimitate.io.opensim.read_coordinates`; without one, the sagittal reader
+  :func:`gdimitate.io.gait.read_opensim` (planar human scaled to 1.75 m), which refuses a
   full-body file and says to pass the model;
 - ``.osim`` + ``coordinates=`` (a ``.mot``/``.sto``): :meth:`Robot.from_osim` of the model
   and the coordinates read onto it;
-- ``.bvh``: :func:`gdimitate.bvh.read_bvh` (skeleton → URDF, contacts from the feet);
+- ``.bvh``: :func:`gdimitate.io.bvh.read_bvh` (skeleton → URDF, contacts from the feet);
 - ``.npz`` (:meth:`Motion.to_npz`): the motion with its robot rebuilt from the metadata the
   file records (library name, URDF / ``.osim`` / ``.bvh`` path, legs, contacts) and checked
   against the recorded :attr:`Robot.fingerprint` (a mismatch is an error);
 - markers: ``.osim`` + ``markers=`` (a ``.trc`` or a gait-lab ``.c3d``), or the ``.trc`` /
   ``.c3d`` itself with ``robot=`` from the ``.osim``: marker-based inverse kinematics
-  (:func:`gdimitate.opensim.inverse_kinematics`, per-marker residuals in
+  (:func:`gdimitate.io.opensim.inverse_kinematics`, per-marker residuals in
   :attr:`Demonstration.ik`); a ``.c3d``'s force plates are the forces
-  (:meth:`gdimitate.c3d.C3DTrial.contact_forces`: plates to feet by proximity) unless
+  (:meth:`gdimitate.io.c3d.C3DTrial.contact_forces`: plates to feet by proximity) unless
   ``grf=`` is given.
 
 Forces: ``grf=`` (an OpenSim ground-reaction-force ``.mot``/``.sto``) is read with
-:func:`gdimitate.opensim.read_grf` on the motion's times, with the OpenSim ExternalLoads XML
+:func:`gdimitate.io.opensim.read_grf` on the motion's times, with the OpenSim ExternalLoads XML
 that assigns its force sets to bodies when one lies beside it (same stem with ``.xml``, or
 the only ``.xml`` in that folder naming the file as its ``datafile``); the measured stance
 (vertical force > 20 N) becomes the motion's contact schedule. A full-body motion without
 forces gets its contacts from the feet's sole corners (height and speed,
-:func:`gdimitate.bvh.detect_contacts`). ``overground=True`` turns a treadmill trial with
-forces overground (:func:`gdimitate.opensim.treadmill_to_overground`: the belt speed, estimated
+:func:`gdimitate.io.bvh.detect_contacts`). ``overground=True`` turns a treadmill trial with
+forces overground (:func:`gdimitate.io.opensim.treadmill_to_overground`: the belt speed, estimated
 from the stance feet, added to the base x and the centres of pressure).
 """
 
@@ -37,10 +37,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import DemonstrationFormatError
-from .model.contact import ContactForces
-from .model.motion import Motion
-from .model.robot import Robot
+from ..errors import DemonstrationFormatError
+from ..model.contact import ContactForces
+from ..model.motion import Motion
+from ..model.robot import Robot
 
 __all__ = ["Demonstration", "DemonstrationFormatError", "SUPPORTED",
            "load_demonstration"]
@@ -151,8 +151,8 @@ def load_demonstration(path: str | Path, *, grf: str | Path | None = None,
 def _check_arguments(path, grf, coordinates, robot, overground, markers, package_dir) -> Path:
     """:func:`load_demonstration`'s arguments of the right types (paths, a Robot, a bool) →
     the demonstration's path; :class:`InvalidInputError` naming the argument otherwise."""
-    from .errors import InvalidInputError
-    from .model.inputs import path_arg
+    from ..errors import InvalidInputError
+    from ..model.inputs import path_arg
 
     p = path_arg("path", path).expanduser()
     for name, value in (("grf", grf), ("coordinates", coordinates), ("markers", markers),
@@ -168,7 +168,7 @@ def _check_arguments(path, grf, coordinates, robot, overground, markers, package
 
 
 def _sagittal(p: Path, grf) -> Demonstration:
-    from .errors import OpenSimDataError
+    from ..errors import OpenSimDataError
     from .gait import read_opensim
 
     try:
@@ -279,7 +279,7 @@ def _recorded_package_dir(p: Path, rec, given: str | Path | None) -> str | None:
     :class:`~gdimitate.errors.MeshPathError` — a file must never widen what may be read."""
     import os
 
-    from .errors import MeshPathError
+    from ..errors import MeshPathError
 
     if given is not None:
         return str(given)
@@ -302,8 +302,8 @@ def _recorded_json(p: Path, field: str, text: str) -> object:
     """A JSON option (``robot_legs``/``robot_contacts``) recorded in an ``.npz``, checked
     (:func:`gdimitate.model.inputs.loads_json`): :class:`FileFormatError` naming the file and
     field."""
-    from .errors import FileFormatError
-    from .model.inputs import loads_json
+    from ..errors import FileFormatError
+    from ..model.inputs import loads_json
 
     if not text:
         return None
@@ -317,8 +317,8 @@ def _recorded_json(p: Path, field: str, text: str) -> object:
 def _recorded_names(p: Path, text: str) -> tuple[str, ...]:
     """The ``robot_massless`` joint names recorded in an ``.npz`` (a JSON list of str):
     :class:`FileFormatError` naming the file and field otherwise."""
-    from .errors import FileFormatError
-    from .model.inputs import loads_json
+    from ..errors import FileFormatError
+    from ..model.inputs import loads_json
 
     if not text:
         return ()
@@ -331,9 +331,9 @@ def _recorded_names(p: Path, text: str) -> tuple[str, ...]:
 
 def _npz(p: Path, robot: Robot | None, package_dir: str | Path | None = None
          ) -> Demonstration:
-    from .errors import FileFormatError, RobotMismatchError
-    from .model.library import list_robots
-    from .model.motion import RobotRecord, check_motion_layout
+    from ..errors import FileFormatError, RobotMismatchError
+    from ..model.library import list_robots
+    from ..model.motion import RobotRecord, check_motion_layout
 
     rec = RobotRecord.from_npz(p)
     motion = Motion.from_npz(p)

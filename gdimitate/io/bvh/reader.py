@@ -13,11 +13,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.spatial.transform import Rotation
 
-from ..errors import BVHError, InvalidInputError
-from ..model.contact import SoleContact, sole_frame_name
-from ..model.kinematics import robot_motion
-from ..model.motion import Motion
-from ..model.robot import Robot
+from ...errors import BVHError, InvalidInputError
+from ...model.contact import SoleContact, sole_frame_name
+from ...model.kinematics import robot_motion
+from ...model.motion import Motion
+from ...model.robot import Robot
 from .contacts import ContactRule, detect_contacts, estimate_floor, sole_corners
 from .inertia import segment_inertias
 from .parse import BVHFile, parse_bvh
@@ -148,32 +148,32 @@ def read_bvh(path: str | Path, *, scale: float | None = None,
              ) -> tuple[Robot, Motion]:
     """Read a BVH file → ``(robot, motion)``.
 
-    The skeleton becomes a URDF (see :mod:`gdimitate.bvh.urdf`: a link per BVH joint, one
+    The skeleton becomes a URDF (see :mod:`gdimitate.io.bvh.urdf`: a link per BVH joint, one
     joint per channel in the file's order, the root's channels as the free-flyer), loaded as a
     :class:`~gdimitate.model.robot.Robot` with ``legs=`` (hip/knee/ankle: the thigh's, shank's and
     foot's rotation channel whose axis is lateral at the zero pose) and ``contacts=`` (sole
-    rectangles, :func:`gdimitate.bvh.skeleton.measure_sole`) given explicitly. The motion's
+    rectangles, :func:`gdimitate.io.bvh.skeleton.measure_sole`) given explicitly. The motion's
     ``q`` ``(T, nq)`` is Pinocchio's: free-flyer position [m] in our world (x forward, y left,
     z up) and quaternion (x, y, z, w), then one angle per rotation channel [rad].
 
     - ``scale`` [m per file unit]: ``None`` detects the unit from the hip height at the zero
-      pose (:func:`gdimitate.bvh.skeleton.detect_scale`: m, cm, mm, inches, CMU units); the
+      pose (:func:`gdimitate.io.bvh.skeleton.detect_scale`: m, cm, mm, inches, CMU units); the
       choice is logged and kept in ``robot.bvh_info``.
     - ``skip_first_frame``: drop frame 0 (CMU's T-pose). ``None`` detects it
       (:func:`is_reference_frame`). Times start at 0 on the first kept frame.
     - ``up``: the file's up axis, ``"y"`` (facing +Z) or ``"z"`` (facing −Y); see
-      :data:`gdimitate.bvh.skeleton.UP_TURNS`. The subject keeps its walking direction; the
+      :data:`gdimitate.io.bvh.skeleton.UP_TURNS`. The subject keeps its walking direction; the
       Robot's :attr:`~gdimitate.model.robot.Robot.base_rotation` measures its facing at the zero
       pose.
     - ``name``: the robot's name (default: the file's stem). ``mass`` [kg]: total body mass,
-      spread by de Leva's (1996) segment table (:mod:`gdimitate.bvh.inertia`).
+      spread by de Leva's (1996) segment table (:mod:`gdimitate.io.bvh.inertia`).
     - ``contacts``: the stance masks ``{"left": (T,) bool, "right": (T,) bool}`` (after any
-      skipped frame), or a :class:`~gdimitate.bvh.contacts.ContactRule` for the detection from
+      skipped frame), or a :class:`~gdimitate.io.bvh.contacts.ContactRule` for the detection from
       foot height and speed (default thresholds when ``None``).
     - ``legs``: BVH joint names ``{"left": {"hip", "knee", "ankle", "toe"?}, "right": …}``
       where the names do not follow a known convention.
     - ``ground``: lower (or raise) the base on every frame by the floor height estimated from
-      the clip (:func:`gdimitate.bvh.contacts.estimate_floor`), so that the floor is z = 0;
+      the clip (:func:`gdimitate.io.bvh.contacts.estimate_floor`), so that the floor is z = 0;
       ``robot.bvh_info.floor`` keeps that height. ``False`` keeps the file's heights.
     - ``urdf_path``: also write the URDF there (``robot.urdf_path``).
 

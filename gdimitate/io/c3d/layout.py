@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import C3DFormatError, ResourceLimitError
+from ...errors import C3DFormatError, ResourceLimitError
 
 __all__ = ["C3DLayout", "MAX_C3D_BYTES", "MAX_C3D_MEMORY", "check_c3d", "estimated_memory"]
 
@@ -75,7 +75,7 @@ class C3DLayout:
 
 
 def estimated_memory(L: C3DLayout) -> float:
-    """Bytes :func:`gdimitate.c3d.read_c3d` needs to read a file of layout ``L`` (an upper
+    """Bytes :func:`gdimitate.io.c3d.read_c3d` needs to read a file of layout ``L`` (an upper
     estimate from measured per-item costs)."""
     samples = L.frames * L.subframes
     return (_COST_FIXED + L.frames * (_COST_FRAME + _COST_POINT * L.points)
@@ -343,7 +343,7 @@ def check_c3d(path: Path) -> C3DLayout:
     size = path.stat().st_size
     if size > MAX_C3D_BYTES:
         raise ResourceLimitError(f"{path}: {size:,} bytes is over the {MAX_C3D_BYTES:,} bytes "
-                                 "a C3D file may have (gdimitate.c3d.layout.MAX_C3D_BYTES); "
+                                 "a C3D file may have (gdimitate.io.c3d.layout.MAX_C3D_BYTES); "
                                  "cut the trial into shorter ones")
     head, section, pblock, nblocks, proc = _sections(path, size)
     r = _Reader(head, proc == 85, path)
@@ -392,7 +392,7 @@ def check_c3d(path: Path) -> C3DLayout:
         raise ResourceLimitError(
             f"{path}: reading {frames:,} frames of {points} points and {channels} × {sub} "
             f"analog samples would need about {need / 1e9:.1f} GB; the limit is "
-            f"{MAX_C3D_MEMORY / 1e9:g} GB (gdimitate.c3d.layout.MAX_C3D_MEMORY): cut the trial")
+            f"{MAX_C3D_MEMORY / 1e9:g} GB (gdimitate.io.c3d.layout.MAX_C3D_MEMORY): cut the trial")
     return layout
 
 

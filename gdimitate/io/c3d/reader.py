@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import C3DFormatError, FileFormatError, ForceDataError, UnitError
-from ..model.osim.joints import ground_to_world
-from ..model.osim.trc import Markers, check_marker_values
+from ...errors import C3DFormatError, FileFormatError, ForceDataError, UnitError
+from ...model.osim.joints import ground_to_world
+from ...model.osim.trc import Markers, check_marker_values
 from ..opensim.grf import CONTACT_THRESHOLD
 
 __all__ = ["C3DTrial", "ForcePlate", "read_c3d"]
@@ -78,7 +78,7 @@ class C3DTrial:
     def contact_forces(self, robot, motion, *, threshold: float = CONTACT_THRESHOLD):
         """The plates' forces on ``robot``'s feet along ``motion`` (same lab frame) →
         :class:`~gdimitate.contact.ContactForces` on ``motion.t``; see
-        :func:`gdimitate.c3d.plates.assign_plates`."""
+        :func:`gdimitate.io.c3d.plates.assign_plates`."""
         from .plates import assign_plates
 
         return assign_plates(self.plates, robot, motion, threshold=threshold,
@@ -199,7 +199,7 @@ def read_c3d(path: str | Path, *, threshold: float = CONTACT_THRESHOLD) -> C3DTr
     pressure NaN elsewhere). Raises :class:`~gdimitate.errors.FileFormatError` (no such file,
     not a C3D file, no markers, no vertical axis; :class:`~gdimitate.errors.C3DFormatError`,
     one of them, for a truncated or corrupt file, checked before ezc3d reads it:
-    :func:`gdimitate.c3d.layout.check_c3d`), :class:`~gdimitate.errors.ResourceLimitError`
+    :func:`gdimitate.io.c3d.layout.check_c3d`), :class:`~gdimitate.errors.ResourceLimitError`
     (too large), :class:`~gdimitate.errors.OpenSimDataError` (marker values no body has),
     :class:`~gdimitate.errors.UnitError` (units not understood) and
     :class:`~gdimitate.errors.ForceDataError` (NaN forces, plates without samples)."""

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model.osim.joints import follow_coordinates, pelvis_to_freeflyer, root_joint
-from ..model.robot import Robot
+from ...model.osim.joints import follow_coordinates, pelvis_to_freeflyer, root_joint
+from ...model.robot import Robot
 from ..opensim.coordinates import robot_coordinates
 from .layout import CONTACT_LABELS, Layout
 
@@ -48,7 +48,7 @@ class OpenSimLayout(Layout):
         {side: stance})`` (the stance's channels both NaN: detected, :meth:`Layout.decode`):
         degrees → radians for the rotational coordinates; an unbounded joint's angle as
         (cos, sin); the root's coordinates → the free-flyer
-        (:func:`~gdimitate.model.osim.joints.pelvis_to_freeflyer`)."""
+        (:func:`~gdimitate.opensim.joints.pelvis_to_freeflyer`)."""
         x, contact = self._checked(sample)
         q = np.array(self.robot.neutral, float)
         for n, (_, kind, i) in enumerate(self._joints):

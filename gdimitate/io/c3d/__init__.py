@@ -9,7 +9,7 @@
     gd.c3d.write_c3d("out.c3d", markers, plates)  # the reverse (synthetic trials, conversions)
 
 :mod:`.reader` reads, :mod:`.plates` assigns plates to feet, :mod:`.writer` writes
-(:func:`gdimitate.gait.write_subject01_c3d` writes the shipped trial as a lab's C3D).
+(:func:`gdimitate.io.gait.write_subject01_c3d` writes the shipped trial as a lab's C3D).
 """
 
 from .plates import assign_plates

@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InvalidInputError, MarkerGapWarning, OpenSimDataError, SolverError
-from ..model.motion import Motion
-from ..model.osim.joints import follow_coordinates
-from ..model.osim.trc import Markers
+from ...errors import InvalidInputError, MarkerGapWarning, OpenSimDataError, SolverError
+from ...model.motion import Motion
+from ...model.osim.joints import follow_coordinates
+from ...model.osim.trc import Markers
 
 __all__ = ["IKResult", "inverse_kinematics", "marker_frames"]
 
@@ -155,7 +155,7 @@ def inverse_kinematics(robot, markers: Markers, weights: dict[str, float] | None
 
     ``robot``: a :class:`~gdimitate.Robot` whose frames are named after the markers (e.g.
     :meth:`Robot.from_osim`); ``markers``: :class:`~gdimitate.opensim.Markers` (from
-    :func:`~gdimitate.opensim.read_trc` or :func:`gdimitate.c3d.read_c3d`, metres, our world
+    :func:`~gdimitate.opensim.read_trc` or :func:`gdimitate.io.c3d.read_c3d`, metres, our world
     frame); ``weights``: ``{marker: w ≥ 0}`` (default 1 each). ``iterations``: Gauss–Newton
     steps per frame after the first (``first_iterations``), stopping earlier when a step
     moves q by less than ``tol`` [rad or m]. Returns the motion (``q`` ``(T, nq)`` on

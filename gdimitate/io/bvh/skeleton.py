@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import BVHError, LegDetectionError
-from ..model.anthropometry import match_segment, side_of
+from ...errors import BVHError, LegDetectionError
+from ...model.anthropometry import match_segment, side_of
 from .parse import BVHFile
 
 __all__ = ["UP_TURNS", "UNITS", "world_turn", "zero_pose", "detect_scale", "hip_height_units",
@@ -141,7 +141,7 @@ def find_legs(bvh: BVHFile, legs: Mapping[str, Mapping[str, str]] | None = None
                     idx[role] = None
                     continue
                 if n not in names:
-                    from ..errors import UnknownNameError
+                    from ...errors import UnknownNameError
 
                     raise UnknownNameError("BVH joint", n, names)
                 idx[role] = names.index(n)

@@ -31,7 +31,7 @@ deep; a ``Frame Time`` between :data:`~gdimitate.safety.MIN_SAMPLE_INTERVAL_S` a
 :data:`~gdimitate.safety.MAX_ARRAY_BYTES`. Beyond them:
 :class:`~gdimitate.errors.ResourceLimitError` naming the file, the line and the limit.
 
-Meaning of the numbers (used by :mod:`gdimitate.bvh.reader` and :mod:`gdimitate.bvh.urdf`):
+Meaning of the numbers (used by :mod:`gdimitate.io.bvh.reader` and :mod:`gdimitate.io.bvh.urdf`):
 a joint's transform relative to its parent is a translation by its OFFSET plus its position
 channels (in the parent's axes), then the rotations of its rotation channels composed in the
 file's order, ``R = R_c1 · R_c2 · …`` (right-handed, about the joint's own rotated axes),
@@ -52,8 +52,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import BVHError, ResourceLimitError
-from ..safety import (
+from ...errors import BVHError, ResourceLimitError
+from ...safety import (
     MAX_BVH_BYTES,
     MAX_MOTION_DURATION_S,
     MAX_SAMPLE_INTERVAL_S,
@@ -120,7 +120,7 @@ class BVHFile:
         for j in self.joints:
             if j.name == name:
                 return j
-        from ..errors import UnknownNameError
+        from ...errors import UnknownNameError
 
         raise UnknownNameError("BVH joint", name, [j.name for j in self.joints])
 
@@ -169,7 +169,7 @@ class _Tokens:
             raise self.error(line, f"{what} is {tok!r}; give a finite number")
         if abs(x) > MAX_BVH_POSITION:
             raise self.error(line, f"{what} is {tok!r}; offsets must lie within "
-                                   f"±{MAX_BVH_POSITION:g} file units (gdimitate.bvh.parse."
+                                   f"±{MAX_BVH_POSITION:g} file units (gdimitate.io.bvh.parse."
                                    "MAX_BVH_POSITION): is the file corrupt?")
         return x
 
@@ -378,7 +378,7 @@ def _read_frames(lines: list[str], start: int, path: str, n_frames: int, n_chann
                           ("a rotation", "MAX_BVH_ROTATION_DEG"))
             raise BVHError(f"{path}, line {i + 1}: frame {k}, value {c + 1} ({label}) is "
                            f"{parts[c]!r}; {kind} must lie within ±{limit[c]:g} "
-                           f"(gdimitate.bvh.parse.{name}): is the file corrupt?")
+                           f"(gdimitate.io.bvh.parse.{name}): is the file corrupt?")
         k += 1
     if k < n_frames:
         raise BVHError(f"{path}, line {last_line}: the MOTION section is truncated: 'Frames: "

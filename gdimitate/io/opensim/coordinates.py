@@ -4,7 +4,7 @@ Columns are matched to the robot's joints by coordinate name: a column is either
 coordinate name (``hip_flexion_r``, as OpenSim's inverse kinematics writes it) or a state path
 ``/jointset/<joint>/<coordinate>/value`` (OpenSim 4 states and Moco solutions, in radians);
 ``…/speed`` and other state columns (``/forceset/…``) are not coordinates and are listed as
-ignored. A URDF converted from the ``.osim`` (:func:`gdimitate.opensim.opensim_to_urdf`) names
+ignored. A URDF converted from the ``.osim`` (:func:`gdimitate.io.opensim.opensim_to_urdf`) names
 each 1-DoF joint after its coordinate, so its columns map one to one.
 
 Units: rotational coordinates are in degrees where the header says ``inDegrees=yes`` (or the
@@ -32,15 +32,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import (
+from ...errors import (
     CoordinateMismatchError,
     CoordinateMismatchWarning,
     OpenSimDataError,
     UnitError,
 )
-from ..model.kinematics import robot_motion
-from ..model.motion import Motion
-from ..model.osim._table import Table, read_table
+from ...model.kinematics import robot_motion
+from ...model.motion import Motion
+from ...model.osim._table import Table, read_table
 
 __all__ = ["read_coordinates", "coordinate_columns", "robot_coordinates"]
 
@@ -122,7 +122,7 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
     ``(T, nq)`` [rad, m] in Pinocchio order (free-flyer ``[x, y, z, qx, qy, qz, qw]`` in our
     world frame from the ground→pelvis coordinates; the spline-driven joints of a converted
     walker knee from their coordinate), and an empty contact schedule (fill it
-    from measured forces, :func:`gdimitate.opensim.read_grf`).
+    from measured forces, :func:`gdimitate.io.opensim.read_grf`).
 
     Raises :class:`~gdimitate.errors.CoordinateMismatchError` (no column matches the model),
     :class:`~gdimitate.errors.UnitError` (unit flag contradicting the values),
@@ -163,11 +163,11 @@ def read_coordinates(path: str | Path, robot, *, osim=None) -> Motion:
         else:
             q[:, i] = x
     if followed:  # spline-driven joints (a walker knee's coupled axes) follow their coordinate
-        from ..model.osim.joints import follow_coordinates
+        from ...model.osim.joints import follow_coordinates
 
         follow_coordinates(plans, q, robot.idx_q)
     if root_in:
-        from ..model.osim.joints import pelvis_to_freeflyer
+        from ...model.osim.joints import pelvis_to_freeflyer
 
         values = {c: table.data[:, cols[c]] * (scale if root_kind[c] == "rotational" else 1.0)
                   for c in root_in}
@@ -184,8 +184,8 @@ def _root_joint(robot, osim):
         osim = _robot_osim(robot)
         if osim is None:
             return None
-    from ..model.osim.joints import root_joint
-    from ..model.osim.model import OsimModel, read_osim
+    from ...model.osim.joints import root_joint
+    from ...model.osim.model import OsimModel, read_osim
 
     model = osim if isinstance(osim, OsimModel) else read_osim(osim)
     return root_joint(model), model

@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ...model.legs import hip_height
+from ...model.robot import SIDES, Robot
 from ..bvh.contacts import ContactRule
-from ..model.legs import hip_height
-from ..model.robot import SIDES, Robot
 
 __all__ = ["CausalStance"]
 

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidInputError, UnitsWarning
-from .model.contact import ContactForces, FootForces
-from .model.motion import Motion
+from ..errors import InvalidInputError, UnitsWarning
+from ..model.contact import ContactForces, FootForces
+from ..model.motion import Motion
 
 __all__ = ["read_mot", "read_opensim", "human_walk", "human_walk_path", "human_walk_3d",
            "human_walk_3d_folder", "one_stride", "cmu_walk_path", "write_subject01_c3d"]
@@ -25,7 +25,7 @@ def human_walk_path() -> Path:
 
 def read_mot(path: str | Path) -> dict[str, np.ndarray]:
     """Read an OpenSim ``.mot``/``.sto`` table into ``{column: (T,) array}``, values as stored
-    (read by :func:`gdimitate.opensim.read_table`, whose errors it raises; one row suffices).
+    (read by :func:`gdimitate.io.opensim.read_table`, whose errors it raises; one row suffices).
 
     Column names are shortened to their coordinate name (``/jointset/hip_r/hip_flexion_r/value``
     → ``hip_flexion_r``). Angles stay in the file's unit (the header's ``inDegrees`` tells);
@@ -38,8 +38,8 @@ def read_mot(path: str | Path) -> dict[str, np.ndarray]:
             repeated column names (also after shortening); OpenSimDataError (an
             InvalidInputError): no such file, no ``endheader``, a malformed numeric table.
     """
-    from .errors import OpenSimFormatError
-    from .model.osim._table import read_table
+    from ..errors import OpenSimFormatError
+    from ..model.osim._table import read_table
 
     table = read_table(path, min_rows=1)
     short = [n.split("/")[-2] if n.endswith("/value") else n.split("/")[-1]
@@ -115,10 +115,10 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     measured body motion, whose centre-of-mass acceleration reproduces the measured GRF
     direction (see ``tests/test_gait.py``).
     """
-    from .model.kinematics import kinematic_contact, robot_motion
-    from .model.robot import Robot
-    from .model.sagittal import compose_q, ground_base
-    from .model.urdfgen import human_spec
+    from ..model.kinematics import kinematic_contact, robot_motion
+    from ..model.robot import Robot
+    from ..model.sagittal import compose_q, ground_base
+    from ..model.urdfgen import human_spec
 
     d = read_mot(path)
     _refuse_full_body(path, d)
@@ -165,7 +165,7 @@ _OUT_OF_PLANE = ("pelvis_list", "pelvis_rotation", "hip_adduction_r", "hip_adduc
 
 def _refuse_full_body(path, d: dict) -> None:
     """A full-body 3-D coordinates file would lose its out-of-plane angles here: refuse it."""
-    from .errors import OpenSimDataError
+    from ..errors import OpenSimDataError
 
     found = [c for c in _OUT_OF_PLANE if c in d]
     if found:
@@ -177,7 +177,7 @@ def _refuse_full_body(path, d: dict) -> None:
 
 
 def _measured_base(robot, q, contact, d, t, belt_speed):
-    from .model.kinematics import frame_paths
+    from ..model.kinematics import frame_paths
 
     for c in ("pelvis_tx", "pelvis_ty"):
         if c not in d:
@@ -226,8 +226,8 @@ def write_subject01_c3d(path: str | Path) -> Path:
     gait-lab example, the docs' figure)."""
     import warnings
 
+    from ..model.robot import Robot
     from .c3d import ForcePlate, write_c3d
-    from .model.robot import Robot
     from .opensim import read_grf, read_trc
 
     folder = human_walk_3d_folder()
@@ -254,17 +254,17 @@ def human_walk_3d(overground: bool = True):
     ``robot``: :meth:`Robot.from_osim` of the subject's scaled OpenSim model (free-flyer
     pelvis, 72.6 kg; soles on the lab floor below the foot markers of the trial's ``.trc``);
     ``motion``: its inverse-kinematics angles (60 Hz, t = 0.5–4.0 s, 211
-    frames) read by :func:`gdimitate.opensim.read_coordinates`, ``contact`` the measured stance
+    frames) read by :func:`gdimitate.io.opensim.read_coordinates`, ``contact`` the measured stance
     (vertical force > 20 N); ``forces``: the measured ground reaction forces of both feet on
-    the motion's times (:func:`gdimitate.opensim.read_grf` with the trial's ExternalLoads).
+    the motion's times (:func:`gdimitate.io.opensim.read_grf` with the trial's ExternalLoads).
 
     ``overground`` (default ``True``): the treadmill trial turned overground — the belt speed,
     estimated from the stance feet, times t added to the pelvis x and to the centres of
-    pressure (:func:`gdimitate.opensim.treadmill_to_overground`); ``forces.frame_note`` says
+    pressure (:func:`gdimitate.io.opensim.treadmill_to_overground`); ``forces.frame_note`` says
     which was done and the speed. ``False`` keeps the treadmill kinematics (as OpenSim's own
     inverse dynamics of this trial used them).
     """
-    from .model.robot import Robot
+    from ..model.robot import Robot
     from .opensim.coordinates import read_coordinates
     from .opensim.grf import read_grf
     from .opensim.treadmill import treadmill_to_overground

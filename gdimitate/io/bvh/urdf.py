@@ -5,7 +5,7 @@
 - a BVH joint with k channels gives k URDF joints ``<joint>_<channel>`` (e.g.
   ``LeftUpLeg_Zrotation``) in the file's channel order, position channels first (prismatic,
   [m]), then the rotation channels (revolute about the channel's axis, [rad]), with k − 1
-  intermediate links ``<joint>_<channel>_link`` (:data:`~gdimitate.bvh.inertia.TINY_MASS`);
+  intermediate links ``<joint>_<channel>_link`` (:data:`~gdimitate.io.bvh.inertia.TINY_MASS`);
   a joint without channels is a fixed joint ``<joint>_fixed``;
 - the first joint of the chain sits at the BVH OFFSET (scaled to metres); below the root every
   link frame has the file's axes, and the root's children are turned by the constant world
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 import yourdfpy as yd
 
-from ..errors import BVHError
-from ..model.contact import sole_frame_name
+from ...errors import BVHError
+from ...model.contact import sole_frame_name
 from .inertia import LinkInertia, tiny
 from .parse import BVHFile
 from .skeleton import Sole
