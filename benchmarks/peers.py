@@ -65,8 +65,8 @@ from results import add_flag, recording
 
 import gdimitate as gd
 from gdimitate.apps.baselines import diff_ik, joint_copy, kinematic_plan
-from gdimitate.audit import audit
-from gdimitate.export import read_wrenches
+from gdimitate.assess.audit import audit
+from gdimitate.export.writers import read_wrenches
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.sim.reference import Plan
 

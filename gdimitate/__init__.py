@@ -48,22 +48,21 @@ from .errors import (
 
 if TYPE_CHECKING:
     from . import (
-        audit,
-        metrics,
         oscillator,
         planar,
         retarget,
         sim,
-        wrenches,
     )
     from .adapt import adapt
     from .apps.cases import paper_case
-    from .audit.dataset import MotionAudit, audit_motion
+    from .assess import audit, metrics, wrenches
+    from .assess.audit.dataset import MotionAudit, audit_motion
+    from .assess.metrics import ForceDirection
+    from .assess.result import AdaptationReport, AdaptedMotion
     from .cpg import CPGReplay, entrain
-    from .export import export_motion
+    from .export.writers import export_motion
     from .io import bvh, c3d, gait, opensim
     from .io.demonstration import Demonstration, load_demonstration
-    from .metrics import ForceDirection
     from .model import contact
     from .model.contact import ContactForces, FootForces, SoleContact
     from .model.library import list_robots
@@ -72,7 +71,6 @@ if TYPE_CHECKING:
     from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
     from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
     from .repair import RepairResult, repair
-    from .result import AdaptationReport, AdaptedMotion
     from .retarget import Limits, StreamingAdaptor, Weights
     from .walk import walk
 
@@ -81,11 +79,11 @@ __version__ = "0.1.0"
 #: public name -> the submodule that defines it (imported when the name is first read)
 _LAZY_NAMES: dict[str, str] = {
     "adapt": ".adapt",
-    "AdaptationReport": ".result",
-    "AdaptedMotion": ".result",
+    "AdaptationReport": ".assess.result",
+    "AdaptedMotion": ".assess.result",
     "paper_case": ".apps.cases",
-    "audit_motion": ".audit.dataset",
-    "MotionAudit": ".audit.dataset",
+    "audit_motion": ".assess.audit.dataset",
+    "MotionAudit": ".assess.audit.dataset",
     "ContactForces": ".model.contact",
     "FootForces": ".model.contact",
     "SoleContact": ".model.contact",
@@ -93,9 +91,9 @@ _LAZY_NAMES: dict[str, str] = {
     "entrain": ".cpg",
     "Demonstration": ".io.demonstration",
     "load_demonstration": ".io.demonstration",
-    "export_motion": ".export",
+    "export_motion": ".export.writers",
     "list_robots": ".model.library",
-    "ForceDirection": ".metrics",
+    "ForceDirection": ".assess.metrics",
     "Motion": ".model.motion",
     "MatsuokaBank": ".oscillator",
     "MatsuokaParams": ".oscillator",
@@ -116,18 +114,18 @@ _LAZY_NAMES: dict[str, str] = {
 
 #: public subpackages / modules (``gdimitate.sim`` etc.) -> where they live, imported on first use
 _LAZY_MODULES: dict[str, str] = {
-    "audit": ".audit",
+    "audit": ".assess.audit",
     "bvh": ".io.bvh",
     "c3d": ".io.c3d",
     "contact": ".model.contact",
     "gait": ".io.gait",
-    "metrics": ".metrics",
+    "metrics": ".assess.metrics",
     "opensim": ".io.opensim",
     "oscillator": ".oscillator",
     "planar": ".planar",
     "retarget": ".retarget",
     "sim": ".sim",
-    "wrenches": ".wrenches",
+    "wrenches": ".assess.wrenches",
 }
 
 

@@ -5,16 +5,17 @@ paper's "without adaptor" baseline (same planar joint angles); ``"optimal"`` —
 contact-consistent trajectory optimisation (:mod:`gdimitate.retarget`). Every method returns an
 :class:`AdaptedMotion`: the motion, a kinematic comparison with the demonstration
 (:class:`AdaptationReport`) and, for the optimal method, the contact wrenches, the contacts
-used, the solver's account and the independent physical audit (:func:`gdimitate.audit.audit`).
+used, the solver's account and the independent physical audit
+(:func:`gdimitate.assess.audit.audit`).
 """
 
 from __future__ import annotations
 
+from .assess.result import AdaptationReport, AdaptedMotion, compare
 from .errors import InvalidInputError, UnknownNameError
 from .model.motion import Motion
 from .model.robot import Robot
 from .planar.analytic import adapt_planar, check_pair
-from .result import AdaptationReport, AdaptedMotion, compare
 from .types import AdaptMethod, ForceModel
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "adapt", "METHODS", "compare"]

@@ -31,9 +31,9 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
+from .assess.verdict import EXIT_NOT_FEASIBLE
 from .errors import GdimitateError, LegDetectionError, OscillatorError, OutputError
 from .safety import atomic_write, output_job, prepare_output_dir
-from .verdict import EXIT_NOT_FEASIBLE
 
 if TYPE_CHECKING:
     from .types import ForceModel
@@ -228,7 +228,7 @@ def _force_goal(given: str | None, method: str, forces) -> str:
 
 def _cmd_adapt(a: argparse.Namespace) -> int:
     from .apps.outputs import write_adapted
-    from .verdict import report_lines, verdict
+    from .assess.verdict import report_lines, verdict
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
@@ -244,7 +244,8 @@ def _cmd_adapt(a: argparse.Namespace) -> int:
 
 def _error_lines(report: dict) -> list[str]:
     """adapt's last line, from report.json's numbers: the largest push-direction error
-    (:func:`gdimitate.verdict.push_errors`: the audit's angle where it measured the push, else
+    (:func:`gdimitate.assess.verdict.push_errors`: the audit's angle where it measured the push,
+    else
     the report's sagittal one) with its side and knot, and the largest position-limit
     excursion."""
     push = report["push_direction_error"]
@@ -271,8 +272,8 @@ def _cmd_view(a: argparse.Namespace) -> int:
     import time
 
     from .apps.examples import example
-    from .metrics import force_direction
-    from .verdict import verdict
+    from .assess.metrics import force_direction
+    from .assess.verdict import verdict
     from .viz import Viewer, compare
 
     live = a.html is None
@@ -444,7 +445,7 @@ def _cmd_stream(a: argparse.Namespace) -> int:
 
 
 def _cmd_export(a: argparse.Namespace) -> None:
-    from .export import FORMATS, export_motion, read_wrenches
+    from .export.writers import FORMATS, export_motion, read_wrenches
 
     demo = _demonstration(a.motion, a)
     wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
@@ -462,7 +463,7 @@ def _cmd_export(a: argparse.Namespace) -> None:
 
 
 def _cmd_simulate(a: argparse.Namespace) -> int:
-    from .export import read_wrenches
+    from .export.writers import read_wrenches
 
     # the plan is a gdimitate .npz that records its robot: --grf, --coordinates and --osim
     # belong to the --reference (they were applied to the plan, which then always failed)
@@ -653,7 +654,7 @@ def _add_entrain(sub) -> None:
 
 def _add_export(sub) -> None:
     """``gdimitate export``: a motion written in another file format."""
-    from .export import FORMATS
+    from .export.writers import FORMATS
 
     ex = sub.add_parser("export", help="write a motion as CSV, NPZ, MuJoCo qpos, or what "
                         "motion-tracking pipelines read: the LAFAN1 CSV, a GMR pickle, an Isaac "

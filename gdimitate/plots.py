@@ -12,8 +12,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from . import metrics
-from .metrics import ForceDirection
+from .assess import metrics
+from .assess.metrics import ForceDirection
 from .model.contact import SoleContact, centre_of_pressure
 from .model.motion import Motion
 from .model.robot import Robot
@@ -146,7 +146,8 @@ def plot_force_directions(t: np.ndarray, directions: Mapping[str, Mapping[str, F
                           times: Mapping[str, np.ndarray] | None = None):
     """Sagittal and frontal force-direction angles [deg] of each foot over time ``t`` ``(T,)``
     [s]: ``directions`` maps a label (e.g. "measured", "dynamics", "imitator") to
-    :func:`gdimitate.metrics.force_direction`'s result on that time grid (``times``: a label's
+    :func:`gdimitate.assess.metrics.force_direction`'s result on that time grid (``times``: a
+    label's
     own time grid where it differs, e.g. an adaptor's knots). ``contact`` (``{side: (T,)
     bool}`` on ``t``) shades single support."""
     fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex=True)

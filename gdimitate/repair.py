@@ -43,13 +43,13 @@ from typing import Any
 
 import numpy as np
 
-from .audit.dataset import MotionAudit
+from .assess.audit.dataset import MotionAudit
+from .assess.result import AdaptedMotion
 from .errors import InvalidInputError
 from .model.contact import ContactForces, FootForces
 from .model.legs import hip_height
 from .model.motion import Motion
 from .model.robot import SIDES, Robot
-from .result import AdaptedMotion
 from .retarget.targets import configurations_at
 
 __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
@@ -173,7 +173,7 @@ def repair_schedule(robot: Robot, motion: Motion, flat: float = FLAT_HEIGHT
     the lowest sole corner's height and speed) where also the sole's highest corner is within
     ``flat`` hip heights of the floor (:func:`gdimitate.bvh.contacts.estimate_floor`), the
     flat foot the adaptor's contact is."""
-    from .audit.dataset import stance_schedule
+    from .assess.audit.dataset import stance_schedule
 
     stance, _ = stance_schedule(robot, motion)
     if all(s in motion.contact for s in SIDES):
@@ -325,10 +325,10 @@ def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
     not the robot's, too short, a robot without a free base, or options the repair sets itself.
     """
     from .adapt import adapt
-    from .audit.dataset import audit_motion
+    from .assess.audit.dataset import audit_motion
+    from .assess.wrenches import estimate_wrenches
     from .model.motion import differentiate
     from .retarget import Weights
-    from .wrenches import estimate_wrenches
 
     t0 = time.perf_counter()
     if not isinstance(robot, Robot):

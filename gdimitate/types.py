@@ -2,7 +2,8 @@
 
 Each alias matches the values its module checks at run time (tests/test_architecture.py keeps
 them equal): :data:`Side` = :data:`SIDES` (= :data:`gdimitate.model.legs.SIDES`),
-:data:`ForceModel` = :data:`gdimitate.metrics.FORCE_MODELS`, :data:`ContactRule` = the rules of
+:data:`ForceModel` = :data:`gdimitate.assess.metrics.FORCE_MODELS`, :data:`ContactRule` = the rules
+of
 :class:`gdimitate.retarget.Contact`, :data:`BaseKind` = the values of ``Robot.base``.
 Importing this module loads nothing else.
 """

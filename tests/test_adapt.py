@@ -9,7 +9,7 @@ from gdimitate import (
     adapt,
     paper_case,
 )
-from gdimitate.metrics import force_direction, hip_height_ratio
+from gdimitate.assess.metrics import force_direction, hip_height_ratio
 from gdimitate.model.sagittal import leg_angles
 from gdimitate.planar import eq1
 
@@ -62,7 +62,7 @@ def test_copy_baseline_changes_hip_ratio(case):
 def test_imitator_stance_foot_does_not_slip():
     demo, imit, motion = paper_case("I")
     a = adapt(motion, demo, imit, "analytic")
-    from gdimitate.metrics import sole_paths
+    from gdimitate.assess.metrics import sole_paths
 
     soles = sole_paths(imit, a.motion)
     for s in ("left", "right"):

@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.audit import AuditReport, AuditTolerances, audit
+from gdimitate.assess.audit import AuditReport, AuditTolerances, audit
 from gdimitate.errors import InvalidInputError
 from gdimitate.model.motion import Motion, differentiate
 from gdimitate.model.robot import Robot

@@ -1,7 +1,8 @@
 """``gd.audit_motion`` and ``gdimitate audit``: a robot motion dataset checked for physical
 feasibility. Each verdict and number is compared with an independent reference: the audit of
 the same motion computed here step by step (:func:`gdimitate.model.motion.differentiate`,
-:func:`gdimitate.wrenches.estimate_wrenches`, :func:`gdimitate.audit.audit`), and the same
+:func:`gdimitate.assess.wrenches.estimate_wrenches`, :func:`gdimitate.assess.audit.audit`), and the
+same
 motion before it was written to another format."""
 
 from __future__ import annotations
@@ -15,12 +16,12 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.apps.cases import paper_case
-from gdimitate.audit import audit
+from gdimitate.assess.audit import audit
+from gdimitate.assess.verdict import EXIT_NOT_FEASIBLE
+from gdimitate.assess.wrenches import estimate_wrenches
 from gdimitate.cli import main
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
-from gdimitate.verdict import EXIT_NOT_FEASIBLE
-from gdimitate.wrenches import estimate_wrenches
 
 
 def _slice(m, a, b):

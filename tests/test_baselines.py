@@ -3,7 +3,7 @@
 References: the legs' sagittal signs/offsets that ``Robot`` measures from each model's geometry
 (independent of the body map's joint-axis signs), Pinocchio's forward kinematics of the
 output, the audit's recomputation (rnea, limits, slip), the project's own measured-force model
-(``gdimitate.metrics.force_direction``) and MuJoCo (``gdimitate.sim.simulate``).
+(``gdimitate.assess.metrics.force_direction``) and MuJoCo (``gdimitate.sim.simulate``).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from gdimitate.apps.baselines import (
     leg_ratio,
     scaled_keypoints,
 )
-from gdimitate.audit import audit
+from gdimitate.assess.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
 from gdimitate.model.sagittal import leg_angles, sagittal_leg
 
@@ -204,7 +204,7 @@ def _peers():
 
 def test_benchmark_push_is_the_measured_force_model(walk):
     """benchmarks/peers.py's measured push on the demonstration's grid equals
-    ``gdimitate.metrics.force_direction(..., "measured")``."""
+    ``gdimitate.assess.metrics.force_direction(..., "measured")``."""
     robot_m, motion, forces = walk
     push = _peers().measured_push(forces, motion.t)
     ref = gd.metrics.force_direction(robot_m, motion, "measured", forces=forces)

@@ -17,8 +17,8 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     """The main job end to end: the 3-D walk → G1 through the optimal adaptor, audited,
     simulated, entrained. Checked independently of the adaptor: the saved motion and wrenches
     re-audited with Pinocchio here; MuJoCo's verdicts (the plan walks, the joint copy falls)."""
-    from gdimitate.audit import audit
-    from gdimitate.export import read_wrenches
+    from gdimitate.assess.audit import audit
+    from gdimitate.export.writers import read_wrenches
     from gdimitate.model.motion import Motion
     from gdimitate.model.robot import Robot
 
@@ -266,7 +266,7 @@ def test_simulate_command(tmp_path, capsys):
     with its recorded robot, simulated; sim.json equals gd.sim.simulate run directly."""
     import gdimitate as gd
     from gdimitate.apps.scenarios import standing_plan
-    from gdimitate.export import export_motion
+    from gdimitate.export.writers import export_motion
 
     robot = gd.Robot.from_library("g1")
     plan = standing_plan(robot, 1.0)

@@ -43,10 +43,10 @@ def test_adapt_of_the_sagittal_walk_to_hoap2_says_which_goal_is_unmet(tmp_path, 
     verdict, the solver's record and each unmet goal are printed and in report.json, the exit
     status is 3 whenever the result is not feasible or a goal is unmet, and the audit's
     verdict is recomputed here from the written files (Pinocchio)."""
-    from gdimitate.audit import audit
+    from gdimitate.assess.audit import audit
+    from gdimitate.assess.verdict import limits_at_bound, report_lines
     from gdimitate.cli import _error_lines
-    from gdimitate.export import read_wrenches
-    from gdimitate.verdict import limits_at_bound, report_lines
+    from gdimitate.export.writers import read_wrenches
 
     out = tmp_path / "a"
     status = main(["adapt", str(SAG), "--grf", str(SAG_GRF), "--imitator", "hoap2",
@@ -345,7 +345,7 @@ def test_view_without_a_file_shows_the_default_story_with_its_verdict(tmp_path, 
     import importlib
 
     from gdimitate.apps.demo import default_demonstration
-    from gdimitate.verdict import verdict
+    from gdimitate.assess.verdict import verdict
 
     module, shown = importlib.import_module("gdimitate.adapt"), []
     original = module.adapt

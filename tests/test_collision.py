@@ -13,11 +13,11 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.audit import audit
+from gdimitate.assess.audit import audit
+from gdimitate.assess.wrenches import estimate_wrenches
 from gdimitate.errors import InvalidInputError
 from gdimitate.model.motion import Motion
 from gdimitate.model.selfcollision import TRUNK, limb_groups, self_collision
-from gdimitate.wrenches import estimate_wrenches
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 
 from gdimitate import Robot, adapt
 from gdimitate.errors import ExportError, FileFormatError
-from gdimitate.export import (
+from gdimitate.export.writers import (
     BASE_COLUMNS,
     FORMATS,
     export_motion,
@@ -249,7 +249,7 @@ def test_gmr_pickle_round_trip_and_body_positions(tmp_path):
     depth-first, as MuJoCo numbers the bodies of the model gdimitate.sim builds."""
     import pickle
 
-    from gdimitate.export import body_links, read_gmr
+    from gdimitate.export.writers import body_links, read_gmr
 
     g1, motion = _g1_motion()
     p = export_motion(g1, motion, tmp_path / "walk.pkl", "gmr", fps=60.0)
@@ -286,7 +286,7 @@ def test_isaaclab_amp_npz_round_trip_body_order_and_velocities(tmp_path):
     and MuJoCo's (1e-9); bodies breadth-first by default (each body's depth in the tree never
     decreases), depth-first on request; velocities equal central differences of the
     positions (O(h²) at 60 Hz); read back to the motion's q."""
-    from gdimitate.export import body_links, read_isaaclab_amp
+    from gdimitate.export.writers import body_links, read_isaaclab_amp
 
     g1, motion = _g1_motion()
     p = export_motion(g1, motion, tmp_path / "walk.npz", "isaaclab_amp", fps=60)
@@ -345,7 +345,7 @@ def test_isaaclab_amp_npz_round_trip_body_order_and_velocities(tmp_path):
 
 def test_cli_exports_gmr_and_isaaclab_amp(tmp_path):
     from gdimitate.cli import main
-    from gdimitate.export import read_gmr
+    from gdimitate.export.writers import read_gmr
 
     g1, motion = _g1_motion()
     npz = tmp_path / "g1.npz"
@@ -356,7 +356,7 @@ def test_cli_exports_gmr_and_isaaclab_amp(tmp_path):
     assert main(["export", str(npz), "--format", "isaaclab_amp", "--body-order", "depth",
                  "--out", str(tmp_path / "a.npz")]) == 0
     assert str(np.load(tmp_path / "a.npz")["body_order"]) == "depth"
-    from gdimitate.export import read_beyondmimic_npz
+    from gdimitate.export.writers import read_beyondmimic_npz
 
     assert main(["export", str(npz), "--format", "beyondmimic_npz", "--fps", "60"]) == 0
     bm = read_beyondmimic_npz(tmp_path / "g1.beyondmimic.npz")
@@ -372,7 +372,7 @@ def test_beyondmimic_npz_keys_and_bodies_match_pinocchio(tmp_path):
     wrenches we computed ride along under documented names."""
     import mujoco
 
-    from gdimitate.export import read_beyondmimic_npz
+    from gdimitate.export.writers import read_beyondmimic_npz
     from gdimitate.sim import build_model
 
     g1, motion = _g1_motion()

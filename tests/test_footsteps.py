@@ -160,8 +160,8 @@ def test_unknown_gait_scaling_is_refused(walk, robot):
 def test_limits_at_bound_from_the_joint_audit():
     """Closed form on audit rows: a torque at 0.995 of its limit and a velocity at 1.0 are at
     their bound, 0.98 is not, a position 0.5 mm from its limit is; no limit (NaN) is never."""
-    from gdimitate.audit.report import JointAudit
-    from gdimitate.verdict import limits_at_bound
+    from gdimitate.assess.audit.report import JointAudit
+    from gdimitate.assess.verdict import limits_at_bound
 
     def row(name, tr, vr, pm):
         return JointAudit(name, tr, 0, 1.0, tr, vr, 0, 1.0, vr, pm, 0)
@@ -180,7 +180,7 @@ def test_a_gait_not_kept_says_so_and_names_the_limits(robot):
     its result is audit-feasible, prints "gait NOT kept" with the travel ratio, and lists
     limits at their bound that the Pinocchio audit recomputed (each ratio ≥ 0.99 in
     audit.joints)."""
-    from gdimitate.verdict import gait_lines
+    from gdimitate.assess.verdict import gait_lines
 
     h, m = gd.gait.human_walk()
     r = gd.adapt(m, h, robot("hoap2"), verbose=False)

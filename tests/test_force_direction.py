@@ -9,9 +9,9 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
+from gdimitate.assess.metrics import ForceDirection, angle_between, force_direction
 from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.io.gait import human_walk_path, read_mot, read_opensim
-from gdimitate.metrics import ForceDirection, angle_between, force_direction
 from gdimitate.model.contact import ContactForces, FootForces
 from gdimitate.model.kinematics import joint_paths
 from gdimitate.model.sagittal import leg_angles

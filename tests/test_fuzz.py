@@ -446,7 +446,7 @@ def test_fuzz_user_numbers_that_size_arrays(rate, fps, shape):
     GdimitateError) before anything large is allocated — never MemoryError or a long run."""
     import time
 
-    from gdimitate.export import export_motion
+    from gdimitate.export.writers import export_motion
     from gdimitate.model.kinematics import kinematic_contact
 
     hoap2 = HOAP2

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from gdimitate import InvalidInputError, TimeGridError
+from gdimitate.assess.metrics import foot_heights
 from gdimitate.io.gait import human_walk, human_walk_path, read_mot, read_opensim
-from gdimitate.metrics import foot_heights
 from gdimitate.model.sagittal import leg_angles
 from gdimitate.model.urdfgen import human_spec
 

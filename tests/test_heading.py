@@ -75,7 +75,7 @@ def test_foot_distance_is_measured_along_the_walk(walk):
     """The feet's distance of the paper's Fig. 4 is along the walk's heading: the shipped walk
     turned by −137° gives the same curve (1e-9 m), which is the ankles' horizontal
     difference projected on the direction of the pelvis's travel (Pinocchio's ankle frames)."""
-    from gdimitate.metrics import foot_distance
+    from gdimitate.assess.metrics import foot_distance
 
     h, m, _ = walk
     turned = turn_motion(m, np.radians(-137), m.q[0, :2])

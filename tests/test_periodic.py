@@ -13,10 +13,11 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.audit.periodic import SEAM_TOL, seam_errors
+from gdimitate.assess.audit.periodic import SEAM_TOL, seam_errors
 from gdimitate.errors import InvalidInputError
+from gdimitate.model.heading import walking_direction
 from gdimitate.retarget.knot import Flags, Knot
-from gdimitate.retarget.parts.periodic import PeriodicSeam, walking_direction
+from gdimitate.retarget.parts.periodic import PeriodicSeam
 from gdimitate.retarget.parts.seam import seam_functions
 from gdimitate.retarget.periodic import periodic_rate, periodic_stride
 from gdimitate.retarget.problem import symbolic_model

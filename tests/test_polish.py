@@ -85,7 +85,7 @@ def test_the_correction_keeps_the_push_directions_it_is_given(g1):
     back through opposite horizontal forces and turns both pushes 1.8 mrad off their
     directions (the audit allows 1 mrad); given the directions, the correction stays within
     half of that (the yaw moments alone can take it back)."""
-    from gdimitate.audit.report import AuditTolerances
+    from gdimitate.assess.audit.report import AuditTolerances
 
     q, v, _, W, frames = _case(g1)
     a = np.zeros_like(v)

@@ -14,15 +14,15 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.apps.baselines import joint_copy
-from gdimitate.audit import audit
+from gdimitate.assess.audit import audit
+from gdimitate.assess.verdict import EXIT_NOT_FEASIBLE
+from gdimitate.assess.wrenches import estimate_wrenches, measured_wrenches
 from gdimitate.cli import main
-from gdimitate.export import read_wrenches
+from gdimitate.export.writers import read_wrenches
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
 from gdimitate.repair import keypoint_frames, repair_rate, wrench_forces
 from gdimitate.sim.reference import Plan
-from gdimitate.verdict import EXIT_NOT_FEASIBLE
-from gdimitate.wrenches import estimate_wrenches, measured_wrenches
 
 SIDES = ("left", "right")
 
@@ -114,7 +114,7 @@ def test_repair_of_the_g1_joint_copy_walks_feasibly_near_its_keypoints(g1_copy_s
 
 def test_estimated_wrenches_as_forces_turn_back_into_the_same_wrenches(g1_copy_stride):
     """:func:`wrench_forces` (sole-frame wrenches → world force, CoP, free moment) inverted by
-    :func:`gdimitate.wrenches.measured_wrenches` (the adaptor's reading of measured forces):
+    :func:`gdimitate.assess.wrenches.measured_wrenches` (the adaptor's reading of measured forces):
     the same wrench within 1e-9 N / N·m wherever the foot pushes."""
     g1, copy = g1_copy_stride
     m = differentiate(g1.model, copy.replace(

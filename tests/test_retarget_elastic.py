@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import gdimitate as gd
+from gdimitate.assess.solver import Unmet
 from gdimitate.retarget import problem as pb
 from gdimitate.retarget import solve
-from gdimitate.retarget.info import Unmet
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.metrics import force_direction
+from gdimitate.assess.metrics import force_direction
 from gdimitate.model.robot import SIDES
 from gdimitate.retarget import resample
 

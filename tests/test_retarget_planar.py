@@ -4,7 +4,7 @@ Ctrl-C.
 
 References are independent of the optimiser: the closed-form Eq. (1)
 (``adapt(method="analytic")``), Pinocchio (``rnea``, frame Jacobians, ``difference``) directly
-and through :func:`gdimitate.audit.audit`.
+and through :func:`gdimitate.assess.audit.audit`.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.audit import AuditTolerances
+from gdimitate.assess.audit import AuditTolerances
 from gdimitate.io.gait import one_stride
 from gdimitate.model.robot import SIDES, Robot
 from gdimitate.retarget import UnmappedJointsWarning

@@ -360,7 +360,7 @@ def test_non_unit_base_quaternion_is_refused_on_reading(tmp_path, g1, quat, caps
     """A motion NPZ with a zero (or non-unit) base quaternion passed Motion.from_npz,
     load_demonstration, export (writing [0,0,0,0]) and simulate (ran on NaN, printed "FELL",
     exit 0); now every reader refuses it, naming the frame."""
-    from gdimitate.export import export_motion, read_csv, read_lafan1_csv
+    from gdimitate.export.writers import export_motion, read_csv, read_lafan1_csv
 
     bad = _g1_motion(g1, quat)
     p = tmp_path / "bad.npz"
@@ -399,7 +399,7 @@ def test_export_onto_a_folder_or_into_a_missing_one_names_the_problem(tmp_path, 
     """export/save to a missing folder or onto a folder raised bare FileNotFoundError /
     IsADirectoryError; now OutputError saying which."""
     from gdimitate.errors import OutputError
-    from gdimitate.export import FORMATS, export_motion
+    from gdimitate.export.writers import FORMATS, export_motion
 
     robot, motion = hoap2, _motion(hoap2, T=20)
     (tmp_path / "folder.csv").mkdir()
@@ -439,7 +439,7 @@ def test_urdf_lower_limit_above_upper_is_refused(tmp_path, joint):
 def test_urdf_zero_effort_or_velocity_warns_and_stays_unchecked(tmp_path):
     """0 means "unknown" in many URDFs: a warning names the joints; the audit still lists them
     in ``unlimited`` (no torque/velocity check is made against 0)."""
-    from gdimitate.audit import audit
+    from gdimitate.assess.audit import audit
     from gdimitate.errors import UnlimitedJointWarning
 
     text = _hoap2_edit(r'(<joint name="left_knee".*?)effort="[^"]+"', r'\1effort="0"')

@@ -525,7 +525,7 @@ def test_a_long_motion_at_a_legal_rate_is_bounded_by_its_knot_array():
 def test_export_frame_rate_is_bounded(tmp_path):
     """export_motion(..., 'lafan1_csv', fps=1e9) wrote 15.5 GB in 90 s."""
     from gdimitate.errors import ExportError
-    from gdimitate.export import export_motion
+    from gdimitate.export.writers import export_motion
 
     g1 = Robot.from_library("g1")
     t = np.arange(30) / 30.0

@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 import gdimitate as gd
-from gdimitate.audit import audit
-from gdimitate.export import read_wrenches
+from gdimitate.assess.audit import audit
+from gdimitate.export.writers import read_wrenches
 from gdimitate.io.demonstration import load_demonstration
 
 CMU = str(gd.gait.cmu_walk_path())  # 120 Hz

@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.audit import audit
+from gdimitate.assess.audit import audit
 from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.model.kinematics import robot_motion
 

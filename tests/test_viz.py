@@ -18,8 +18,8 @@ import pinocchio as pin
 import pytest
 import umsgpack
 
+from gdimitate.assess.metrics import force_direction
 from gdimitate.errors import InvalidInputError, ViewerError
-from gdimitate.metrics import force_direction
 from gdimitate.model.robot import Robot
 from gdimitate.planar.walking import GaitSpec, walking_motion
 from gdimitate.viz import (

@@ -192,7 +192,7 @@ def _walk_prints_its_report(said: str, d: dict, out) -> None:
     steps, frequencies, push error and strides."""
     import math
 
-    from gdimitate.verdict import written_gait_lines
+    from gdimitate.assess.verdict import written_gait_lines
 
     aud = d["cycle_audit"]
     assert aud["feasible"] == d["cycle_feasible"]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from gdimitate import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, InvalidInputError, walking_motion
-from gdimitate.metrics import foot_heights, hip_height, sole_paths
+from gdimitate.assess.metrics import foot_heights, hip_height, sole_paths
 
 
 @pytest.mark.parametrize("gait", [HUMAN_GAIT, ROBOT_GAIT], ids=["human", "robot"])

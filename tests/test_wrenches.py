@@ -13,12 +13,17 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.audit import audit
+from gdimitate.assess.audit import audit
+from gdimitate.assess.wrenches import (
+    WrenchEstimate,
+    base_dofs,
+    estimate_wrenches,
+    measured_wrenches,
+)
 from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.io.gait import human_walk, human_walk_3d, human_walk_path, read_mot, read_opensim
 from gdimitate.model.motion import Motion, differentiate
 from gdimitate.model.robot import Robot
-from gdimitate.wrenches import WrenchEstimate, base_dofs, estimate_wrenches, measured_wrenches
 
 SIDES = ("left", "right")
 GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"

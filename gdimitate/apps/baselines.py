@@ -29,9 +29,9 @@ output:
 Both give a :class:`BaselinePlan`: ``motion`` with ``v``, ``a`` (central differences,
 :func:`gdimitate.model.motion.differentiate`) and the demonstrator's stance schedule, and the
 contact wrenches the motion implicitly asks of the floor —
-:func:`gdimitate.wrenches.estimate_wrenches` with ``method="lstsq"`` (no cone: feet may pull,
+:func:`gdimitate.assess.wrenches.estimate_wrenches` with ``method="lstsq"`` (no cone: feet may pull,
 the centre of pressure may leave the sole). A :class:`BaselinePlan` is a plan in the contract
-of :func:`gdimitate.sim.simulate` and fits :func:`gdimitate.audit.audit`.
+of :func:`gdimitate.sim.simulate` and fits :func:`gdimitate.assess.audit.audit`.
 """
 
 from __future__ import annotations
@@ -212,8 +212,8 @@ def kinematic_plan(robot: Robot, motion: Motion, method: str, seconds: float,
                    ) -> BaselinePlan:
     """Wrap a kinematic ``motion`` (``q``, ``contact``) of ``robot`` as a :class:`BaselinePlan`:
     ``v``, ``a`` by :func:`gdimitate.model.motion.differentiate` (no filter) and the minimum-norm
-    wrenches of :func:`gdimitate.wrenches.estimate_wrenches` (``method="lstsq"``)."""
-    from ..wrenches import estimate_wrenches
+    wrenches of :func:`gdimitate.assess.wrenches.estimate_wrenches` (``method="lstsq"``)."""
+    from ..assess.wrenches import estimate_wrenches
 
     mo = differentiate(robot.model, motion)
     contacts = dict(robot.require_contacts())

@@ -85,10 +85,10 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     the whole-body optimal adaptor); ``rate`` [knots/s] of the optimal solve."""
     from .. import sim
     from ..adapt import adapt
+    from ..assess.verdict import solver_record, verdict
     from ..cpg import entrain
     from ..model.robot import Robot
     from ..safety import atomic_write, prepare_output_dir
-    from ..verdict import solver_record, verdict
     from .baselines import joint_copy, kinematic_plan
 
     t0 = time.perf_counter()
@@ -153,7 +153,7 @@ def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot
     """The adapted motion (NPZ, CSV), the oscillator parameters and replay, the push
     directions (demonstrator measured vs plan), the gait (demonstrator scaled vs imitator) and
     the simulation's summary plot."""
-    from ..metrics import force_direction
+    from ..assess.metrics import force_direction
     from ..plots import plot_force_directions, plot_gait
     from ..safety import atomic_write
     from ..sim import plots as sim_plots
@@ -179,7 +179,7 @@ def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot
 
 def _plan_directions(robot: Robot, adapted):
     """The plan's push directions (its contact forces, reversed, in the world frame)."""
-    from ..metrics import ForceDirection, frame_rotations
+    from ..assess.metrics import ForceDirection, frame_rotations
 
     out = {}
     for s, c in adapted.contacts.items():
@@ -221,7 +221,7 @@ def _simline(m: dict[str, Any]) -> str:
 
 def summary_rows(summary: dict[str, Any], out: str | Path) -> list[tuple[str, str]]:
     """``(label, value)`` rows of :func:`summary_table`."""
-    from ..verdict import Verdict, written_gait_lines
+    from ..assess.verdict import Verdict, written_gait_lines
 
     aud = summary.get("audit")
     rows = [("demonstration", f"{summary['frames']} frames, {_num(summary['duration_s']):.2f} s "

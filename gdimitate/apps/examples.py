@@ -15,9 +15,9 @@ from ..types import AdaptMethod
 from .cases import PAPER_CASES
 
 if TYPE_CHECKING:  # the command line reads EXAMPLES without loading Pinocchio
+    from ..assess.result import AdaptedMotion
     from ..model.motion import Motion
     from ..model.robot import Robot
-    from ..result import AdaptedMotion
 
 __all__ = ["Example", "EXAMPLES", "example"]
 

@@ -10,9 +10,9 @@ import json
 from pathlib import Path
 from typing import Any
 
+from ..assess.result import AdaptedMotion
 from ..model.motion import Motion
 from ..model.robot import Robot
-from ..result import AdaptedMotion
 from ..safety import atomic_write
 
 __all__ = ["ADAPT_FILES", "write_adapted"]
@@ -26,8 +26,8 @@ def write_adapted(out: Path, demonstrator: Robot, demo: Motion, result: AdaptedM
     """Write :data:`ADAPT_FILES` of ``result`` (an adaptation of ``demo`` by
     ``demonstrator``) into the folder ``out``; ``extra``: more top-level entries of
     report.json. Returns report.json's text (what the console prints from)."""
+    from ..assess.verdict import push_errors, solver_record, verdict
     from ..plots import plot_gait
-    from ..verdict import push_errors, solver_record, verdict
 
     v = verdict(result)
     with atomic_write(out / "imitator_joints.csv") as tmp:

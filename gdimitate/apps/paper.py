@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import plots
 from ..adapt import adapt
-from ..metrics import sole_paths
+from ..assess.metrics import sole_paths
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
 from ..model.sagittal import leg_angles

@@ -18,10 +18,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..assess.verdict import EXIT_NOT_FEASIBLE, Verdict
 from ..model.motion import Motion
 from ..model.robot import Robot
 from ..repair import RepairResult
-from ..verdict import EXIT_NOT_FEASIBLE, Verdict
 
 __all__ = ["input_plan", "repair_file", "repair_verdict", "simulate_both"]
 
@@ -29,7 +29,7 @@ __all__ = ["input_plan", "repair_file", "repair_verdict", "simulate_both"]
 def repair_verdict(r: RepairResult) -> Verdict:
     """The repair's :class:`~gdimitate.verdict.Verdict`: the audit of the repaired motion
     (:attr:`RepairResult.after`), with the solver's record."""
-    from ..verdict import solver_record
+    from ..assess.verdict import solver_record
 
     a = r.after
     return Verdict(bool(a.feasible), "audit (Pinocchio) of the repaired motion",
@@ -41,7 +41,7 @@ def input_plan(robot: Robot, motion: Motion, r: RepairResult):
     """The input as a plan for :func:`gdimitate.sim.simulate`: its q, v and a (differenced
     where absent), the audit's stance schedule and the audit's estimated wrenches
     (``r.before.wrenches``)."""
-    from ..audit.dataset import stance_schedule
+    from ..assess.audit.dataset import stance_schedule
     from ..model.motion import differentiate
     from ..sim.reference import Plan
 

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from ..assess.result import AdaptedMotion
+from ..assess.verdict import EXIT_NOT_FEASIBLE
 from ..errors import InvalidInputError
 from ..io.live.layout import LiveSourceError
 from ..io.live.source import LiveSource
@@ -36,8 +38,6 @@ from ..model.kinematics import robot_motion
 from ..model.legs import hip_height
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
-from ..result import AdaptedMotion
-from ..verdict import EXIT_NOT_FEASIBLE
 
 __all__ = ["LiveView", "StreamLog", "open_source", "run_stream", "stream_command",
            "stream_lines"]
@@ -216,9 +216,9 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
     """The demonstration received and the motion streamed as :func:`gdimitate.adapt`'s
     ``mode="per_frame"`` result (``frame_feasible``: the audit of the assembled motion knot
     by knot — what the stream's verdicts are, frame for frame)."""
-    from ..audit import audit
+    from ..assess.audit import audit
+    from ..assess.result import compare
     from ..model.footsteps import compare_gait
-    from ..result import compare
     from ..retarget import SolverInfo, Unmet
 
     t = np.asarray(log.t) - log.t[0]
@@ -394,7 +394,7 @@ def stream_command(a: Any, out: Path, imitator: Callable[[], Robot]) -> int:
     ``out``; ``imitator()`` loads the robot (after the source is found: a missing stream
     fails at once); prints the summary from the written report.json; returns the exit
     status."""
-    from ..verdict import report_lines
+    from ..assess.verdict import report_lines
 
     source = open_source(a.source, skeleton=a.skeleton, osim=a.osim, frames=a.frames,
                          timeout=a.timeout, loopback=a.loopback)

@@ -24,7 +24,7 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     gait) next to ``imitator`` performing the analytically adapted walk, with force-direction
     arrows, centres of mass and foot paths."""
     from ..adapt import adapt
-    from ..metrics import force_direction
+    from ..assess.metrics import force_direction
     from ..model.robot import Robot
     from ..planar.walking import walking_motion
     from ..viz.compare import compare

@@ -1,5 +1,5 @@
 """``gdimitate audit``: robot motion files from any retargeter audited for physical
-feasibility (:func:`gdimitate.audit.audit_motion`), one after the other on this process.
+feasibility (:func:`gdimitate.assess.audit.audit_motion`), one after the other on this process.
 
 Files read (:data:`AUDIT_FORMATS`, by extension and content): gdimitate's ``.npz`` (robot
 recorded: no robot needed), the ``"csv"`` export (a header row), the LAFAN1 / BeyondMimic
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..audit.dataset import MotionAudit
+from ..assess.audit.dataset import MotionAudit
 from ..errors import FileFormatError, InvalidInputError
 from ..model.motion import Motion
 from ..model.robot import Robot
@@ -45,7 +45,7 @@ RobotLoader = Callable[[], "Robot | None"]
 @dataclass(frozen=True)
 class AuditedFile:
     """One file's audit: ``path``, its ``format`` (:data:`AUDIT_FORMATS`), ``robot`` (its
-    name) and the :class:`~gdimitate.audit.dataset.MotionAudit`."""
+    name) and the :class:`~gdimitate.assess.audit.dataset.MotionAudit`."""
 
     path: Path
     format: str
@@ -119,7 +119,7 @@ def read_robot_motion(path: Path, robot: Robot | None, fps: float = 30.0
     """``(robot, motion, format)`` of a motion file. ``robot``: the robot it was made for
     (None: only gdimitate's ``.npz``, which records its robot); ``fps`` [Hz]: the frame rate
     of a LAFAN1 CSV. Raises :class:`InvalidInputError` naming ``--robot`` when one is needed."""
-    from .. import export
+    from ..export import writers as export
 
     fmt = motion_format(path)
     if fmt == "npz":
@@ -153,7 +153,7 @@ def _read_beyondmimic(path: Path, robot: Robot) -> Motion:
     else in MuJoCo's order for the model :func:`gdimitate.sim.build_model` makes."""
     import mujoco
 
-    from ..export import read_beyondmimic_npz
+    from ..export.writers import read_beyondmimic_npz
     from ..model.mjcf import build_model
 
     bm = read_beyondmimic_npz(path)
@@ -179,7 +179,7 @@ def _read_beyondmimic(path: Path, robot: Robot) -> Motion:
 
 def _read_mujoco(path: Path, robot: Robot) -> Motion:
     """A MuJoCo qpos NPZ onto ``robot`` (the model :func:`gdimitate.sim.build_model` makes)."""
-    from ..export import read_mujoco
+    from ..export.writers import read_mujoco
     from ..model.mjcf import build_model
 
     mm = read_mujoco(path)
@@ -202,8 +202,8 @@ def _from_qpos(sim, robot: Robot, t: np.ndarray, qpos: np.ndarray) -> Motion:
 def audit_files(paths: Sequence[Path], robot: RobotLoader, fps: float = 30.0
                 ) -> list[AuditedFile]:
     """Each file read (:func:`read_robot_motion`, the robot from ``robot()`` loaded once
-    where needed) and audited (:func:`gdimitate.audit.audit_motion`), in order."""
-    from ..audit.dataset import audit_motion
+    where needed) and audited (:func:`gdimitate.assess.audit.audit_motion`), in order."""
+    from ..assess.audit.dataset import audit_motion
 
     given: list[Robot | None] = []
     out = []

@@ -94,7 +94,7 @@ class BatchRow:
       ``ground_penetration_max_m``;
     - ``goals_unmet`` (optimal method): the goals the optimiser's least-infeasible fallback
       leaves unmet, ``name violation@knot``, ``;``-separated (``""``: all met; see
-      :mod:`gdimitate.verdict`);
+      :mod:`gdimitate.assess.verdict`);
     - the audit's main margins (optimal method): ``audit_binding`` (failed checks, most
       violated first, ``;``-separated), ``torque_ratio_max`` (worst |τ|/limit),
       ``base_residual_max`` [N, N·m], ``penetration_max_m`` (deepest sole corner; negative:
@@ -262,7 +262,7 @@ def _save(adapted, path: Path) -> None:
 
 def _adapt_one(path: Path, options: BatchOptions) -> tuple[Any, dict[str, Any]]:
     from ..adapt import adapt
-    from ..verdict import verdict
+    from ..assess.verdict import verdict
 
     demonstrator, motion, forces = _load(path, options)
     imitator = load_robot(options.imitator)

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..assess.result import AdaptedMotion, compare
 from ..errors import InvalidInputError, LegMatchError
 from ..model.kinematics import robot_motion
 from ..model.motion import Motion
 from ..model.robot import Robot
 from ..model.sagittal import compose_q, ground_base, leg_angles, sagittal_leg
-from ..result import AdaptedMotion, compare
 from ..types import SIDES, ForceModel, PlanarMethod
 from .twolink import eq1
 

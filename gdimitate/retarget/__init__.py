@@ -15,7 +15,7 @@ solves one whole-body inverse-dynamics QP per frame instead (:mod:`.receding`):
   rectangle, swing clearance of every sole corner, the force direction (the goal);
 - one knot's functions mapped over the knots and the NLP cached per problem shape
   (:mod:`.problem`); IPOPT; the least-infeasible (elastic, L1) fallback; Ctrl-C stops a solve
-  (:mod:`.interrupt`); the report recomputed by :func:`gdimitate.audit.audit`.
+  (:mod:`.interrupt`); the report recomputed by :func:`gdimitate.assess.audit.audit`.
 """
 
 from .bodymap import BodyMap, UnmappedJointsWarning, body_map

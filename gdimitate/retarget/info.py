@@ -1,11 +1,10 @@
-"""What the optimal adaptor's modes share below them: the solver record (:class:`SolverInfo`,
-:class:`Unmet`), the soles a solve uses (:func:`resolve_contacts`) and the robot the audit
-judges (:func:`limited_robot`). ``solve`` (the trajectory mode) and ``streaming`` (the
-per-frame mode) both import them from here, so neither imports the other's module."""
+"""What the optimal adaptor's modes share below them: the soles a solve uses
+(:func:`resolve_contacts`) and the robot the audit judges (:func:`limited_robot`). ``solve``
+(the trajectory mode) and ``streaming`` (the per-frame mode) both import them from here, so
+neither imports the other's module; the solver record they fill (:class:`SolverInfo`) lives
+with the result type that holds it (:mod:`gdimitate.assess.solver`)."""
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,41 +14,7 @@ from ..model.robot import SIDES, Robot
 from . import limits
 from .params import Contact
 
-__all__ = ["SolverInfo", "Unmet", "resolve_contacts", "limited_robot"]
-
-
-@dataclass(frozen=True)
-class Unmet:
-    """A constraint group the returned motion does not meet (optimiser's view; the audit is
-    the judge): ``name``, worst ``violation`` (in the row's own scaled units: torque/limit,
-    force/(m·g), height/leg length, rad, m) and its ``knot``."""
-
-    name: str
-    violation: float
-    knot: int
-
-
-@dataclass(frozen=True)
-class SolverInfo:
-    """How the optimiser ran: IPOPT's ``status``, ``success``, ``iterations``, ``time_s``
-    (solves only), ``build_s`` (0 when the NLP came from the cache), ``cached`` (the NLP was
-    already built in this process), ``elastic`` (True when the hard problem failed and the
-    least-infeasible solve ran), ``knots``, ``variables`` (free ones), ``constraints`` (rows
-    the schedule imposes), ``unmet`` and ``compiled`` (this call compiled the robot's
-    derivatives to C; False: none needed, or they came from the on-disk cache)."""
-
-    status: str
-    success: bool
-    iterations: int
-    time_s: float
-    build_s: float
-    cached: bool
-    elastic: bool
-    knots: int
-    variables: int
-    constraints: int
-    unmet: tuple[Unmet, ...] = ()
-    compiled: bool = False
+__all__ = ["resolve_contacts", "limited_robot"]
 
 
 def resolve_contacts(imitator: Robot, opts: Contact, given) -> dict[str, SoleContact]:

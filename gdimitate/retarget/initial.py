@@ -54,9 +54,9 @@ def consistent_start(model: pin.Model, t: np.ndarray, q: np.ndarray
 def initial_wrenches(robot: Robot, motion, contacts, f_min: float, nw: int
                      ) -> dict[str, np.ndarray]:
     """Wrenches ``{side: (T, nw)}`` that explain the start's base dynamics inside the cones
-    where they can (:func:`gdimitate.wrenches.estimate_wrenches`, a QP per knot; the least
+    where they can (:func:`gdimitate.assess.wrenches.estimate_wrenches`, a QP per knot; the least
     residual elsewhere), in the variables' layout (planar: f_x, f_z, τ_y)."""
-    from ..wrenches import estimate_wrenches
+    from ..assess.wrenches import estimate_wrenches
 
     est = estimate_wrenches(robot, motion, contacts, method="cone", f_min=f_min)
     cols = [0, 2, 4] if nw == 3 else list(range(6))

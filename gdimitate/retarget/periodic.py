@@ -12,7 +12,7 @@ stride (``adapt(..., periodic=True)``).
   first's shifted by the solved stride, ``v`` of the first = the last's (by the integration
   rule), and the last knot's ``a`` and wrenches = the first's. Each correction is of the
   size of IPOPT's final constraint violation; the audit judges the result, and
-  :func:`gdimitate.audit.periodic.seam_audit` checks the seam itself.
+  :func:`gdimitate.assess.audit.periodic.seam_audit` checks the seam itself.
 """
 
 from __future__ import annotations
@@ -21,12 +21,12 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..model.contact import ContactForces, FootForces
+from ..model.heading import shift_by_stride, walking_direction
 from ..model.motion import Motion
 from ..model.robot import Robot
-from .parts.periodic import walking_direction
 from .polish import make_consistent
 
-__all__ = ["periodic_stride", "periodic_rate", "close_seam", "shift_by_stride"]
+__all__ = ["periodic_stride", "periodic_rate", "close_seam"]
 
 
 def _strikes(contact: np.ndarray) -> np.ndarray:
@@ -79,21 +79,6 @@ def periodic_rate(motion: Motion, rate: float) -> float:
     P = float(motion.t[-1] - motion.t[0])
     n = max(int(round(P * rate)), 2)
     return n / P
-
-
-def shift_by_stride(robot: Robot, q_first: np.ndarray, q_last: np.ndarray,
-                    direction: np.ndarray) -> np.ndarray:
-    """``q_first`` with its base advanced along ``direction`` ``(2,)`` by the stride of
-    ``q_last`` (the component of ``q_last − q_first``'s horizontal base displacement along
-    it; planar: ``base_x`` of ``q_last``)."""
-    out = np.array(q_first, float)
-    if robot.base == "free":
-        d = np.asarray(direction, float)
-        out[:2] = q_first[:2] + float((q_last[:2] - q_first[:2]) @ d) * d
-    else:
-        ix = robot.idx_q("base_x")
-        out[ix] = q_last[ix]
-    return out
 
 
 def close_seam(robot: Robot, demonstrator: Robot, demo_q: np.ndarray, t: np.ndarray,

@@ -12,7 +12,7 @@ on the output's own numbers — nothing is clipped and no inequality is touched:
 - the stance wrenches get the least-norm correction that zeroes the unactuated (base) rows of
   ``rnea(q, v, a) − Σ J_cᵀ w_c`` (Pinocchio, not the NLP's expressions). Given the soles'
   ``contacts``, the correction is the least-norm one that also leaves every row of each
-  sole's wrench cone (:func:`gdimitate.wrenches.cone_rows`: friction, centre of pressure, yaw
+  sole's wrench cone (:func:`gdimitate.assess.wrenches.cone_rows`: friction, centre of pressure, yaw
   moment) no worse than ``max(0, its value before)`` — a QP (DAQP) where the plain
   least-norm correction would push a wrench out of its cone. In double support the base rows
   leave it the freedom; where they do not (one foot, or the QP infeasible) the plain
@@ -25,7 +25,7 @@ on the output's own numbers — nothing is clipped and no inequality is touched:
   the push of its right foot, just struck and lightly loaded, 4.1 mrad off its target.)
 
 Each correction is of the size of IPOPT's final constraint violation; the audit
-(:func:`gdimitate.audit.audit`) then judges every inequality on the corrected numbers.
+(:func:`gdimitate.assess.audit.audit`) then judges every inequality on the corrected numbers.
 """
 
 from __future__ import annotations
@@ -73,8 +73,8 @@ def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                       contacts: dict[str, SoleContact] | None = None,
                       targets: dict[str, np.ndarray] | None = None, half_angle: float = 0.0
                       ) -> dict[str, np.ndarray]:
-    from ..audit.report import AuditTolerances
-    from ..wrenches import cone_rows
+    from ..assess.audit.report import AuditTolerances
+    from ..assess.wrenches import cone_rows
 
     angle = half_angle + 0.5 * AuditTolerances().force_direction
 

@@ -12,8 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..assess.metrics import FORCE_MODELS
+from ..assess.solver import SolverInfo, Unmet
 from ..errors import InvalidInputError, SolverError, UnknownNameError
-from ..metrics import FORCE_MODELS
 from ..model.contact import ContactForces, SoleContact
 from ..model.footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
 from ..model.heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
@@ -23,7 +24,7 @@ from ..model.robot import SIDES, Robot
 from . import codegen, limits
 from . import problem as pb
 from .bodymap import body_map
-from .info import SolverInfo, Unmet, limited_robot, resolve_contacts
+from .info import limited_robot, resolve_contacts
 from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
 from .knot import Flags
@@ -453,7 +454,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
 
     Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
     ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
-    ``contacts``, ``audit`` (:func:`gdimitate.audit.audit` recomputed from the output) and
+    ``contacts``, ``audit`` (:func:`gdimitate.assess.audit.audit` recomputed from the output) and
     ``solver`` (:class:`SolverInfo`). Never raises on an infeasible problem: the
     least-infeasible motion comes back with ``solver.unmet`` and the audit's ``binding``.
     """
@@ -741,7 +742,7 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
             info: SolverInfo, periodic: bool = False):
     """The :class:`~gdimitate.adapt.AdaptedMotion` of a solution vector ``z`` (``periodic``:
     the seam made exact, :func:`.periodic.close_seam`, and audited)."""
-    from ..result import AdaptedMotion, compare
+    from ..assess.result import AdaptedMotion, compare
 
     T = tg.T
     Z = z.reshape(T, -1).T
@@ -762,7 +763,7 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     motion = base.replace(v=v, a=a)
     push_r = None
     if force in ("measured", "dynamics"):
-        from ..metrics import frame_rotations
+        from ..assess.metrics import frame_rotations
 
         push_r = {s: np.where(tg.stance[s][:, None], -np.einsum(
             "tij,tj->ti", frame_rotations(imitator, q, cs[s].frame), W[s][:, :3]), np.nan)
@@ -770,12 +771,12 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     report = compare(demonstrator, tg.demo.replace(contact=tg.stance), imitator, motion,
                      "optimal", {s: np.ones(T, bool) for s in SIDES}, force,
                      push_m=tg.push, push_r=push_r)
-    from ..audit import audit
+    from ..assess.audit import audit
 
     aud = audit(limited_robot(imitator, num.lim), motion, W, cs, target=target,
                 cone_half_angle=copts.cone_half_angle)
     if periodic:
-        from ..audit.periodic import seam_audit
+        from ..assess.audit.periodic import seam_audit
 
         aud = seam_audit(aud, imitator, motion, W, demonstrator, tg.demo.q)
     return AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,

@@ -32,17 +32,18 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from ..assess.result import AdaptedMotion, compare
+from ..assess.solver import SolverInfo, Unmet
 from ..errors import GdimitateWarning, InvalidInputError, UnknownNameError
 from ..model.contact import ContactForces, SoleContact
 from ..model.heading import facing_yaw, turn_configurations, yaw_matrix
 from ..model.kinematics import robot_motion
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
-from ..result import AdaptedMotion, compare
 from . import limits as limits_mod
 from .bodymap import BodyMap, body_map
 from .frameref import FrameReference, initial_pose, initial_velocity
-from .info import SolverInfo, Unmet, limited_robot, resolve_contacts
+from .info import limited_robot, resolve_contacts
 from .knot import base_dofs
 from .params import Contact, Limits, Weights
 from .receding import FrameQP
@@ -409,7 +410,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags —
     the audit of the assembled motion, knot by knot, run once after the frames (also in
     ``solver``'s ``unmet`` when some frames fail); ``audit`` is that whole motion's."""
-    from ..audit import audit
+    from ..assess.audit import audit
 
     if demo.base_nq and demo.q.shape[1] != demonstrator.model.nq:
         raise InvalidInputError("the demonstration does not match the demonstrator")

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..assess.metrics import force_direction
 from ..errors import InvalidInputError
-from ..metrics import force_direction
 from ..model.contact import ContactForces
 from ..model.footsteps import sole_frames
 from ..model.kinematics import anchor_schedule, frame_placements

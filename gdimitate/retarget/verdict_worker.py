@@ -1,6 +1,6 @@
 """The streaming mode's per-frame verdict, off the hot path (docs/design.md §6, §12, §13).
 
-A frame's verdict is the trajectory audit's knot verdict (:func:`gdimitate.audit.audit`,
+A frame's verdict is the trajectory audit's knot verdict (:func:`gdimitate.assess.audit.audit`,
 ``knot_feasible``), recomputed from the stream's own output: :func:`knot_verdicts` is its one
 definition, whoever runs it. Knot k's checks read frames k − 1 (the step's length, for the
 stance soles' velocity), k and k + 1 (forward differences of ``q``, the next velocity and
@@ -106,7 +106,7 @@ def knot_verdicts(robot: Robot, contacts: Mapping[str, SoleContact], cone_half_a
     ``w`` (``{side: (6,)}`` [N, N·m], sole frames) per knot, as far as they are final (an
     unknown one is taken as the knot before's). ``tail``: ``(a, w)`` of the last frame (its
     own QP, :meth:`StreamingAdaptor.final`), which ``last`` may then be."""
-    from ..audit import audit
+    from ..assess.audit import audit
 
     n = len(H["t"])
     if tail is not None and len(H["a"]) == n - 1:
@@ -318,7 +318,7 @@ class VerdictWorker:
         if not can_fork():
             raise VerdictWorkerError("this platform cannot fork a verdict worker; use "
                                      "audit='inline'")
-        from ..audit import audit  # noqa: F401  (loaded once, before the fork)
+        from ..assess.audit import audit  # noqa: F401  (loaded once, before the fork)
 
         args = (robot, dict(contacts), float(cone_half_angle))
         down_r, down_w = os.pipe()  # caller -> worker

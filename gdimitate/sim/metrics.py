@@ -3,7 +3,7 @@
 Every function takes plain arrays on the simulation's time grid (time first) and returns a
 typed result. Force directions follow the project's convention: the *push on the ground* (the
 reverse of the ground reaction force on the foot), as two angles from the downward vertical —
-sagittal (:func:`gdimitate.metrics.angle_down`, positive forward) and frontal
+sagittal (:func:`gdimitate.assess.metrics.angle_down`, positive forward) and frontal
 ``atan2(push_y, −push_z)`` (positive left).
 """
 
@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..assess.metrics import angle_down
 from ..errors import SimulationError
-from ..metrics import angle_down
 from ..model.contact import SoleContact, centre_of_pressure, cone_margin
 
 __all__ = [

@@ -11,7 +11,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..metrics import angle_down
+from ..assess.metrics import angle_down
 from ..model.robot import SIDES
 from ..safety import atomic_write
 from .metrics import frontal_angle, stance_intervals

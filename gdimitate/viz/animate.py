@@ -121,7 +121,7 @@ def sample_frames(model: pin.Model, visual_model: pin.GeometryModel, t: np.ndarr
     Args:
         soles: leg name → sole frame name (e.g. ``{"left": "left_sole"}``).
         force_directions: leg name → push directions, anything :func:`push_vectors` takes
-            (e.g. ``gdimitate.metrics.force_direction``'s result per foot), NaN in swing.
+            (e.g. ``gdimitate.assess.metrics.force_direction``'s result per foot), NaN in swing.
         com: ``(T, 3)`` centre of mass [m] to show instead of Pinocchio's.
     """
     soles = dict(soles or {})
@@ -172,14 +172,14 @@ def sample_frames(model: pin.Model, visual_model: pin.GeometryModel, t: np.ndarr
     )
 
 
-#: leg name -> a foot's push directions: a ``gdimitate.metrics.ForceDirection``, ``(T, 3)``
+#: leg name -> a foot's push directions: a ``gdimitate.assess.metrics.ForceDirection``, ``(T, 3)``
 #: vectors or ``(T,)`` sagittal angles [rad] (what :func:`push_vectors` reads)
 PushDirections = Mapping[str, Any]
 
 
 def push_vectors(directions: object) -> np.ndarray:
     """One foot's push directions as unit vectors ``(T, 3)`` (NaN rows where there is none)
-    from a :class:`gdimitate.metrics.ForceDirection`, vectors ``(T, 3)`` or sagittal angles
+    from a :class:`gdimitate.assess.metrics.ForceDirection`, vectors ``(T, 3)`` or sagittal angles
     ``(T,)`` [rad] from the downward vertical, positive forward (the planar case)."""
     v = getattr(directions, "vector", directions)
     a = np.asarray(v, dtype=float)

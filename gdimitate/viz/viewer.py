@@ -177,7 +177,8 @@ class Viewer:
             color: RGB in [0, 1] for every part, or ``None`` for the URDF's colours.
             opacity: in [0, 1]; < 1 draws a translucent ghost.
             force_directions: leg name → the foot's push on the ground: a
-                ``gdimitate.metrics.ForceDirection`` (e.g. from ``force_direction``), ``(T, 3)``
+                ``gdimitate.assess.metrics.ForceDirection`` (e.g. from ``force_direction``), ``(T,
+                3)``
                 vectors or ``(T,)`` sagittal angles [rad] from the downward vertical, NaN in
                 swing; drawn in 3-D as arrows whose tip touches the sole, hidden when NaN.
             com: ``True`` marks Pinocchio's centre of mass; a ``(T, 3)`` array [m] marks that

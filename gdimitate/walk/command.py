@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..assess.verdict import EXIT_NOT_FEASIBLE
 from ..model.robot import Robot
-from ..verdict import EXIT_NOT_FEASIBLE
 from . import WALK_RATE
 
 __all__ = ["walk_command"]
@@ -17,7 +17,7 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
                  log=print, rate: float = WALK_RATE) -> int:
     """Write a walk into ``out`` (``demo``: a loaded demonstration with ``robot``,
     ``motion``, ``forces``, or None for the shipped 3-D walk); exit status 0 when it walked
-    every step with a feasible cycle, :data:`~gdimitate.verdict.EXIT_NOT_FEASIBLE` otherwise.
+    every step with a feasible cycle, :data:`~gdimitate.assess.verdict.EXIT_NOT_FEASIBLE` otherwise.
     ``rate`` [knots/s]: the cycle's knot rate (default :data:`~gdimitate.walk.WALK_RATE`)."""
     from . import periodic_cycle, walk
 
@@ -32,7 +32,7 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
     cycle, forces = periodic_cycle(args[0], args[1], imitator, forces, rate)
     why = "feasible" if cycle.feasible else "NOT feasible: " + ", ".join(cycle.audit.binding[:4])
     log(f"      audit: {why}")
-    from ..verdict import gait_lines
+    from ..assess.verdict import gait_lines
 
     for line in gait_lines(cycle):  # the cycle's stride against the scaled one; what binds
         log(f"      {line}")

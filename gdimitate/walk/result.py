@@ -20,11 +20,11 @@ from typing import Any
 
 import numpy as np
 
+from ..assess.result import AdaptedMotion
 from ..jsonable import jsonable
 from ..model.contact import ContactForces
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
-from ..result import AdaptedMotion
 from ..safety import atomic_write
 from ..sim.periodic import PeriodicReference
 from .loop import Trace, step_bounds

@@ -14,7 +14,7 @@ Euler (:mod:`.integration`, ``q_k = q_{k−1} ⊕ h v_k``) ``v_k`` is the veloci
 step (k − 1, k). Where the foot is down at both ends the hold rows already make the foot's
 displacement over that step zero, i.e. its mean velocity along the step; ``J_c(q) v_k`` still
 changes along the step, by ``(J_c(q_k) − J_c(q_{k−1})) v_k`` = O(h·|v|²·ℓ), so it ends the
-step at about half of that (what :func:`gdimitate.audit.audit`'s ``stance_velocity`` check
+step at about half of that (what :func:`gdimitate.assess.audit.audit`'s ``stance_velocity`` check
 allows for there). Asking for ``J_c(q_k) v_k = 0`` at those knots as well would over-determine
 the step: the velocities of the base and the stance leg (6 + 6 in 3-D, 3 + 3 planar) would
 have to meet as many pose and velocity rows, which near a still robot only v = 0 does — the

@@ -13,19 +13,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ...model.heading import walking_direction
 from .seam import SeamConstraint
 
-__all__ = ["PeriodicSeam", "walking_direction"]
-
-
-def walking_direction(robot, q: np.ndarray) -> np.ndarray:
-    """``(2,)`` unit horizontal direction of ``robot``'s base displacement from ``q[0]`` to
-    ``q[-1]`` (free flyer: x, y; planar: +x); (1, 0) when the base does not move."""
-    if robot.base != "free":
-        return np.array([1.0, 0.0])
-    d = np.asarray(q[-1, :2] - q[0, :2], float)
-    n = float(np.linalg.norm(d))
-    return d / n if n > 1e-9 else np.array([1.0, 0.0])
+__all__ = ["PeriodicSeam"]
 
 
 @dataclass(frozen=True)

@@ -5,8 +5,9 @@ BeyondMimic pipeline writes it): velocities and accelerations by differencing wh
 has none (:func:`gdimitate.model.motion.differentiate`), the stance schedule from the motion's own
 ``contact`` or else from the soles' height and speed (:func:`gdimitate.io.bvh.detect_contacts`),
 the contact wrenches that best explain its inverse dynamics inside each sole's cone
-(:func:`gdimitate.wrenches.estimate_wrenches`), then the independent audit
-(:func:`gdimitate.audit.audit`). :class:`MotionAudit` holds the report, the wrenches and a few
+(:func:`gdimitate.assess.wrenches.estimate_wrenches`), then the independent audit
+(:func:`gdimitate.assess.audit.audit`). :class:`MotionAudit` holds the report, the wrenches and a
+few
 numbers per clip read from the report (never recomputed).
 """
 
@@ -17,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from ..jsonable import jsonable
-from ..model.contact import SoleContact
-from ..model.motion import Motion
+from ...errors import InvalidInputError
+from ...jsonable import jsonable
+from ...model.contact import SoleContact
+from ...model.motion import Motion
 from ..wrenches import WrenchEstimate
 from .report import AuditReport, AuditTolerances
 
@@ -158,7 +159,7 @@ def stance_schedule(robot, motion: Motion) -> tuple[dict[str, np.ndarray], str]:
     stands still there (a treadmill) → height alone."""
     if all(s in motion.contact for s in SIDES):
         return {s: np.asarray(motion.contact[s], bool) for s in SIDES}, "motion"
-    from ..io.bvh.contacts import kinematic_stance
+    from ...io.bvh.contacts import kinematic_stance
 
     if motion.T < 3:
         raise InvalidInputError(f"a motion of {motion.T} frame(s) cannot be audited: its "
@@ -176,15 +177,15 @@ def audit_motion(robot, motion: Motion, contacts: Mapping[str, SoleContact] | No
     are differenced from ``q`` where it has none; ``contact`` ``{side: (T,) bool}`` used where
     it has both feet, else :func:`stance_schedule` finds them); ``contacts``
     ``{side: SoleContact}`` (default: the robot's); ``tolerances``, ``collision_margin`` [m]:
-    as :func:`gdimitate.audit.audit`.
+    as :func:`gdimitate.assess.audit.audit`.
 
-    The contact wrenches are :func:`gdimitate.wrenches.estimate_wrenches` (``method="cone"``:
+    The contact wrenches are :func:`gdimitate.assess.wrenches.estimate_wrenches` (``method="cone"``:
     inside each sole's cone, the least unexplained base wrench where none explains the motion
     — the audit then fails ``base_residual``). Returns a :class:`MotionAudit`. Raises
     :class:`~gdimitate.errors.InvalidInputError` for a motion that is not the robot's, too
     short, or a fixed-base robot.
     """
-    from ..model.motion import differentiate
+    from ...model.motion import differentiate
     from ..wrenches import estimate_wrenches
     from .core import audit
 

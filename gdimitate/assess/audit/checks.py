@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InvalidInputError
-from ..model.contact import SoleContact, cone_margin
-from ..model.motion import Motion
+from ...errors import InvalidInputError
+from ...model.contact import SoleContact, cone_margin
+from ...model.motion import Motion
 from ..wrenches import base_dofs
 from .report import (
     AuditReport,
@@ -234,7 +234,7 @@ def _wrap(x: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------------- the audit
 def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
               collision_margin: float = 0.0):
-    """See :func:`gdimitate.audit.audit`."""
+    """See :func:`gdimitate.assess.audit.audit`."""
     if not isinstance(tol, AuditTolerances):
         raise InvalidInputError(f"tolerances must be an AuditTolerances; got {type(tol).__name__}")
     contacts, W, targets = _validate(robot, motion, wrenches, contacts, target, cone_half_angle)
@@ -366,7 +366,7 @@ def _penetration_check(contacts: dict[str, SoleContact], pos: dict, rot: dict, T
 def _self_collision(robot, motion, margin, tol, add) -> SelfCollisionAudit | None:
     """The ``self_collision`` check (every knot's closest pair against ``margin``) and its
     summary; ``None`` (no check) for a robot without collision geometry."""
-    from ..model.selfcollision import self_collision
+    from ...model.selfcollision import self_collision
 
     if not (np.isfinite(margin) and margin >= 0):
         raise InvalidInputError(f"collision_margin must be a finite distance ≥ 0 [m]; got "

@@ -6,8 +6,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..model.contact import SoleContact
-from ..model.motion import Motion
+from ...model.contact import SoleContact
+from ...model.motion import Motion
 from .report import AuditReport, AuditTolerances
 
 __all__ = ["audit"]

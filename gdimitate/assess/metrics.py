@@ -10,12 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InvalidInputError, UnknownNameError
-from .model.contact import ContactForces
-from .model.heading import walk_heading
-from .model.kinematics import frame_paths, frame_rotations, joint_paths
-from .model.motion import Motion
-from .model.robot import PLANAR_BASE, SIDES, Robot
+from ..errors import InvalidInputError, UnknownNameError
+from ..model.contact import ContactForces
+from ..model.heading import walk_heading
+from ..model.kinematics import frame_paths, frame_rotations, joint_paths
+from ..model.motion import Motion
+from ..model.robot import PLANAR_BASE, SIDES, Robot
 
 __all__ = ["FORCE_MODELS", "angle_down", "hip_path", "hip_height", "ankle_paths", "sole_paths",
            "foot_heights", "foot_distance", "com_path", "force_direction", "joint_limit_margins",
@@ -172,7 +172,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
     - ``dynamics`` — from the demonstrator's own whole-body dynamics: the contact wrenches that
       explain the base rows of its inverse dynamics inside each foot's contact wrench cone,
       split between the feet in double support (a QP per knot,
-      :func:`gdimitate.wrenches.estimate_wrenches`); velocities and accelerations from
+      :func:`gdimitate.assess.wrenches.estimate_wrenches`); velocities and accelerations from
       ``motion.v``/``motion.a`` or, when absent, :func:`gdimitate.model.motion.differentiate` with a
       ``cutoff`` [Hz] low-pass (zero phase; OpenSim's inverse dynamics uses 6 Hz);
     - ``com`` — from the whole-body centre of mass to the contact point (the measured centre
@@ -211,7 +211,7 @@ def force_direction(robot: Robot, motion: Motion, model: str = "segment",
             push[s] = -f
             stance[s] = stance[s] & contact
     else:
-        from .model.motion import differentiate
+        from ..model.motion import differentiate
         from .wrenches import estimate_wrenches
 
         m = motion if motion.v is not None and motion.a is not None else differentiate(

@@ -22,10 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .errors import InvalidInputError, SolverError, UnknownNameError
-from .model.contact import ContactForces, SoleContact, wrench_cone
-from .model.kinematics import PLANAR_BASE, base_joint_id, base_v_indices, frame_placements
-from .model.motion import Motion
+from ..errors import InvalidInputError, SolverError, UnknownNameError
+from ..model.contact import ContactForces, SoleContact, wrench_cone
+from ..model.kinematics import PLANAR_BASE, base_joint_id, base_v_indices, frame_placements
+from ..model.motion import Motion
 
 __all__ = ["WrenchEstimate", "estimate_wrenches", "base_dofs", "METHODS", "measured_wrenches",
            "cone_rows"]
@@ -261,7 +261,7 @@ def measured_wrenches(robot, motion: Motion, forces: ContactForces,
                       contacts: Mapping[str, SoleContact] | None = None) -> dict[str, np.ndarray]:
     """Measured ground reaction forces as contact wrenches ``{side: (T, 6)}`` [N, N·m] at each
     foot's contact frame, in its axes — the convention of :func:`estimate_wrenches`, the
-    adaptor's output and :func:`gdimitate.audit.audit` (whose ``tau`` is then the inverse
+    adaptor's output and :func:`gdimitate.assess.audit.audit` (whose ``tau`` is then the inverse
     dynamics with the measured forces applied).
 
     Per knot the world force f acts at the centre of pressure c with the free moment τ_free

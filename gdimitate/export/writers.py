@@ -78,11 +78,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .errors import ExportError, FileFormatError, OutputError
-from .model.kinematics import base_joint_id
-from .model.motion import Motion, check_base_quaternion, check_motion_layout
-from .model.robot import PLANAR_BASE, SIDES, Robot
-from .safety import check_array_size, check_positive
+from ..errors import ExportError, FileFormatError, OutputError
+from ..model.kinematics import base_joint_id
+from ..model.motion import Motion, check_base_quaternion, check_motion_layout
+from ..model.robot import PLANAR_BASE, SIDES, Robot
+from ..safety import check_array_size, check_positive
 
 __all__ = ["BODY_ORDERS", "FORMATS", "BeyondMimicMotion", "MujocoMotion", "body_links",
            "export_motion", "read_beyondmimic_npz", "read_csv", "read_gmr", "read_isaaclab_amp",
@@ -123,7 +123,7 @@ def export_motion(robot: Robot, motion: Motion, path: str | Path, format: str = 
     ``fps`` whose frames exceed :data:`~gdimitate.safety.MAX_ARRAY_BYTES`,
     :class:`~gdimitate.errors.OutputError` for a ``path`` that is a folder, in a folder that
     does not exist, or cannot be written."""
-    from .model.inputs import path_arg
+    from ..model.inputs import path_arg
 
     if not isinstance(robot, Robot):
         raise ExportError(f"robot must be a gdimitate.Robot; got {type(robot).__name__}")
@@ -283,11 +283,11 @@ def _checked_wrenches(motion: Motion, wrenches) -> dict[str, np.ndarray]:
 def _joint_torques(robot: Robot, motion: Motion, wrenches) -> np.ndarray | None:
     """The actuated joints' torques ``(T, nv − base)`` [N·m, N] in Pinocchio's velocity order
     that the motion's ``v``, ``a`` and the contact ``wrenches`` imply — the audit's own inverse
-    dynamics (:func:`gdimitate.audit.checks.joint_torques`) — or None without wrenches, ``v``
+    dynamics (:func:`gdimitate.assess.audit.checks.joint_torques`) — or None without wrenches, ``v``
     or ``a`` (nothing to compute them from)."""
     if wrenches is None or motion.v is None or motion.a is None:
         return None
-    from .audit.checks import joint_torques
+    from ..assess.audit.checks import joint_torques
 
     return joint_torques(robot, motion, wrenches)[:, _base_nv(robot):]
 
@@ -326,7 +326,7 @@ def _write_npz(robot, motion, path, wrenches=None, **_) -> None:
 
 def read_wrenches(path: str | Path) -> dict[str, np.ndarray] | None:
     """The contact wrenches ``{side: (T, 6)}`` of an ``"npz"`` export, or None."""
-    from .safety import open_npz
+    from ..safety import open_npz
 
     with open_npz(path) as z:
         if not all(f"wrench_{s}" in z.files for s in SIDES):
@@ -351,7 +351,7 @@ class MujocoMotion:
 def _write_mujoco(robot, motion, path, **_) -> None:
     import mujoco
 
-    from .sim import build_model
+    from ..model.mjcf import build_model
 
     sim = build_model(robot)
     qpos = np.array([sim.qpos_from_q(q) for q in motion.q])
@@ -367,7 +367,7 @@ def _write_mujoco(robot, motion, path, **_) -> None:
 
 def read_mujoco(path: str | Path) -> MujocoMotion:
     """Read a ``"mujoco"`` export."""
-    from .safety import open_npz
+    from ..safety import open_npz
 
     with open_npz(path, ("time", "qpos", "joint_names", "mjcf")) as z:
         return MujocoMotion(z["time"], z["qpos"], z["qvel"] if "qvel" in z.files else None,
@@ -471,7 +471,7 @@ def _body_kinematics(robot: Robot, q: np.ndarray, v: np.ndarray, ids: list[int])
 
 def _training_frames(robot, motion, fps, what):
     """The resampled motion (t, q, v) for the gmr/isaaclab_amp writers."""
-    from .model.motion import differentiate
+    from ..model.motion import differentiate
 
     t, q = _fps_grid(robot, motion, fps, what)
     if len(t) < 2:
@@ -544,7 +544,7 @@ def read_gmr(path: str | Path, robot: Robot) -> Motion:
 def read_isaaclab_amp(path: str | Path, robot: Robot) -> Motion:
     """Read an ``"isaaclab_amp"`` NPZ onto a free-flyer ``robot`` → :class:`Motion` (the root
     body's pose and ``dof_positions`` by ``dof_names``; ``t = k / fps``)."""
-    from .safety import open_npz
+    from ..safety import open_npz
 
     keys = ("fps", "dof_names", "body_names", "dof_positions", "body_positions",
             "body_rotations")
@@ -563,7 +563,7 @@ def read_isaaclab_amp(path: str | Path, robot: Robot) -> Motion:
 def _write_beyondmimic(robot, motion, path, fps=30.0, wrenches=None, **_) -> None:
     import mujoco
 
-    from .sim import build_model
+    from ..model.mjcf import build_model
 
     t, q, v = _training_frames(robot, motion, fps, "beyondmimic_npz")
     sim = build_model(robot)
@@ -629,7 +629,7 @@ class BeyondMimicMotion:
 def read_beyondmimic_npz(path: str | Path) -> BeyondMimicMotion:
     """Read a ``"beyondmimic_npz"`` file (ours; BeyondMimic's own files have the same keys
     but no ``joint_names``/``body_names``: an empty tuple then)."""
-    from .safety import open_npz
+    from ..safety import open_npz
 
     keys = ("fps", "joint_pos", "joint_vel", "body_pos_w", "body_quat_w", "body_lin_vel_w",
             "body_ang_vel_w")

@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..jsonable import jsonable
+from ...jsonable import jsonable
 
 __all__ = [
     "AuditTolerances",
@@ -79,7 +79,7 @@ class AuditTolerances:
     self_collision: float = 1e-3
 
     def __post_init__(self) -> None:
-        from ..errors import InvalidInputError
+        from ...errors import InvalidInputError
 
         for f in fields(self):
             v = getattr(self, f.name)
@@ -260,7 +260,7 @@ class AuditReport:
 
     def check(self, name: str) -> Check:
         """The check called ``name``; :class:`~gdimitate.errors.UnknownNameError` lists them."""
-        from ..errors import UnknownNameError
+        from ...errors import UnknownNameError
 
         for c in self.checks:
             if c.name == name:
@@ -274,7 +274,7 @@ class AuditReport:
 
     def joint(self, name: str) -> JointAudit:
         """The :class:`JointAudit` of joint ``name``."""
-        from ..errors import UnknownNameError
+        from ...errors import UnknownNameError
 
         for j in self.joints:
             if j.name == name:

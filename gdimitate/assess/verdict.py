@@ -1,7 +1,7 @@
 """What an adaptation's result may claim, in words: the verdict every output prints.
 
 docs/design.md §12: "feasible" only where the judge says so — the independent audit
-(:func:`gdimitate.audit.audit`, Pinocchio recomputation) for the optimal adaptor; Eq. (1)'s
+(:func:`gdimitate.assess.audit.audit`, Pinocchio recomputation) for the optimal adaptor; Eq. (1)'s
 reachability and the imitator's position limits for the kinematic methods — and a goal the
 optimiser could not keep (an ``unmet`` row of its least-infeasible fallback,
 :class:`gdimitate.retarget.Unmet`) is part of the verdict, not a footnote. The command line
@@ -95,10 +95,11 @@ class Verdict:
 def push_errors(result: Any) -> dict[str, tuple[float, int, str]]:
     """Each foot's largest push-direction error, the one definition every output prints:
     ``{side: (angle [rad], knot, measure)}`` — the audit's (``measure`` ``"audit"``: the angle
-    between the push of the output's wrenches and its target, :class:`~gdimitate.audit.report.
+    between the push of the output's wrenches and its target,
+    :class:`~gdimitate.assess.audit.report.
     ForceDirectionAudit`) where it measured one (the measured and dynamics models), else the
     adaptation report's (``"sagittal"``: the force model's sagittal angle, imitator −
-    demonstrator, :attr:`~gdimitate.result.AdaptationReport.force_direction_error`); a side
+    demonstrator, :attr:`~gdimitate.assess.result.AdaptationReport.force_direction_error`); a side
     with neither is left out."""
     out: dict[str, tuple[float, int, str]] = {}
     aud = getattr(result, "audit", None)
@@ -235,7 +236,7 @@ def written_gait_lines(report: dict[str, Any]) -> list[str]:
     (:meth:`gdimitate.model.footsteps.GaitComparison.to_dict`) and ``audit`` (its joints)."""
     from types import SimpleNamespace
 
-    from .model.footsteps import GaitComparison, Step
+    from ..model.footsteps import GaitComparison, Step
 
     g = report.get("gait")
     if g is None:

@@ -10,6 +10,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..model.contact import SoleContact
+from ..model.footsteps import GaitComparison
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
 from .metrics import (
     angle_down,
     foot_heights,
@@ -17,14 +21,10 @@ from .metrics import (
     hip_height_ratio,
     joint_limit_margins,
 )
-from .model.contact import SoleContact
-from .model.footsteps import GaitComparison
-from .model.motion import Motion
-from .model.robot import SIDES, Robot
 
 if TYPE_CHECKING:  # annotations only: the audit is below this module, the solver above it
     from .audit.report import AuditReport
-    from .retarget.solve import SolverInfo
+    from .solver import SolverInfo
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "compare"]
 
@@ -89,7 +89,7 @@ class AdaptedMotion:
       the ground applies to each foot, in its sole frame at the frame's origin (zeros in
       swing; planar models: f_y = τ_x = τ_z = 0);
     - ``contacts`` (optimal only): ``{"left": SoleContact, "right": SoleContact}`` used;
-    - ``audit`` (optimal only): :class:`gdimitate.audit.AuditReport` recomputed from
+    - ``audit`` (optimal only): :class:`gdimitate.assess.audit.AuditReport` recomputed from
       ``motion`` and ``wrenches`` with Pinocchio (``audit.feasible``, ``audit.binding``);
     - ``solver`` (optimal only): :class:`gdimitate.retarget.SolverInfo`;
     - ``force_model``: the force-direction model of the goal;
@@ -113,10 +113,10 @@ class AdaptedMotion:
              body_order: str | None = None):
         """Write the motion (and, in ``"npz"``, the contact wrenches and the robot's record)
         in ``format``: ``"csv"``, ``"npz"``, ``"mujoco"``, ``"lafan1_csv"``, ``"gmr"`` or
-        ``"isaaclab_amp"`` (:func:`gdimitate.export.export_motion` describes each; ``fps``
+        ``"isaaclab_amp"`` (:func:`gdimitate.export.writers.export_motion` describes each; ``fps``
         [Hz] is the rate of the last three, ``body_order`` ``"depth"``/``"breadth"`` the body
         order of the last two). Returns the path written."""
-        from .export import export_motion
+        from ..export.writers import export_motion
 
         return export_motion(self.robot, self.motion, path, format, wrenches=self.wrenches,
                              fps=fps, body_order=body_order)

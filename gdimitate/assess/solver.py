@@ -1,0 +1,43 @@
+"""The optimal adaptor's solver record, held by :class:`~gdimitate.AdaptedMotion`
+(``adapted.solver``): how the optimiser ran (:class:`SolverInfo`) and the constraint groups its
+motion leaves unmet (:class:`Unmet`). Both modes of :mod:`gdimitate.retarget` fill it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["SolverInfo", "Unmet"]
+
+
+@dataclass(frozen=True)
+class Unmet:
+    """A constraint group the returned motion does not meet (optimiser's view; the audit is
+    the judge): ``name``, worst ``violation`` (in the row's own scaled units: torque/limit,
+    force/(m·g), height/leg length, rad, m) and its ``knot``."""
+
+    name: str
+    violation: float
+    knot: int
+
+
+@dataclass(frozen=True)
+class SolverInfo:
+    """How the optimiser ran: IPOPT's ``status``, ``success``, ``iterations``, ``time_s``
+    (solves only), ``build_s`` (0 when the NLP came from the cache), ``cached`` (the NLP was
+    already built in this process), ``elastic`` (True when the hard problem failed and the
+    least-infeasible solve ran), ``knots``, ``variables`` (free ones), ``constraints`` (rows
+    the schedule imposes), ``unmet`` and ``compiled`` (this call compiled the robot's
+    derivatives to C; False: none needed, or they came from the on-disk cache)."""
+
+    status: str
+    success: bool
+    iterations: int
+    time_s: float
+    build_s: float
+    cached: bool
+    elastic: bool
+    knots: int
+    variables: int
+    constraints: int
+    unmet: tuple[Unmet, ...] = ()
+    compiled: bool = False
