@@ -107,7 +107,7 @@ def _audit(r: dict) -> str:
 
 
 def planar_case2() -> dict:
-    from gdimitate.adapt import adapt
+    from gdimitate.adaptation.adaptor import adapt
     from gdimitate.apps.cases import paper_case
 
     d, i, m = paper_case("II")

@@ -4,7 +4,8 @@
 Run: ``python benchmarks/import_time.py [--repeat 5] [--baseline-rev eac54a4]``.
 
 Each figure is the median wall time [s] of ``--repeat`` fresh interpreters
-(``python -c "import gdimitate"``; ``python -c "from gdimitate.cli import main; main(['--help'])"``,
+(``python -c "import gdimitate"``; ``python -c "from gdimitate.apps.cli import main;
+main(['--help'])"``,
 what the console script runs), with the engines each leaves in ``sys.modules``. The same-run
 baseline is the tree of ``--baseline-rev`` (by default the revision before the lazy
 ``gdimitate/__init__``), extracted with ``git archive`` into a temporary folder and put first
@@ -31,7 +32,7 @@ ENGINES = ("mujoco", "meshcat", "dask", "numba", "pink", "matplotlib", "casadi",
            "scipy")
 CASES = {
     "import gdimitate": "import gdimitate",
-    "gdimitate --help": ("import contextlib, io\nfrom gdimitate.cli import main\n"
+    "gdimitate --help": ("import contextlib, io\nfrom gdimitate.apps.cli import main\n"
                          "with contextlib.redirect_stdout(io.StringIO()):\n"
                          "    try:\n        main(['--help'])\n    except SystemExit:\n"
                          "        pass"),

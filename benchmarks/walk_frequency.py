@@ -39,7 +39,7 @@ def main() -> None:
     warnings.simplefilter("ignore")
     from gdimitate.apps.demo import default_demonstration
     from gdimitate.model.robot import Robot
-    from gdimitate.walk import periodic_cycle, walk
+    from gdimitate.walker import periodic_cycle, walk
 
     robot, demo, forces = default_demonstration()
     imit = Robot.load(args.robot)

@@ -8,7 +8,7 @@ only — the planar model has no lateral freedom), magnitudes as fractions of m�
 gain 0 (open loop) and > 0, repeated trials (the push at mid-stance of different steps).
 Same-run baseline: the unpushed walk at each gain. Reports, per (robot, direction, gain),
 the largest push every trial survived and the steps the body's rhythm needed to come back
-(:meth:`gdimitate.walk.WalkResult.steps_to_rhythm`: heel-strike intervals back within 5 %
+(:meth:`gdimitate.walker.WalkResult.steps_to_rhythm`: heel-strike intervals back within 5 %
 of the period of the unpushed walk's), as a Markdown table (stdout and --md).
 
     python benchmarks/walk_push.py                       # HOAP-2, forward, quick
@@ -55,7 +55,7 @@ def load_cycle(path: Path):
 
 
 def cycle_of(name: str, cache: Path, given: dict[str, Path] | None = None):
-    from gdimitate.walk import periodic_cycle
+    from gdimitate.walker import periodic_cycle
 
     if given and name in given:  # a cycle saved by save_cycle (e.g. adapted elsewhere)
         return load_cycle(given[name])
@@ -70,7 +70,7 @@ def cycle_of(name: str, cache: Path, given: dict[str, Path] | None = None):
 
 
 def run(name: str, args, forces) -> list[dict]:
-    from gdimitate.walk import WalkNetwork, WalkPush, walk
+    from gdimitate.walker import WalkNetwork, WalkPush, walk
 
     cyc = cycle_of(name, args.cache, dict(args.cycle))
     net = WalkNetwork.tune(cyc.robot, cyc.motion)
@@ -106,7 +106,7 @@ def run(name: str, args, forces) -> list[dict]:
 def nominal(name: str, cyc, forces, net, gain: float, steps: int) -> dict:
     """The unpushed walk of ``steps`` steps: the issue's criteria (no fall; push RMS vs
     measured per step ≤ 5°; the network's frequency within 1 % of the cycle's)."""
-    from gdimitate.walk import walk
+    from gdimitate.walker import walk
 
     t = time.process_time()
     d = walk(cycle=cyc, forces=forces, steps=steps, network=net, feedback_gain=gain).to_dict()

@@ -17,8 +17,8 @@ IMG = Path(__file__).parent / "img"
 def force_direction_3d() -> Path:
     """Measured vs estimated (dynamics, com) force directions of the shipped 3-D walk."""
     import gdimitate as gd
+    from gdimitate.apps.figures import plot_force_directions
     from gdimitate.assess.metrics import force_direction
-    from gdimitate.plots import plot_force_directions
 
     robot, motion, forces = gd.gait.human_walk_3d()
     dirs = {"measured": force_direction(robot, motion, "measured", forces=forces),
@@ -34,8 +34,8 @@ def adaptor_g1() -> Path:
     """The whole shipped 3-D walk adapted to G1: each sole's centre of pressure inside its
     rectangle, and the push direction of G1's planned wrenches vs the measured one."""
     import gdimitate as gd
+    from gdimitate.apps.figures import plot_force_directions, plot_sole_cop
     from gdimitate.assess.metrics import ForceDirection, force_direction, frame_rotations
-    from gdimitate.plots import plot_force_directions, plot_sole_cop
 
     human, walk, forces = gd.gait.human_walk_3d()
     robot = gd.Robot.from_library("g1")

@@ -56,8 +56,8 @@ def demo() -> list[str]:
     from gdimitate.apps.demo import summary_table
 
     with tempfile.TemporaryDirectory() as tmp:
-        run = subprocess.run([sys.executable, "-m", "gdimitate.cli", "demo", "--out", DEMO_OUT],
-                             cwd=tmp, stdout=subprocess.PIPE, text=True)
+        run = subprocess.run([sys.executable, "-m", "gdimitate.apps.cli", "demo", "--out",
+                              DEMO_OUT], cwd=tmp, stdout=subprocess.PIPE, text=True)
         sys.stdout.write(run.stdout)
         if run.returncode not in (0, 3):  # 3: written, not feasible (the block says so)
             raise SystemExit(f"gdimitate demo exited {run.returncode}")

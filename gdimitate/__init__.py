@@ -26,8 +26,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import sys
-from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from .errors import (
@@ -53,13 +51,13 @@ if TYPE_CHECKING:
         retarget,
         sim,
     )
-    from .adapt import adapt
+    from .adaptation.adaptor import adapt
+    from .adaptation.repairer import RepairResult, repair
     from .apps.cases import paper_case
     from .assess import audit, metrics, wrenches
     from .assess.audit.dataset import MotionAudit, audit_motion
     from .assess.metrics import ForceDirection
     from .assess.result import AdaptationReport, AdaptedMotion
-    from .cpg import CPGReplay, entrain
     from .export.writers import export_motion
     from .io import bvh, c3d, gait, opensim
     from .io.demonstration import Demonstration, load_demonstration
@@ -69,16 +67,16 @@ if TYPE_CHECKING:
     from .model.motion import Motion
     from .model.robot import Leg, Robot
     from .oscillator import MatsuokaBank, MatsuokaParams, self_adjust
+    from .oscillator.replay import CPGReplay, entrain
     from .planar.walking import HUMAN_GAIT, ROBOT_GAIT, GaitSpec, walking_motion
-    from .repair import RepairResult, repair
     from .retarget import Limits, StreamingAdaptor, Weights
-    from .walk import walk
+    from .walker import walk
 
 __version__ = "0.1.0"
 
 #: public name -> the submodule that defines it (imported when the name is first read)
 _LAZY_NAMES: dict[str, str] = {
-    "adapt": ".adapt",
+    "adapt": ".adaptation.adaptor",
     "AdaptationReport": ".assess.result",
     "AdaptedMotion": ".assess.result",
     "paper_case": ".apps.cases",
@@ -87,8 +85,8 @@ _LAZY_NAMES: dict[str, str] = {
     "ContactForces": ".model.contact",
     "FootForces": ".model.contact",
     "SoleContact": ".model.contact",
-    "CPGReplay": ".cpg",
-    "entrain": ".cpg",
+    "CPGReplay": ".oscillator.replay",
+    "entrain": ".oscillator.replay",
     "Demonstration": ".io.demonstration",
     "load_demonstration": ".io.demonstration",
     "export_motion": ".export.writers",
@@ -107,9 +105,9 @@ _LAZY_NAMES: dict[str, str] = {
     "ROBOT_GAIT": ".planar.walking",
     "GaitSpec": ".planar.walking",
     "walking_motion": ".planar.walking",
-    "repair": ".repair",
-    "RepairResult": ".repair",
-    "walk": ".walk",
+    "repair": ".adaptation.repairer",
+    "RepairResult": ".adaptation.repairer",
+    "walk": ".walker",
 }
 
 #: public subpackages / modules (``gdimitate.sim`` etc.) -> where they live, imported on first use
@@ -146,22 +144,6 @@ def __getattr__(name: str) -> Any:
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
 
-
-class _Package(ModuleType):
-    """``gdimitate.adapt`` is the function, as it was when ``__init__`` imported it eagerly.
-
-    Importing a submodule binds it on its package (``gdimitate.adapt = <module adapt>``) after
-    the submodule runs; a name that is both a submodule and a public function must keep the
-    function, so that binding is skipped here and ``__getattr__`` returns the function.
-    """
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if isinstance(value, ModuleType) and _LAZY_NAMES.get(name) == f".{name}":
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "AdaptationReport",

@@ -68,7 +68,7 @@ class OscillatorError(InvalidInputError):
 
 class SolverError(GdimitateError):
     """The optimiser could not be set up (not: could not find a feasible point, which is a
-    result reported in :class:`~gdimitate.adapt.AdaptedMotion.report`)."""
+    result reported in :class:`~gdimitate.AdaptedMotion.report`)."""
 
 
 class ViewerError(GdimitateError):

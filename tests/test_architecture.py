@@ -34,14 +34,14 @@ def _is_type_checking(test: ast.expr) -> bool:
         isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
 
 
-def _runtime_nodes(tree: ast.AST):
+def _runtime_nodes(tree: ast.AST, typed: bool = False):
     """Every node that runs: function bodies included, ``if TYPE_CHECKING:`` blocks left out
-    (imports for annotations only)."""
+    (imports for annotations only) unless ``typed``."""
     todo = [tree]
     while todo:
         node = todo.pop()
         yield node
-        if isinstance(node, ast.If) and _is_type_checking(node.test):
+        if not typed and isinstance(node, ast.If) and _is_type_checking(node.test):
             todo.extend(node.orelse)
         else:
             todo.extend(ast.iter_child_nodes(node))
@@ -73,16 +73,17 @@ def _imported(node: ast.AST, package: str, mods: set[str]) -> list[str]:
     return out
 
 
-def import_graph(root: Path) -> dict[str, set[str]]:
+def import_graph(root: Path, typed: bool = False) -> dict[str, set[str]]:
     """``{module: modules it imports}`` over the package at ``root`` (a folder), from the
-    source with :mod:`ast`: module-level and function-level imports alike."""
+    source with :mod:`ast`: module-level and function-level imports alike; with ``typed``,
+    the imports for annotations only (``if TYPE_CHECKING:``) too."""
     files = {_module_name(root, p): p for p in sorted(root.rglob("*.py"))}
     mods = set(files)
     graph: dict[str, set[str]] = {}
     for mod, path in files.items():
         package = mod if path.name == "__init__.py" else mod.rpartition(".")[0]
         tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-        graph[mod] = {t for node in _runtime_nodes(tree)
+        graph[mod] = {t for node in _runtime_nodes(tree, typed)
                       for t in _imported(node, package, mods) if t != mod}
     return graph
 
@@ -123,10 +124,10 @@ def _describe(graph: dict[str, set[str]], comp: list[str]) -> str:
     return "; ".join(f"{m} -> {sorted(graph[m] & set(comp))}" for m in comp)
 
 
-def gdimitate_graph() -> dict[str, set[str]]:
+def gdimitate_graph(typed: bool = False) -> dict[str, set[str]]:
     """The package's graph; ``gdimitate/__init__`` imports its public names on first use
     (module ``__getattr__``), which counts as importing the modules that define them."""
-    graph = import_graph(PKG)
+    graph = import_graph(PKG, typed)
     graph["gdimitate"] |= {f"gdimitate{m}" for m in gdimitate._LAZY_NAMES.values()}
     graph["gdimitate"] |= {f"gdimitate{m}" for m in gdimitate._LAZY_MODULES.values()}
     return graph
@@ -152,6 +153,9 @@ def test_the_graph_sees_a_cycle_through_an_import_inside_a_function(tmp_path):
     graph = import_graph(pkg)
     assert graph["toy.sub.b"] == {"toy.a"}
     assert cycles(graph) == [["toy.a", "toy.sub", "toy.sub.b"]]
+    typed = import_graph(pkg, typed=True)
+    assert typed["toy.sub.b"] == {"toy.a", "toy.c"}
+    assert cycles(typed) == [["toy.a", "toy.c", "toy.sub", "toy.sub.b"]]
 
 
 def test_no_import_cycle_besides_the_listed_ones():
@@ -163,6 +167,14 @@ def test_no_import_cycle_besides_the_listed_ones():
 
 def test_no_import_cycle_at_all():
     graph = gdimitate_graph()
+    found = cycles(graph)
+    assert not found, " | ".join(_describe(graph, c) for c in found)
+
+
+def test_no_type_level_cycle():
+    """Imports for annotations only count too: a cycle closed under ``if TYPE_CHECKING:`` is a
+    type living on the wrong floor."""
+    graph = gdimitate_graph(typed=True)
     found = cycles(graph)
     assert not found, " | ".join(_describe(graph, c) for c in found)
 
@@ -179,9 +191,9 @@ def test_public_names_resolve_and_adapt_stays_the_function():
     submodule ``gdimitate.adapt`` first does not replace the function ``gdimitate.adapt``."""
     code = textwrap.dedent("""
         import sys
-        import gdimitate.adapt
+        import gdimitate.adaptation.adaptor
         import gdimitate as gd
-        assert gd.adapt is sys.modules["gdimitate.adapt"].adapt, gd.adapt
+        assert gd.adapt is sys.modules["gdimitate.adaptation.adaptor"].adapt, gd.adapt
         missing = [n for n in gd.__all__ if not hasattr(gd, n)]
         assert not missing, missing
         assert set(gd.__all__) <= set(dir(gd))
@@ -200,7 +212,7 @@ def test_public_names_resolve_and_adapt_stays_the_function():
 def test_literal_aliases_match_the_values_checked_at_run_time():
     from typing import get_args
 
-    from gdimitate.adapt import METHODS
+    from gdimitate.adaptation.adaptor import METHODS
     from gdimitate.assess.metrics import FORCE_MODELS
     from gdimitate.errors import UnknownNameError
     from gdimitate.model.legs import SIDES
@@ -223,7 +235,22 @@ def test_literal_aliases_match_the_values_checked_at_run_time():
 #: gdimitate.viz`` into apps.viewer_picture): removed, not aliased — one home per module
 REMOVED_PATHS = ("gdimitate.demo", "gdimitate.paper", "gdimitate.cases", "gdimitate.examples",
                  "gdimitate.baselines", "gdimitate.sim.scenarios", "gdimitate.viz.__main__",
-                 "gdimitate.analytic", "gdimitate.sagittal", "gdimitate.walking")
+                 "gdimitate.analytic", "gdimitate.sagittal", "gdimitate.walking") + (
+    # the layers as folders (model/, io/, assess/, export/, adaptation/, walker/; cli and
+    # plots into apps/, cpg into oscillator/)
+    "gdimitate.adapt", "gdimitate.anthropometry", "gdimitate.audit", "gdimitate.bvh",
+    "gdimitate.c3d", "gdimitate.cli", "gdimitate.contact", "gdimitate.cpg",
+    "gdimitate.demonstration", "gdimitate.footsteps", "gdimitate.gait", "gdimitate.heading",
+    "gdimitate.inputs", "gdimitate.kinematics", "gdimitate.legs", "gdimitate.library",
+    "gdimitate.live", "gdimitate.loading", "gdimitate.meshes", "gdimitate.metrics",
+    "gdimitate.mirror", "gdimitate.motion", "gdimitate.opensim", "gdimitate.opensim._table",
+    "gdimitate.opensim.functions", "gdimitate.opensim.joints", "gdimitate.opensim.model",
+    "gdimitate.opensim.trc", "gdimitate.opensim.urdf", "gdimitate.planar.sagittal",
+    "gdimitate.plots", "gdimitate.repair", "gdimitate.result", "gdimitate.robot",
+    "gdimitate.selfcollision", "gdimitate.sim.model", "gdimitate.symbolic",
+    "gdimitate.urdfcheck", "gdimitate.urdfgen", "gdimitate.verdict", "gdimitate.walk",
+    "gdimitate.wrenches",
+)
 
 
 def test_scenario_code_is_imported_only_by_the_command_line():
@@ -231,7 +258,7 @@ def test_scenario_code_is_imported_only_by_the_command_line():
     CLI, by itself and by ``gdimitate/__init__`` (the documented name ``paper_case``,
     lazily)."""
     graph = gdimitate_graph()
-    allowed = {"gdimitate", "gdimitate.cli"}
+    allowed = {"gdimitate", "gdimitate.apps.cli"}
     users = {m: sorted(t for t in deps if t == "gdimitate.apps" or
                        t.startswith("gdimitate.apps."))
              for m, deps in graph.items()
@@ -255,36 +282,55 @@ def test_no_alias_of_a_moved_module_remains():
 
 
 # ------------------------------------------------------------------ floors
-#: the floors of docs/design.md §8's diagram, top first, by top-level module or package of
-#: gdimitate; a module may import its own floor and those below, never one above. Modules not
-#: named (robot, loading, legs, kinematics, contact, motion, errors, safety, oscillator/,
-#: viz/, opensim/, bvh/, c3d/, ...) lie below every named floor.
-FLOORS: tuple[frozenset[str], ...] = (
-    frozenset({"cli", "apps"}),
-    frozenset({"batch", "walk", "plots"}),
-    frozenset({"adapt", "repair"}),
-    frozenset({"retarget"}),
-    frozenset({"planar"}),
-    frozenset({"assess", "export", "cpg", "sim"}),
-    frozenset({"io"}),
+#: the floors of docs/design.md §8, top first: each names the folders (or the modules at the
+#: package's top) that make it, by the first name under ``gdimitate`` ("" is ``gdimitate``
+#: itself, whose public names load on first use). Every module lies on exactly one floor
+#: (test_every_module_has_a_floor); a module imports its own floor and those below, never one
+#: above, type-only imports included (test_imports_run_down_the_floors).
+FLOORS: tuple[tuple[str, frozenset[str]], ...] = (
+    ("public names", frozenset({""})),
+    ("entry points: the command line, scenario code", frozenset({"apps"})),
+    ("closed loops and batches: the walk, the batch runner", frozenset({"walker", "batch"})),
+    ("engines: MuJoCo, viewers, oscillators", frozenset({"sim", "viz", "oscillator"})),
+    ("adaptation: adapt picks the method and the mode; repair", frozenset({"adaptation"})),
+    ("the optimal adaptor: trajectory and streaming modes", frozenset({"retarget"})),
+    ("the paper's planar case", frozenset({"planar"})),
+    ("assessment and export: metrics, wrenches, audit, result", frozenset({"assess", "export"})),
+    ("readers: OpenSim, BVH, C3D, live sources, shipped data", frozenset({"io"})),
+    ("the robot model", frozenset({"model"})),
+    ("base: errors, types, input limits", frozenset({"errors", "types", "safety", "jsonable"})),
 )
 
-#: imports up the floors left for now, each with why (the coordinator empties this)
+#: imports up the floors left for now, each with why (empty: every import runs down)
 UPWARD_ALLOWED: dict[tuple[str, str], str] = {}
 
 
+def _unit(module: str) -> str:
+    return module.split(".")[1] if "." in module else ""
+
+
 def _floor(module: str) -> int:
-    unit = module.split(".")[1] if "." in module else ""
-    return next((i for i, f in enumerate(FLOORS) if unit in f), len(FLOORS))
+    unit = _unit(module)
+    return next(i for i, (_, units) in enumerate(FLOORS) if unit in units)
+
+
+def test_every_module_has_a_floor():
+    """Every module of the package lies on one floor (a new folder or top-level module must be
+    given one), and no floor names a unit that is gone."""
+    graph = gdimitate_graph()
+    named = [u for _, units in FLOORS for u in units]
+    assert len(named) == len(set(named)), "a unit on two floors"
+    units = {_unit(m) for m in graph}
+    assert not units - set(named), f"modules on no floor: {sorted(units - set(named))}"
+    assert not set(named) - units, f"floors name missing units: {sorted(set(named) - units)}"
 
 
 def test_imports_run_down_the_floors():
-    """docs/design.md §8: cli/apps -> batch/walk -> adapt -> retarget -> planar -> result ->
-    audit/metrics/sim -> robot ... -> errors. ``gdimitate/__init__`` (lazy public names) is
-    exempt; the allowed exceptions are printed."""
-    graph = gdimitate_graph()
-    up = sorted((m, d) for m, deps in graph.items() if m != "gdimitate"
-                for d in deps if _floor(d) < _floor(m))
+    """docs/design.md §8: apps -> walker/batch -> sim/viz/oscillator -> adaptation -> retarget
+    -> planar -> assess/export -> io -> model -> errors/types. Type-only imports count (a type
+    read from a floor above is a dependency on it); the allowed exceptions are printed."""
+    graph = gdimitate_graph(typed=True)
+    up = sorted((m, d) for m, deps in graph.items() for d in deps if _floor(d) < _floor(m))
     print("imports up the floors allowed for now:")
     for (m, d), why in UPWARD_ALLOWED.items():
         print(f"  {m} -> {d}: {why}")
@@ -294,7 +340,22 @@ def test_imports_run_down_the_floors():
 
         warnings.warn(f"gone, remove from UPWARD_ALLOWED: {stale}", UserWarning, stacklevel=1)
     bad = [e for e in up if e not in UPWARD_ALLOWED]
-    assert not bad, "imports up the floors: " + ", ".join(f"{m} -> {d}" for m, d in bad)
+    assert not bad, "imports up the floors: " + ", ".join(
+        f"{m} ({FLOORS[_floor(m)][0]}) -> {d} ({FLOORS[_floor(d)][0]})" for m, d in bad)
+
+
+def test_no_module_named_like_a_public_name():
+    """A public function or class of ``gdimitate`` (``gd.adapt``, ``gd.walk``, ``gd.repair``
+    ...) is never also a submodule ``gdimitate.<name>``: importing the submodule would rebind
+    the name on the package."""
+    import types
+
+    graph = gdimitate_graph()
+    clash = [n for n in gdimitate.__all__
+             if not isinstance(getattr(gdimitate, n), types.ModuleType)
+             and f"gdimitate.{n}" in graph]
+    assert not clash, f"modules named like public names: {clash}"
+    assert type(gdimitate) is types.ModuleType, "gdimitate's module class is replaced"
 
 
 # ------------------------------------------------------------------ function length

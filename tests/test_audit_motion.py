@@ -16,10 +16,10 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.apps.cases import paper_case
+from gdimitate.apps.cli import main
 from gdimitate.assess.audit import audit
 from gdimitate.assess.verdict import EXIT_NOT_FEASIBLE
 from gdimitate.assess.wrenches import estimate_wrenches
-from gdimitate.cli import main
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
 

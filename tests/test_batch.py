@@ -251,7 +251,7 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor, s
     tmp.mkdir()
     with open(err, "w") as fe:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "gdimitate.cli", "batch", str(demos), "--imitator", "hoap2",
+            [sys.executable, "-m", "gdimitate.apps.cli", "batch", str(demos), "--imitator", "hoap2",
              "--out", str(out), "--workers", "2", "--executor", executor],
             stdout=subprocess.DEVNULL, stderr=fe, env={**os.environ, "TMPDIR": str(tmp)},
             start_new_session=True)
@@ -295,7 +295,7 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor, s
 
 
 def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
-    from gdimitate.cli import main
+    from gdimitate.apps.cli import main
 
     out = tmp_path / "cli"
     args = ["batch", str(inputs), "--imitator", "hoap2", "--out", str(out), "--method",

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from gdimitate import Robot
-from gdimitate.cli import main
+from gdimitate.apps.cli import main
 from gdimitate.errors import FileFormatError, ForceDataError
 from gdimitate.io.c3d import ForcePlate, read_c3d, write_c3d
 from gdimitate.io.c3d.plates import assign_plates

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from printed import flat, numbers
 
-from gdimitate.cli import main
+from gdimitate.apps.cli import main
 from gdimitate.planar import eq1
 
 
@@ -140,7 +140,7 @@ def test_adapt_command_and_errors(tmp_path, capsys):
 
 
 def test_console_script_help():
-    r = subprocess.run([sys.executable, "-m", "gdimitate.cli", "--help"], capture_output=True,
+    r = subprocess.run([sys.executable, "-m", "gdimitate.apps.cli", "--help"], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 0 and "demo" in r.stdout and "paper" in r.stdout
 
@@ -180,13 +180,13 @@ def _entrain_prints_its_report(printed: str, out, frames: int, replay_s: float) 
     replay check's numbers are those recomputed here from the written network
     (oscillator_params.json): the frequency learned, each signal's nRMSE, teacher fit,
     free-running frequency and amplitude ratio, the worst of them and the tolerances."""
-    from gdimitate.cpg import (
+    from gdimitate.oscillator import SelfAdjustResult
+    from gdimitate.oscillator.replay import (
         CHECK_STRIDES,
         REPLAY_AMPLITUDE_TOL,
         REPLAY_FREQUENCY_TOL,
         replay_check,
     )
-    from gdimitate.oscillator import SelfAdjustResult
 
     rep = json.loads((out / "report.json").read_text())
     chk = rep["replay_check"]

@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from gdimitate.cli import main
+from gdimitate.apps.cli import main
 from gdimitate.io.gait import human_walk_path
 
 SAG = human_walk_path()

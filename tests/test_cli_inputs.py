@@ -11,7 +11,7 @@ import re
 import numpy as np
 import pytest
 
-from gdimitate.cli import build_parser, main
+from gdimitate.apps.cli import build_parser, main
 from gdimitate.export.writers import read_csv
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.io.gait import human_walk_3d_folder, human_walk_path

@@ -16,7 +16,7 @@ import pytest
 from printed import numbers
 
 import gdimitate as gd
-from gdimitate.cli import EXIT_STATUS, build_parser, main
+from gdimitate.apps.cli import EXIT_STATUS, build_parser, main
 from gdimitate.io.gait import human_walk_path
 
 SAG = human_walk_path()
@@ -43,9 +43,9 @@ def test_adapt_of_the_sagittal_walk_to_hoap2_says_which_goal_is_unmet(tmp_path, 
     verdict, the solver's record and each unmet goal are printed and in report.json, the exit
     status is 3 whenever the result is not feasible or a goal is unmet, and the audit's
     verdict is recomputed here from the written files (Pinocchio)."""
+    from gdimitate.apps.cli import _error_lines
     from gdimitate.assess.audit import audit
     from gdimitate.assess.verdict import limits_at_bound, report_lines
-    from gdimitate.cli import _error_lines
     from gdimitate.export.writers import read_wrenches
 
     out = tmp_path / "a"
@@ -241,7 +241,7 @@ def test_one_stride_clip_is_one_stride():
     that closes on itself — each foot's contact the same at both ends, one stance and one
     swing between — is one stride. A clip cut short (0.7 of the stride) is not."""
     from gdimitate.apps.demo import default_demonstration
-    from gdimitate.cpg import stride_frequency
+    from gdimitate.oscillator.replay import stride_frequency
 
     _, stride, _ = default_demonstration()
     span = float(stride.t[-1] - stride.t[0])
@@ -258,7 +258,7 @@ def test_a_joint_held_still_is_not_warned_about(walks):
     an arm joint the adaptor holds within ±0.1 rad of its rest pose. A signal that moves less
     than HELD_RANGE, or a joint less than HELD_SHARE of the largest joint's range, is taught
     but not warned about; one that drifts across the clip is (the test above)."""
-    from gdimitate.cpg import HELD_RANGE, HELD_SHARE
+    from gdimitate.oscillator.replay import HELD_RANGE, HELD_SHARE
 
     robot, motion = walks["analytic"]
     largest = max(np.ptp(motion.column(j)) for j in robot.joint_names[1:]
@@ -301,7 +301,7 @@ def test_entrain_learns_the_stride_frequency(walks, which):
 def test_replay_check_fails_a_replay_at_half_amplitude(walks):
     """Negative control: the same network read out at half gain (the issue's "hip at half
     its amplitude") fails the check, with the ratio measured."""
-    from gdimitate.cpg import replay_check
+    from gdimitate.oscillator.replay import replay_check
 
     robot, motion = walks["analytic"]
     cpg = gd.entrain(robot, motion)
@@ -347,7 +347,7 @@ def test_view_without_a_file_shows_the_default_story_with_its_verdict(tmp_path, 
     from gdimitate.apps.demo import default_demonstration
     from gdimitate.assess.verdict import verdict
 
-    module, shown = importlib.import_module("gdimitate.adapt"), []
+    module, shown = importlib.import_module("gdimitate.adaptation.adaptor"), []
     original = module.adapt
     monkeypatch.setattr(module, "adapt", lambda *a, **k: shown.append(original(*a, **k))
                         or shown[-1])

@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.cpg import _compose, body_signals
+from gdimitate.oscillator.replay import _compose, body_signals
 
 
 @pytest.mark.parametrize("which", ["3d", "planar"])

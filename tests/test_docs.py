@@ -159,7 +159,7 @@ def _one_page_site(tmp_path: Path, extra: str = "") -> Path:
     python["options"]["extensions"] = [str(ROOT / e) for e in python["options"]["extensions"]]
     (tmp_path / "mkdocs.yml").write_text(yaml.safe_dump(config))
     (docs / "index.md").write_text("# Home\n\n## A heading\n\n[fine](#a-heading)\n\n"
-                                   f"::: gdimitate.adapt.adapt\n\n{extra}\n")
+                                   f"::: gdimitate.adaptation.adaptor.adapt\n\n{extra}\n")
     return tmp_path / "mkdocs.yml"
 
 

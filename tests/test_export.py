@@ -344,7 +344,7 @@ def test_isaaclab_amp_npz_round_trip_body_order_and_velocities(tmp_path):
 
 
 def test_cli_exports_gmr_and_isaaclab_amp(tmp_path):
-    from gdimitate.cli import main
+    from gdimitate.apps.cli import main
     from gdimitate.export.writers import read_gmr
 
     g1, motion = _g1_motion()

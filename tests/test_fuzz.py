@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import gdimitate as gd
-from gdimitate.cli import main
+from gdimitate.apps.cli import main
 from gdimitate.errors import BVHError, GdimitateError
 from gdimitate.io.bvh import read_bvh
 from gdimitate.io.gait import read_mot, read_opensim

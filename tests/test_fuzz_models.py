@@ -363,7 +363,7 @@ def test_npz_recorded_package_dir_never_widens_the_mesh_sandbox(walker, tmp_path
                          robot_package_dir=pkg, robot_fingerprint=legit.fingerprint)
         with pytest.raises(MeshPathError, match="robot_package_dir"):
             gd.load_demonstration(evil)
-    from gdimitate.cli import main
+    from gdimitate.apps.cli import main
 
     html = tmp_path / "v.html"  # the reported command: refused before any page is made
     assert main(["view", str(evil), "--html", str(html)]) == 2

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gdimitate.cli import main
+from gdimitate.apps.cli import main
 from gdimitate.errors import OutputError
 from gdimitate.io.gait import human_walk_path
 from gdimitate.safety import LOCK_NAME, atomic_write, output_job
@@ -148,7 +148,7 @@ def test_a_second_command_on_a_busy_folder_is_refused(tmp_path, capsys):
 
 
 def _start_adapt(out: Path) -> subprocess.Popen:
-    p = subprocess.Popen([sys.executable, "-m", "gdimitate.cli", "adapt", str(SAG), "--grf",
+    p = subprocess.Popen([sys.executable, "-m", "gdimitate.apps.cli", "adapt", str(SAG), "--grf",
                           str(SAG_GRF), "--imitator", "hoap2", "--out", str(out)],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     t0 = time.time()
@@ -199,7 +199,7 @@ def test_a_run_killed_mid_write_leaves_no_half_written_result(tmp_path):
             elif f.suffix == ".npz":
                 with np.load(f) as z:
                     assert "q" in z.files
-    r = subprocess.run([sys.executable, "-m", "gdimitate.cli", "adapt", str(SAG), "--grf",
+    r = subprocess.run([sys.executable, "-m", "gdimitate.apps.cli", "adapt", str(SAG), "--grf",
                         str(SAG_GRF), "--imitator", "hoap2", "--method", "analytic", "--out",
                         str(out)], capture_output=True, text=True, timeout=300)
     assert r.returncode in (0, 3), r.stderr

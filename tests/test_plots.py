@@ -9,8 +9,8 @@ matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
 
+from gdimitate.apps.figures import plot_sole_cop  # noqa: E402
 from gdimitate.model.contact import SoleContact  # noqa: E402
-from gdimitate.plots import plot_sole_cop  # noqa: E402
 
 
 def test_sole_cop_points_are_the_wrenches_cop(tmp_path):

@@ -13,15 +13,15 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
+from gdimitate.adaptation.repairer import keypoint_frames, repair_rate, wrench_forces
 from gdimitate.apps.baselines import joint_copy
+from gdimitate.apps.cli import main
 from gdimitate.assess.audit import audit
 from gdimitate.assess.verdict import EXIT_NOT_FEASIBLE
 from gdimitate.assess.wrenches import estimate_wrenches, measured_wrenches
-from gdimitate.cli import main
 from gdimitate.export.writers import read_wrenches
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
-from gdimitate.repair import keypoint_frames, repair_rate, wrench_forces
 from gdimitate.sim.reference import Plan
 
 SIDES = ("left", "right")

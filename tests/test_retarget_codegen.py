@@ -196,7 +196,7 @@ def test_the_solver_record_says_what_was_compiled(tmp_path, monkeypatch):
     process, its compiled derivatives came from the disk cache. The record now tells the three
     cases apart: compiled now; loaded from disk (compiled False, cached False); the process's
     own NLP again (cached True)."""
-    from gdimitate.adapt import adapt
+    from gdimitate.adaptation.adaptor import adapt
     from gdimitate.apps.cases import paper_case
     from gdimitate.retarget import problem as pb
 

@@ -21,7 +21,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gdimitate.adapt import adapt
+from gdimitate.adaptation.adaptor import adapt
 from gdimitate.apps.cases import paper_case
 from gdimitate.errors import ContactError, GdimitateError, InvalidInputError, UnknownNameError
 from gdimitate.model.contact import SoleContact

@@ -14,7 +14,7 @@ import pinocchio as pin
 import pytest
 
 import gdimitate as gd
-from gdimitate.cli import main
+from gdimitate.apps.cli import main
 from gdimitate.errors import (
     FileFormatError,
     InvalidInputError,

@@ -275,7 +275,7 @@ def _wait_for_line(proc: subprocess.Popen, text: str) -> str:
 @pytest.mark.slow
 def test_demo_terminated_leaves_no_output(tmp_path, spawn):
     out = tmp_path / "demo-out"
-    proc = spawn(["-m", "gdimitate.cli", "demo", "--method", "analytic", "--out", str(out)],
+    proc = spawn(["-m", "gdimitate.apps.cli", "demo", "--method", "analytic", "--out", str(out)],
                  tmp_path / "tmp")
     text = _wait_for_line(proc, "[1/")  # loading the walk; the output folder is made
     assert out.is_dir()
@@ -290,7 +290,7 @@ def test_demo_terminated_leaves_no_output(tmp_path, spawn):
 @pytest.mark.slow
 def test_view_stops_on_sigint_and_fails_when_its_server_dies(tmp_path, spawn):
     # a feasible example: since issue 22 the exit status after Ctrl-C is the verdict's
-    view = ["-m", "gdimitate.cli", "view", "--example", "case-I", "--method", "analytic",
+    view = ["-m", "gdimitate.apps.cli", "view", "--example", "case-I", "--method", "analytic",
             "--seconds", "120"]
     proc = spawn(view, tmp_path / "tmp")
     server = _wait_for_server(proc)
@@ -373,7 +373,7 @@ def test_millisecond_time_axis_is_refused_before_allocating():
     """entrain() of a 60 Hz clip whose time is in milliseconds grew to 22 GB; now refused."""
     import tracemalloc
 
-    import gdimitate.cpg  # noqa: F401 — its imports (numba, SciPy: ~56 MB of module code) are not the clip's
+    import gdimitate.oscillator.replay  # noqa: F401 — its imports (numba, SciPy: ~56 MB of module code) are not the clip's
 
     robot, motion = _hoap2_walk(np.arange(150) * (1000.0 / 60))
     tracemalloc.start()

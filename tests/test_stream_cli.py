@@ -30,7 +30,7 @@ PERIOD_S = 1 / 120
 
 
 def _run(args: list[str], **kw) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "gdimitate.cli", "stream", *args],
+    return subprocess.Popen([sys.executable, "-m", "gdimitate.apps.cli", "stream", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
 
 

@@ -17,7 +17,7 @@ from printed import numbers
 from gdimitate.errors import InvalidInputError, PlanError
 from gdimitate.model.robot import SIDES
 from gdimitate.sim.periodic import PeriodicReference
-from gdimitate.walk import WalkNetwork, periodic_cycle, walk
+from gdimitate.walker import WalkNetwork, periodic_cycle, walk
 
 
 @pytest.fixture(scope="module")
@@ -157,7 +157,7 @@ def test_cli_walk_writes_its_files(tmp_path, capsys):
     is feasible), 20 steps. Issue 32's target: exit 0 with an audit-feasible cycle, no
     fall, every step's push within 5° of the measured one and the stride at least 0.8 of the
     demonstrator's scaled to the legs (measured: 20/20, 2.0-4.9°, stride ratio 0.92)."""
-    from gdimitate.cli import main
+    from gdimitate.apps.cli import main
 
     out = tmp_path / "w"
     status = main(["walk", "--no-html", "--out", str(out)])

@@ -11,7 +11,7 @@ viewer), ``stream`` (``gdimitate stream``: a live source adapted frame by frame)
 releases without
 a deprecation period.
 
-Only the command line (:mod:`gdimitate.cli`), ``benchmarks/``, ``notebooks/``, ``docs/`` and
+Only the command line (:mod:`gdimitate.apps.cli`), ``benchmarks/``, ``notebooks/``, ``docs/`` and
 ``tests/`` import this package; nothing in the library below it does (``tests/
 test_architecture.py`` checks, docs/design.md §8). The one documented public name defined
 here, :func:`gdimitate.paper_case`, is re-exported lazily by ``gdimitate/__init__``.

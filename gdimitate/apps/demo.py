@@ -34,7 +34,7 @@ DEMO_RATE = 30.0
 #: demonstration).
 DEFAULT_IMITATOR = "g1"
 #: ``gdimitate walk``'s default robot: the default story's, whose periodic cycle of the
-#: shipped 3-D walk is audit-feasible at :data:`gdimitate.walk.WALK_RATE` and walks in
+#: shipped 3-D walk is audit-feasible at :data:`gdimitate.walker.WALK_RATE` and walks in
 #: MuJoCo (20/20 steps, push within 4.9° of the measured one on every step).
 WALK_IMITATOR = DEFAULT_IMITATOR
 
@@ -84,10 +84,10 @@ def run_demo(out: str | Path = "gdimitate-demo", imitator: str | Robot = DEFAULT
     model); ``method``: the adaptor whose result is simulated, entrained and shown (default
     the whole-body optimal adaptor); ``rate`` [knots/s] of the optimal solve."""
     from .. import sim
-    from ..adapt import adapt
+    from ..adaptation.adaptor import adapt
     from ..assess.verdict import solver_record, verdict
-    from ..cpg import entrain
     from ..model.robot import Robot
+    from ..oscillator.replay import entrain
     from ..safety import atomic_write, prepare_output_dir
     from .baselines import joint_copy, kinematic_plan
 
@@ -154,9 +154,9 @@ def _write_files(out: Path, demo_robot: Robot, demo: Motion, forces, imit: Robot
     directions (demonstrator measured vs plan), the gait (demonstrator scaled vs imitator) and
     the simulation's summary plot."""
     from ..assess.metrics import force_direction
-    from ..plots import plot_force_directions, plot_gait
     from ..safety import atomic_write
     from ..sim import plots as sim_plots
+    from .figures import plot_force_directions, plot_gait
 
     with atomic_write(out / "imitator_motion.npz") as tmp:
         adapted.save(tmp)

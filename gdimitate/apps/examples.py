@@ -41,7 +41,7 @@ EXAMPLES = _names()
 
 def example(name: str = "human-walk", method: AdaptMethod = "analytic") -> Example:
     """Build a named example (see the module docstring) with the given adaptor method."""
-    from ..adapt import adapt
+    from ..adaptation.adaptor import adapt
     from ..io.gait import human_walk
     from ..model.robot import Robot
     from .cases import paper_case

@@ -27,7 +27,7 @@ def write_adapted(out: Path, demonstrator: Robot, demo: Motion, result: AdaptedM
     ``demonstrator``) into the folder ``out``; ``extra``: more top-level entries of
     report.json. Returns report.json's text (what the console prints from)."""
     from ..assess.verdict import push_errors, solver_record, verdict
-    from ..plots import plot_gait
+    from .figures import plot_gait
 
     v = verdict(result)
     with atomic_write(out / "imitator_joints.csv") as tmp:

@@ -8,13 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from .. import plots
-from ..adapt import adapt
+from ..adaptation.adaptor import adapt
 from ..assess.metrics import sole_paths
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
 from ..model.sagittal import leg_angles
 from ..planar import eq1
+from . import figures as plots
 from .cases import PAPER_CASES, paper_case
 
 __all__ = ["step_length", "case_summary", "run_paper"]

@@ -18,10 +18,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..adaptation.repairer import RepairResult
 from ..assess.verdict import EXIT_NOT_FEASIBLE, Verdict
 from ..model.motion import Motion
 from ..model.robot import Robot
-from ..repair import RepairResult
 
 __all__ = ["input_plan", "repair_file", "repair_verdict", "simulate_both"]
 
@@ -76,8 +76,8 @@ def repair_file(out: Path, path: Path, robot: Robot | None, *, fps: float = 30.0
     gdimitate's ``.npz``; ``fps`` [Hz]: a LAFAN1 CSV's frame rate; ``rate`` [knots/s]: the
     adaptor's grid) and write the outputs into the prepared folder ``out``. Returns the exit
     status and the console lines."""
+    from ..adaptation.repairer import repair
     from ..batch.audit import read_robot_motion
-    from ..repair import repair
     from .outputs import write_adapted
 
     bot, motion, fmt = read_robot_motion(path, robot, fps)

@@ -137,7 +137,7 @@ class LiveView:
 def _stop_on_signals() -> Iterator[dict[str, str | None]]:
     """Ctrl-C (SIGINT) and SIGTERM set ``["reason"]`` instead of interrupting (the loop
     stops and writes what it streamed); the previous handlers are back afterwards (a second
-    Ctrl-C while writing interrupts: gdimitate.cli's status 130, the outputs undone)."""
+    Ctrl-C while writing interrupts: gdimitate.apps.cli's status 130, the outputs undone)."""
     state: dict[str, str | None] = {"reason": None}
 
     def on(signum: int, frame: object) -> None:
@@ -390,7 +390,7 @@ def open_source(spec: str, *, skeleton: str | None = None, osim: str | None = No
 
 
 def stream_command(a: Any, out: Path, imitator: Callable[[], Robot]) -> int:
-    """``gdimitate stream`` with its parsed arguments ``a`` (gdimitate.cli), writing into
+    """``gdimitate stream`` with its parsed arguments ``a`` (gdimitate.apps.cli), writing into
     ``out``; ``imitator()`` loads the robot (after the source is found: a missing stream
     fails at once); prints the summary from the written report.json; returns the exit
     status."""

@@ -23,7 +23,7 @@ def demo_html(path: str | Path, demonstrator: str = "talos", imitator: str = "g1
     """Write the demo scene to ``path``: ``demonstrator`` walking (the generated human-like
     gait) next to ``imitator`` performing the analytically adapted walk, with force-direction
     arrows, centres of mass and foot paths."""
-    from ..adapt import adapt
+    from ..adaptation.adaptor import adapt
     from ..assess.metrics import force_direction
     from ..model.robot import Robot
     from ..planar.walking import walking_motion

@@ -1,7 +1,7 @@
 """The result of an adaptation: :class:`AdaptedMotion` (the motion, the kinematic comparison
 with the demonstration, and for the optimal method the wrenches, contacts, solver account and
 audit) and :class:`AdaptationReport`, made by :func:`compare`. Every method returns one
-(:func:`gdimitate.adapt.adapt`, which re-exports these names)."""
+(:func:`gdimitate.adaptation.adaptor.adapt`, which re-exports these names)."""
 
 from __future__ import annotations
 

@@ -165,7 +165,7 @@ def solver_record(solver: Any) -> dict[str, Any] | None:
 
 
 def verdict(result: Any) -> Verdict:
-    """The verdict of an :class:`~gdimitate.adapt.AdaptedMotion`: the audit's for the optimal
+    """The verdict of an :class:`~gdimitate.AdaptedMotion`: the audit's for the optimal
     method, Eq. (1)'s reachability and the position limits for the kinematic ones; plus the
     solver's unmet goals that the judge does not measure itself. A goal the audit checks (the
     push direction against its target, ``force_direction:<side>``) is judged by the audit's
@@ -212,7 +212,8 @@ def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
 
 
 def gait_lines(result: Any) -> list[str]:
-    """The gait comparison's console lines (:attr:`~gdimitate.adapt.AdaptedMotion.gait`),
+    """The gait comparison's console lines
+    (:attr:`~gdimitate.AdaptedMotion.gait`),
     with the limits at their bound where the gait is not kept; empty without a gait."""
     g = getattr(result, "gait", None)
     if g is None:

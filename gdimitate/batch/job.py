@@ -261,7 +261,7 @@ def _save(adapted, path: Path) -> None:
 
 
 def _adapt_one(path: Path, options: BatchOptions) -> tuple[Any, dict[str, Any]]:
-    from ..adapt import adapt
+    from ..adaptation.adaptor import adapt
     from ..assess.verdict import verdict
 
     demonstrator, motion, forces = _load(path, options)

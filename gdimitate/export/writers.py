@@ -1,7 +1,7 @@
 """Write a robot's motion in the formats other tools read, and read them back.
 
-Formats (:data:`FORMATS`; ``gdimitate export`` and :meth:`gdimitate.adapt.AdaptedMotion.save`
-call :func:`export_motion`):
+Formats (:data:`FORMATS`; ``gdimitate export`` and
+:meth:`gdimitate.AdaptedMotion.save` call :func:`export_motion`):
 
 - ``"csv"``: a header row, then one row per frame: ``time`` [s], the floating base's pose
   ``base_x, base_y, base_z`` [m] and ``base_qx, base_qy, base_qz, base_qw`` (the base link's

@@ -452,7 +452,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     walk along any direction gives the same motion up to that turn, and the report's
     sagittal angles are in the heading frame (forward = along the walk).
 
-    Returns an :class:`~gdimitate.adapt.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
+    Returns an :class:`~gdimitate.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
     ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
     ``contacts``, ``audit`` (:func:`gdimitate.assess.audit.audit` recomputed from the output) and
     ``solver`` (:class:`SolverInfo`). Never raises on an infeasible problem: the
@@ -740,7 +740,7 @@ def wrenches_of(c: pb.Compiled, Z: np.ndarray) -> dict[str, np.ndarray]:
 def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrator: Robot,
             imitator: Robot, cs: dict[str, SoleContact], force: str, copts: Contact,
             info: SolverInfo, periodic: bool = False):
-    """The :class:`~gdimitate.adapt.AdaptedMotion` of a solution vector ``z`` (``periodic``:
+    """The :class:`~gdimitate.AdaptedMotion` of a solution vector ``z`` (``periodic``:
     the seam made exact, :func:`.periodic.close_seam`, and audited)."""
     from ..assess.result import AdaptedMotion, compare
 

@@ -11,7 +11,7 @@ for at least :data:`MIN_SWING` of the period — and staying above :data:`OFF_FR
 says where in the cycle the body is. Only onsets within :data:`STRIKE_WINDOW` cycles of the
 plan's heel strike of that foot count (a swing foot that scuffs the floor mid-swing is no heel
 strike). The network is driven by ``g = gain · u(ground phase)``, ``u`` the input it was taught
-with at that fraction (:meth:`~gdimitate.walk.network.WalkNetwork.input_at`): with ``gain`` 0
+with at that fraction (:meth:`~gdimitate.walker.network.WalkNetwork.input_at`): with ``gain`` 0
 the network runs open loop (free), with ``gain`` > 0 it is pulled towards the body's rhythm.
 
 The *ground phase* advances at the cycle's own rate and is corrected at each heel strike
@@ -23,7 +23,7 @@ the correction moves the ground phase by :data:`STRIKE_CORRECTION` of the gap be
 that phase (half: a touchdown is a noisy reading of the body's phase — G1's vary by 10-25 ms
 from strike to strike — and a full re-set passed that noise on, up to 1.2 % per step). The
 network reads its phase on the orbit it has when locked to a drive at the cycle's rate
-(:meth:`~gdimitate.walk.network.WalkNetwork.use_gain`), so in a walk that keeps its rhythm
+(:meth:`~gdimitate.walker.network.WalkNetwork.use_gain`), so in a walk that keeps its rhythm
 network, ground and body agree, the gap is zero and the feedback does not move the network's
 mean frequency. (An earlier version re-set the ground phase to its own value at each foot's
 first strike and read the network on its free orbit: it left out the network's lead on its

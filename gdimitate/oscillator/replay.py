@@ -25,17 +25,17 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InvalidInputError, ResourceLimitError
-from .model.kinematics import kinematic_contact, robot_motion
-from .model.motion import Motion
-from .model.robot import PLANAR_BASE, Robot
-from .oscillator import OscillatorWarning, SelfAdjustResult, self_adjust
-from .safety import (
+from ..errors import InvalidInputError, ResourceLimitError
+from ..model.kinematics import kinematic_contact, robot_motion
+from ..model.motion import Motion
+from ..model.robot import PLANAR_BASE, Robot
+from ..safety import (
     MAX_MOTION_DURATION_S,
     MAX_OUTPUT_SAMPLES,
     check_positive,
     check_time_axis,
 )
+from . import OscillatorWarning, SelfAdjustResult, self_adjust
 
 __all__ = ["CPGReplay", "ReplayCheck", "entrain", "BodySignals", "body_signals",
            "stride_frequency"]
@@ -139,7 +139,7 @@ class ReplayCheck:
 def replay_check(result: SelfAdjustResult) -> ReplayCheck:
     """Run ``result``'s network free for :data:`CHECK_STRIDES` strides from the end of
     teaching and compare every signal with the teaching signal (:class:`ReplayCheck`)."""
-    from .oscillator import measured_frequency
+    from . import measured_frequency
 
     fT = float(result.teacher.frequency)
     t = np.arange(0.0, CHECK_STRIDES / fT, 1e-3)

@@ -43,14 +43,14 @@ from typing import Any
 
 import numpy as np
 
-from .assess.audit.dataset import MotionAudit
-from .assess.result import AdaptedMotion
-from .errors import InvalidInputError
-from .model.contact import ContactForces, FootForces
-from .model.legs import hip_height
-from .model.motion import Motion
-from .model.robot import SIDES, Robot
-from .retarget.targets import configurations_at
+from ..assess.audit.dataset import MotionAudit
+from ..assess.result import AdaptedMotion
+from ..errors import InvalidInputError
+from ..model.contact import ContactForces, FootForces
+from ..model.legs import hip_height
+from ..model.motion import Motion
+from ..model.robot import SIDES, Robot
+from ..retarget.targets import configurations_at
 
 __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_schedule",
            "wrench_forces", "identity_map", "keypoint_frames", "keypoint_error", "placed",
@@ -148,7 +148,7 @@ class RepairResult:
         """JSON-ready: ``feasible``, ``before`` and ``after`` (each
         :meth:`MotionAudit.summary_dict` with its failed checks), the kept keypoints [m] and
         push [rad], ``seconds``."""
-        from .jsonable import jsonable
+        from ..jsonable import jsonable
 
         return jsonable({
             "feasible": self.feasible,
@@ -173,12 +173,12 @@ def repair_schedule(robot: Robot, motion: Motion, flat: float = FLAT_HEIGHT
     the lowest sole corner's height and speed) where also the sole's highest corner is within
     ``flat`` hip heights of the floor (:func:`gdimitate.bvh.contacts.estimate_floor`), the
     flat foot the adaptor's contact is."""
-    from .assess.audit.dataset import stance_schedule
+    from ..assess.audit.dataset import stance_schedule
 
     stance, _ = stance_schedule(robot, motion)
     if all(s in motion.contact for s in SIDES):
         return stance
-    from .io.bvh.contacts import estimate_floor, sole_corners
+    from ..io.bvh.contacts import estimate_floor, sole_corners
 
     hip = hip_height(robot)
     corners = sole_corners(robot, motion.q)
@@ -196,7 +196,7 @@ def wrench_forces(robot: Robot, motion: Motion, wrenches: Mapping[str, np.ndarra
     pressure ``p + R (−τ_y/f_z, τ_x/f_z, 0)`` and the free moment about it ``R (0, 0, τ_z −
     c_x f_y + c_y f_x)``; in contact where ``motion.contact`` says stance and f_z > 0.
     :func:`gdimitate.wrenches.measured_wrenches` turns them back (within round-off)."""
-    from .model.kinematics import frame_placements
+    from ..model.kinematics import frame_placements
 
     contacts = robot.require_contacts()
     P = frame_placements(robot, motion.q, [contacts[s].frame for s in SIDES])
@@ -222,7 +222,7 @@ def wrench_forces(robot: Robot, motion: Motion, wrenches: Mapping[str, np.ndarra
 def identity_map(robot: Robot) -> dict[str, dict]:
     """The body map of ``robot`` onto itself: every 1-DoF joint (not a planar base's) onto
     itself (scale 1, offset 0) and the preset's segments (pelvis, torso) onto themselves."""
-    from .retarget.bodymap import UnmappedJointsWarning, body_map
+    from ..retarget.bodymap import UnmappedJointsWarning, body_map
 
     m = robot.model
     joints = {j: [j, 1.0, 0.0] for j in robot.joint_names
@@ -324,11 +324,11 @@ def repair(robot: Robot, motion: Motion, *, rate: float | None = None,
     repaired motion. Raises :class:`~gdimitate.errors.InvalidInputError` for a motion that is
     not the robot's, too short, a robot without a free base, or options the repair sets itself.
     """
-    from .adapt import adapt
-    from .assess.audit.dataset import audit_motion
-    from .assess.wrenches import estimate_wrenches
-    from .model.motion import differentiate
-    from .retarget import Weights
+    from ..assess.audit.dataset import audit_motion
+    from ..assess.wrenches import estimate_wrenches
+    from ..model.motion import differentiate
+    from ..retarget import Weights
+    from .adaptor import adapt
 
     t0 = time.perf_counter()
     if not isinstance(robot, Robot):

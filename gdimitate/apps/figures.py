@@ -12,13 +12,13 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .assess import metrics
-from .assess.metrics import ForceDirection
-from .model.contact import SoleContact, centre_of_pressure
-from .model.motion import Motion
-from .model.robot import Robot
-from .model.sagittal import leg_angles
-from .safety import atomic_write
+from ..assess import metrics
+from ..assess.metrics import ForceDirection
+from ..model.contact import SoleContact, centre_of_pressure
+from ..model.motion import Motion
+from ..model.robot import Robot
+from ..model.sagittal import leg_angles
+from ..safety import atomic_write
 
 __all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
            "plot_force_directions", "plot_sole_cop"]
@@ -62,7 +62,7 @@ def plot_heights(tracks: list[Track], title: str = "", path: Path | None = None)
 
 def plot_gait(demonstrator: Robot, demo: Motion, adapted, path: Path | None = None):
     """The paper's Fig. 4 for an adaptation (``adapted``: an
-    :class:`~gdimitate.adapt.AdaptedMotion` of ``demo``): :func:`plot_heights` of the
+    :class:`~gdimitate.AdaptedMotion` of ``demo``): :func:`plot_heights` of the
     demonstrator and the imitator, each over its own leg length — the demonstrator scaled to
     the imitator's legs — titled with the travel ratio (docs/design.md §13)."""
     g = adapted.gait
@@ -178,7 +178,7 @@ def plot_sole_cop(wrenches: Mapping[str, np.ndarray], contacts: Mapping[str, Sol
                   stance: Mapping[str, np.ndarray], title: str = "", path: Path | None = None):
     """Each foot's centre of pressure [cm] inside its sole rectangle, seen from above in the
     sole frame (x forward, y left): ``wrenches`` ``{side: (T, 6)}`` [N, N·m] in the sole frame
-    (an :class:`~gdimitate.adapt.AdaptedMotion`'s), ``contacts`` the sole rectangles,
+    (an :class:`~gdimitate.AdaptedMotion`'s), ``contacts`` the sole rectangles,
     ``stance`` ``{side: (T,) bool}`` (only stance knots with a positive normal force are
     drawn). The drawn points are :func:`gdimitate.model.contact.centre_of_pressure`'s."""
     fig, ax = plt.subplots(1, 2, figsize=(8, 4.5))

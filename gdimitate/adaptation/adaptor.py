@@ -11,12 +11,12 @@ used, the solver's account and the independent physical audit
 
 from __future__ import annotations
 
-from .assess.result import AdaptationReport, AdaptedMotion, compare
-from .errors import InvalidInputError, UnknownNameError
-from .model.motion import Motion
-from .model.robot import Robot
-from .planar.analytic import adapt_planar, check_pair
-from .types import AdaptMethod, ForceModel
+from ..assess.result import AdaptationReport, AdaptedMotion, compare
+from ..errors import InvalidInputError, UnknownNameError
+from ..model.motion import Motion
+from ..model.robot import Robot
+from ..planar.analytic import adapt_planar, check_pair
+from ..types import AdaptMethod, ForceModel
 
 __all__ = ["AdaptationReport", "AdaptedMotion", "adapt", "METHODS", "compare"]
 
@@ -27,14 +27,14 @@ def _check_size(demo: Motion, imitator: Robot, method: str, rate: float | None) 
     """Refuse, before any allocation, a time axis in the wrong unit and an optimal knot grid
     beyond :data:`~gdimitate.safety.MAX_KNOT_RATE` or :data:`~gdimitate.safety.MAX_ARRAY_BYTES`
     (e.g. a BVH frame time of 1e6 s, ``rate=1e6``)."""
-    from .safety import MAX_KNOT_RATE, check_array_size, check_positive, check_time_axis
+    from ..safety import MAX_KNOT_RATE, check_array_size, check_positive, check_time_axis
 
     check_time_axis(demo.t, "the demonstration")
     if method != "optimal":
         return
     if rate is not None:
         check_positive("rate [knots/s]", rate, upper=MAX_KNOT_RATE)
-    from .retarget import DEFAULT_RATE
+    from ..retarget import DEFAULT_RATE
 
     knots = (demo.t[-1] - demo.t[0]) * (DEFAULT_RATE if rate is None else rate) + 1
     check_array_size("the optimal adaptor's knot grid (knots × state)",
@@ -61,7 +61,7 @@ def adapt(demo: Motion, demonstrator: Robot, imitator: Robot, method: AdaptMetho
     check_pair(demo, demonstrator, imitator)
     _check_size(demo, imitator, method, rate)
     if method == "optimal":
-        from .retarget import adapt_optimal
+        from ..retarget import adapt_optimal
 
         return adapt_optimal(demo, demonstrator, imitator, force=force, forces=forces,
                              rate=rate, **options)

@@ -27,11 +27,11 @@ DEFAULT_GAIN = 0.5
 
 def periodic_cycle(demo=None, demonstrator: Robot | None = None,
                    imitator: str | Robot = "g1", forces=None, rate: float = WALK_RATE):
-    """The periodic cycle (an :class:`~gdimitate.adapt.AdaptedMotion`) of a demonstration on
+    """The periodic cycle (an :class:`~gdimitate.AdaptedMotion`) of a demonstration on
     ``imitator``: the measured push directions kept (``force="measured"``) when ``forces``
     are given. Without ``demo``: one stride (:func:`gdimitate.io.gait.one_stride`) of the shipped
     3-D walk (:func:`gdimitate.io.gait.human_walk_3d`). Returns ``(cycle, forces)``."""
-    from ..adapt import adapt
+    from ..adaptation.adaptor import adapt
 
     if demo is None:
         from ..io import gait

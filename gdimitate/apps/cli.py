@@ -31,12 +31,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from .assess.verdict import EXIT_NOT_FEASIBLE
-from .errors import GdimitateError, LegDetectionError, OscillatorError, OutputError
-from .safety import atomic_write, output_job, prepare_output_dir
+from ..assess.verdict import EXIT_NOT_FEASIBLE
+from ..errors import GdimitateError, LegDetectionError, OscillatorError, OutputError
+from ..safety import atomic_write, output_job, prepare_output_dir
 
 if TYPE_CHECKING:
-    from .types import ForceModel
+    from ..types import ForceModel
 
 __all__ = ["EXIT_STATUS", "main"]
 
@@ -82,8 +82,8 @@ def _json_file(path: str | None, what: str):
     """The JSON object in ``path`` (``--legs``/``--contacts``), or None."""
     if path is None:
         return None
-    from .errors import InvalidInputError
-    from .model.inputs import read_json
+    from ..errors import InvalidInputError
+    from ..model.inputs import read_json
 
     value = read_json(path, what)  # bounded: size, nesting, digits, no NaN
     if not isinstance(value, dict):
@@ -95,7 +95,7 @@ def _json_file(path: str | None, what: str):
 def _robot(spec: str, a: argparse.Namespace):
     """``Robot.load`` of a library name or a .urdf/.osim path with the command's
     ``--package-dir``/``--contacts``/``--legs``/``--massless-joints``."""
-    from .model.robot import Robot
+    from ..model.robot import Robot
 
     massless = [j for j in (a.massless_joints or "").split(",") if j.strip()]
     return Robot.load(spec, package_dir=a.package_dir,
@@ -106,7 +106,7 @@ def _robot(spec: str, a: argparse.Namespace):
 
 def _add_robot_args(p: argparse.ArgumentParser, flag: str, default: str | None,
                     what: str) -> None:
-    from .model.library import list_robots
+    from ..model.library import list_robots
 
     p.add_argument(flag, default=default,
                    help=f"{what}: a library name ({', '.join(list_robots())}) or a .urdf/.osim "
@@ -153,8 +153,8 @@ def _demonstration(path: str | None, a: argparse.Namespace):
     ``None`` → ``None``."""
     if path is None:
         return None
-    from .io.demonstration import load_demonstration
-    from .model.robot import Robot
+    from ..io.demonstration import load_demonstration
+    from ..model.robot import Robot
 
     robot = None
     if a.osim is not None:
@@ -166,7 +166,7 @@ def _demonstration(path: str | None, a: argparse.Namespace):
 
 
 def _cmd_demo(a: argparse.Namespace) -> int:
-    from .apps.demo import run_demo
+    from .demo import run_demo
 
     imitator = _robot(a.imitator, a)
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
@@ -180,7 +180,7 @@ def _cmd_demo(a: argparse.Namespace) -> int:
 
 
 def _cmd_paper(a: argparse.Namespace) -> None:
-    from .apps.paper import run_paper
+    from .paper import run_paper
 
     run_paper(a.out)
 
@@ -189,7 +189,7 @@ def _default_story(imitator: str | None, a: argparse.Namespace):
     """The default demonstration and imitator
     (:func:`gdimitate.apps.demo.default_demonstration`,
     G1 unless ``imitator`` names another), announced."""
-    from .apps.demo import DEFAULT_IMITATOR, default_demonstration
+    from .demo import DEFAULT_IMITATOR, default_demonstration
 
     robot, motion, forces = default_demonstration()
     print(f"no demonstration given: one stride of the shipped real 3-D walk ({motion.T} frames, "
@@ -199,7 +199,7 @@ def _default_story(imitator: str | None, a: argparse.Namespace):
 
 def _adapted(a: argparse.Namespace, demonstration: str | None):
     """``(demonstrator, demonstration, forces, result)`` of the command's adaptation."""
-    from .adapt import adapt
+    from ..adaptation.adaptor import adapt
 
     demo = _demonstration(demonstration, a)
     if demo is None:
@@ -227,8 +227,8 @@ def _force_goal(given: str | None, method: str, forces) -> str:
 
 
 def _cmd_adapt(a: argparse.Namespace) -> int:
-    from .apps.outputs import write_adapted
-    from .assess.verdict import report_lines, verdict
+    from ..assess.verdict import report_lines, verdict
+    from .outputs import write_adapted
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
@@ -259,7 +259,7 @@ def _error_lines(report: dict) -> list[str]:
 
 
 def _cmd_walk(a: argparse.Namespace) -> int:
-    from .walk.command import walk_command
+    from ..walker.command import walk_command
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)
@@ -271,10 +271,10 @@ def _cmd_walk(a: argparse.Namespace) -> int:
 def _cmd_view(a: argparse.Namespace) -> int:
     import time
 
-    from .apps.examples import example
-    from .assess.metrics import force_direction
-    from .assess.verdict import verdict
-    from .viz import Viewer, compare
+    from ..assess.metrics import force_direction
+    from ..assess.verdict import verdict
+    from ..viz import Viewer, compare
+    from .examples import example
 
     live = a.html is None
     v = None
@@ -325,7 +325,7 @@ def _cmd_view(a: argparse.Namespace) -> int:
 
 
 def _cmd_entrain(a: argparse.Namespace) -> int:
-    from .cpg import entrain
+    from ..oscillator.replay import entrain
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
@@ -372,7 +372,7 @@ def _cmd_entrain(a: argparse.Namespace) -> int:
 
 
 def _cmd_batch(a: argparse.Namespace) -> int:
-    from .batch import BatchOptions, run_batch
+    from ..batch import BatchOptions, run_batch
 
     options = BatchOptions(a.imitator, method=a.method, force=a.force, simulate=a.simulate,
                            demonstrator=a.demonstrator)
@@ -383,7 +383,7 @@ def _cmd_batch(a: argparse.Namespace) -> int:
           f"{where}) …", flush=True)
     res = run_batch(a.input_dir, a.out, options, workers=a.workers, executor=a.executor,
                     address=a.address, pattern=a.pattern, progress=not a.quiet)
-    from .batch.table import console_table
+    from ..batch.table import console_table
 
     print(console_table(res.rows))
     counts = ", ".join(f"{len(res.by_status(s))} {s}" for s in ("done", "skipped", "failed"))
@@ -397,9 +397,9 @@ def _cmd_batch(a: argparse.Namespace) -> int:
 
 
 def _cmd_repair(a: argparse.Namespace) -> int:
-    from .apps.repair import repair_file
-    from .batch.audit import find_motion_files
-    from .errors import InvalidInputError
+    from ..batch.audit import find_motion_files
+    from ..errors import InvalidInputError
+    from .repair import repair_file
 
     if Path(a.file).expanduser().is_dir():
         raise InvalidInputError(f"{a.file} is a folder; repair takes one motion file (audit "
@@ -414,7 +414,7 @@ def _cmd_repair(a: argparse.Namespace) -> int:
 
 
 def _cmd_audit(a: argparse.Namespace) -> int:
-    from .batch.audit import audit_csv, audit_files, audit_table, find_motion_files
+    from ..batch.audit import audit_csv, audit_files, audit_table, find_motion_files
 
     files = find_motion_files(a.files)
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
@@ -437,7 +437,7 @@ def _cmd_audit(a: argparse.Namespace) -> int:
 
 
 def _cmd_stream(a: argparse.Namespace) -> int:
-    from .apps.stream import stream_command
+    from .stream import stream_command
 
     with output_job(a.out):  # one run per folder; failed: what it wrote is undone
         out = prepare_output_dir(a.out)  # before the work: a bad --out fails at once
@@ -445,7 +445,7 @@ def _cmd_stream(a: argparse.Namespace) -> int:
 
 
 def _cmd_export(a: argparse.Namespace) -> None:
-    from .export.writers import FORMATS, export_motion, read_wrenches
+    from ..export.writers import FORMATS, export_motion, read_wrenches
 
     demo = _demonstration(a.motion, a)
     wrenches = read_wrenches(a.motion) if Path(a.motion).suffix.lower() == ".npz" else None
@@ -463,7 +463,7 @@ def _cmd_export(a: argparse.Namespace) -> None:
 
 
 def _cmd_simulate(a: argparse.Namespace) -> int:
-    from .export.writers import read_wrenches
+    from ..export.writers import read_wrenches
 
     # the plan is a gdimitate .npz that records its robot: --grf, --coordinates and --osim
     # belong to the --reference (they were applied to the plan, which then always failed)
@@ -481,10 +481,10 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
 
 
 def _simulate(a: argparse.Namespace, demo, wrenches, forces) -> int:
-    from .sim import plots as sim_plots
-    from .sim import simulate
-    from .sim.animation import show_simulation
-    from .sim.reference import Plan
+    from ..sim import plots as sim_plots
+    from ..sim import simulate
+    from ..sim.animation import show_simulation
+    from ..sim.reference import Plan
 
     robot = demo.robot
     out = prepare_output_dir(a.out)
@@ -497,7 +497,7 @@ def _simulate(a: argparse.Namespace, demo, wrenches, forces) -> int:
         tmp.write_text(json.dumps(summary, indent=2, default=str))
     sim_plots.plot_summary(res, out / "simulation.png")
     if a.html:
-        from .viz import Viewer
+        from ..viz import Viewer
 
         v = Viewer.start(quiet=True)
         try:
@@ -542,7 +542,7 @@ _METHOD_HELP = ("adaptor: optimal (whole-body, contact-consistent, within the im
 
 def _add_demo(sub) -> None:
     """``gdimitate demo``: the main job (:mod:`gdimitate.apps.demo`)."""
-    from .apps.demo import DEFAULT_IMITATOR
+    from .demo import DEFAULT_IMITATOR
 
     d = sub.add_parser("demo", help="the main job: the real 3-D walk → G1 (whole-body adaptor, "
                                     "MuJoCo physics check, oscillator replay)")
@@ -561,7 +561,7 @@ def _add_paper(sub) -> None:
 
 def _add_adapt(sub) -> None:
     """``gdimitate adapt``: adapt a demonstration file, write the result and its verdict."""
-    from .apps.demo import DEFAULT_IMITATOR
+    from .demo import DEFAULT_IMITATOR
 
     ad = sub.add_parser("adapt", help="adapt a demonstration file for an imitator",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: {EXIT_STATUS[3]}")
@@ -586,7 +586,7 @@ def _add_adapt(sub) -> None:
 
 def _add_walk(sub) -> None:
     """``gdimitate walk``: a periodic cycle walked in MuJoCo under an oscillator network."""
-    from .apps.demo import WALK_IMITATOR
+    from .demo import WALK_IMITATOR
 
     wk = sub.add_parser("walk", help="a periodic cycle, a whole-body oscillator network and N "
                                      "steps in MuJoCo (walk.json, plots, trajectory, HTML)",
@@ -600,7 +600,7 @@ def _add_walk(sub) -> None:
                          "(default: %(default)s)")
     wk.add_argument("--rate", type=float, default=None,
                     help="knots per second of the cycle's optimal solve (default: "
-                         "gdimitate.walk.WALK_RATE)")
+                         "gdimitate.walker.WALK_RATE)")
     wk.add_argument("--no-html", action="store_true", help="skip walk.html")
     wk.add_argument("--out", default="gdimitate-walk", help="output folder (default: %(default)s)")
     wk.set_defaults(func=_cmd_walk)
@@ -608,8 +608,8 @@ def _add_walk(sub) -> None:
 
 def _add_view(sub) -> None:
     """``gdimitate view``: the meshcat preview, live or as a self-contained HTML file."""
-    from .apps.demo import DEFAULT_IMITATOR
-    from .apps.examples import EXAMPLES
+    from .demo import DEFAULT_IMITATOR
+    from .examples import EXAMPLES
 
     vw = sub.add_parser("view", help="meshcat preview: live in the browser or --html FILE",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the adaptation shown is not "
@@ -635,7 +635,7 @@ def _add_view(sub) -> None:
 
 def _add_entrain(sub) -> None:
     """``gdimitate entrain``: a Matsuoka network tuned to a motion, and its replay."""
-    from .apps.demo import DEFAULT_IMITATOR
+    from .demo import DEFAULT_IMITATOR
 
     en = sub.add_parser("entrain", help="tune a Matsuoka network to a motion and replay it",
                         epilog=f"exit status {EXIT_NOT_FEASIBLE}: the free-running replay "
@@ -654,7 +654,7 @@ def _add_entrain(sub) -> None:
 
 def _add_export(sub) -> None:
     """``gdimitate export``: a motion written in another file format."""
-    from .export.writers import FORMATS
+    from ..export.writers import FORMATS
 
     ex = sub.add_parser("export", help="write a motion as CSV, NPZ, MuJoCo qpos, or what "
                         "motion-tracking pipelines read: the LAFAN1 CSV, a GMR pickle, an Isaac "
@@ -730,7 +730,7 @@ def _add_batch(sub) -> None:
 
 def _add_audit(sub) -> None:
     """``gdimitate audit``: robot motion files checked for physical feasibility."""
-    from .batch.audit import AUDIT_FORMATS
+    from ..batch.audit import AUDIT_FORMATS
 
     au = sub.add_parser("audit", help="check robot motion files (gdimitate .npz, CSV, LAFAN1 / "
                         "BeyondMimic CSV, GMR pickle, Isaac Lab AMP or MuJoCo qpos NPZ) for "
@@ -771,7 +771,7 @@ def _add_repair(sub) -> None:
 def _add_stream(sub) -> None:
     """``gdimitate stream``: a live mocap stream adapted frame by frame (docs/guide/
     streaming.md)."""
-    from .apps.demo import DEFAULT_IMITATOR
+    from .demo import DEFAULT_IMITATOR
 
     st = sub.add_parser("stream", help="adapt a live mocap stream frame by frame (a BVH file "
                         "played at its rate, or Lab Streaming Layer), shown in meshcat; "

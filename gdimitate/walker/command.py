@@ -1,5 +1,5 @@
 """``gdimitate walk [DEMO] --imitator NAME --steps N --out DIR``: the command's work, kept
-out of :mod:`gdimitate.cli` (which only parses)."""
+out of :mod:`gdimitate.apps.cli` (which only parses)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
     """Write a walk into ``out`` (``demo``: a loaded demonstration with ``robot``,
     ``motion``, ``forces``, or None for the shipped 3-D walk); exit status 0 when it walked
     every step with a feasible cycle, :data:`~gdimitate.assess.verdict.EXIT_NOT_FEASIBLE` otherwise.
-    ``rate`` [knots/s]: the cycle's knot rate (default :data:`~gdimitate.walk.WALK_RATE`)."""
+    ``rate`` [knots/s]: the cycle's knot rate (default :data:`~gdimitate.walker.WALK_RATE`)."""
     from . import periodic_cycle, walk
 
     if demo is None:
