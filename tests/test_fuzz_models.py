@@ -412,7 +412,7 @@ def test_export_checks_the_quaternion_itself(walker, tmp_path, base_nq):
     bad = gd.Motion(motion.t, motion.joint_names, q, base_nq=base_nq, joint_nq=motion.joint_nq)
     out = tmp_path / "out.csv"
     with pytest.raises(InvalidInputError, match="joint 'root_joint': its quaternion"):
-        gd.export.export_motion(robot, bad, out, "csv")
+        gd.export_motion(robot, bad, out, "csv")
     assert not out.exists()
 
 
@@ -556,12 +556,12 @@ def test_export_fps_is_checked(walker, tmp_path, fps, fmt):
     robot, motion, _ = walker
     out = tmp_path / "o.csv"
     with pytest.raises(ExportError, match="fps"):
-        gd.export.export_motion(robot, motion, out, fmt, fps=fps)
+        gd.export_motion(robot, motion, out, fmt, fps=fps)
     assert not out.exists()
     with pytest.raises(ExportError, match="format"):
-        gd.export.export_motion(robot, motion, out, 5)
+        gd.export_motion(robot, motion, out, 5)
     with pytest.raises(ExportError, match="robot"):
-        gd.export.export_motion(None, motion, out, "csv")
+        gd.export_motion(None, motion, out, "csv")
 
 
 def test_bounds_are_generous_for_real_robots():
