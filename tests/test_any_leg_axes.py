@@ -181,7 +181,7 @@ def test_the_compiled_problem_cache_tells_knee_axes_apart(tmp_path):
     """Two robots of one name whose knees differ only in the axis (30° vs 35° tilt, both
     Pinocchio RevoluteUnaligned joints) must not share compiled derivatives: the adaptor's
     cache key covers joint axes (it did not, and the second robot got the first's solution)."""
-    from gdimitate.retarget.problem import fingerprint
+    from gdimitate.retarget.trajectory.problem import fingerprint
 
     text = biped_urdf("tilted")
     other = text

@@ -19,8 +19,8 @@ from gdimitate.model.heading import walking_direction
 from gdimitate.retarget.knot import Flags, Knot
 from gdimitate.retarget.parts.periodic import PeriodicSeam
 from gdimitate.retarget.parts.seam import seam_functions
-from gdimitate.retarget.periodic import periodic_rate, periodic_stride
-from gdimitate.retarget.problem import symbolic_model
+from gdimitate.retarget.trajectory.periodic import periodic_rate, periodic_stride
+from gdimitate.retarget.trajectory.problem import symbolic_model
 
 RNG = np.random.default_rng(18)
 

@@ -1,4 +1,5 @@
-"""The exact-consistency step before a result is reported (gdimitate.retarget.polish): the
+"""The exact-consistency step before a result is reported (gdimitate.retarget.trajectory.polish):
+the
 wrench correction zeroes the base rows of Pinocchio's inverse dynamics and, given the soles,
 keeps every wrench inside its cone (checked with the audit's own margins)."""
 
@@ -11,7 +12,7 @@ import pytest
 from gdimitate.model.contact import cone_margin
 from gdimitate.model.kinematics import base_v_indices
 from gdimitate.model.robot import SIDES, Robot
-from gdimitate.retarget.polish import make_consistent
+from gdimitate.retarget.trajectory.polish import make_consistent
 
 
 @pytest.fixture(scope="module")

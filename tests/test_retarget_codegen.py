@@ -1,4 +1,4 @@
-"""Compiled per-knot functions (gdimitate.retarget.codegen): compiled once into the cache
+"""Compiled per-knot functions (gdimitate.retarget.trajectory.codegen): compiled once into the cache
 folder, loaded afterwards without building or compiling, nothing written to the working
 folder, the same numbers as CasADi's virtual machine; no C compiler → the virtual machine with
 one warning."""
@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gdimitate.retarget import codegen
+from gdimitate.retarget.trajectory import codegen
 
 
 def _functions() -> list[ca.Function]:
@@ -86,7 +86,7 @@ def test_source_digest_covers_every_module_the_compiled_expressions_import():
     import ast
     from pathlib import Path
 
-    from gdimitate.retarget import problem
+    from gdimitate.retarget.trajectory import problem
 
     root = Path(problem.__file__).parents[1]  # gdimitate/
     digested = set()
@@ -157,8 +157,8 @@ def test_knot_derivatives_in_pieces_match_finite_differences(tmp_path, monkeypat
     ``kjac`` against central differences of ``kg``, the summed ``kh`` pieces (upper
     triangle) against central differences of the Lagrangian's gradient σ·kgrad + kjacᵀλ."""
     from gdimitate.retarget import parts as P
-    from gdimitate.retarget import problem as pb
     from gdimitate.retarget.knot import Flags
+    from gdimitate.retarget.trajectory import problem as pb
 
     if codegen._compiler() is None:
         pytest.skip("no C compiler on this machine")
@@ -198,7 +198,7 @@ def test_the_solver_record_says_what_was_compiled(tmp_path, monkeypatch):
     own NLP again (cached True)."""
     from gdimitate.adaptation.adaptor import adapt
     from gdimitate.apps.cases import paper_case
-    from gdimitate.retarget import problem as pb
+    from gdimitate.retarget.trajectory import problem as pb
 
     if codegen._compiler() is None:
         pytest.skip("no C compiler on this machine")

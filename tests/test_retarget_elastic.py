@@ -1,4 +1,5 @@
-"""The goal rows' elastic slacks (gdimitate.retarget.solve.GOAL): a demonstration whose force
+"""The goal rows' elastic slacks (gdimitate.retarget.trajectory.solve.GOAL): a demonstration whose
+force
 direction is beyond the imitator's reach is answered by the hard solve itself — the least miss
 of the goal, every other row met — and the miss it reports is the one the independent report
 (Pinocchio kinematics) measures on the returned motion."""
@@ -10,8 +11,8 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.assess.solver import Unmet
-from gdimitate.retarget import problem as pb
-from gdimitate.retarget import solve
+from gdimitate.retarget.trajectory import problem as pb
+from gdimitate.retarget.trajectory import solve
 
 
 @pytest.fixture(scope="module")

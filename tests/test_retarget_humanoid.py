@@ -97,11 +97,11 @@ def test_screening_keeps_the_legs_apart_row(walk):
     cores)."""
     from gdimitate.model.kinematics import actuated_v_indices
     from gdimitate.retarget import Contact, Limits, Weights, limits
-    from gdimitate.retarget import problem as pb
-    from gdimitate.retarget import solve as S
     from gdimitate.retarget.bodymap import body_map
     from gdimitate.retarget.info import resolve_contacts
     from gdimitate.retarget.targets import demonstration_targets
+    from gdimitate.retarget.trajectory import problem as pb
+    from gdimitate.retarget.trajectory import solve as S
 
     h, demo, fs = walk
     robot = gd.Robot.from_library("g1")  # its measured-push problem the demo compiles too

@@ -14,7 +14,7 @@ from gdimitate.model.contact import wrench_cone
 from gdimitate.model.robot import SIDES
 from gdimitate.retarget import parts as P
 from gdimitate.retarget.knot import Flags, Knot
-from gdimitate.retarget.problem import symbolic_model
+from gdimitate.retarget.trajectory.problem import symbolic_model
 
 RNG = np.random.default_rng(7)
 
@@ -258,7 +258,7 @@ def test_costs_match_pinocchio(robot):
 def test_layout_slacks_and_labels_follow_the_list(robot):
     """The weight block, the elastic slacks and the labels are derived from the parts: drop a
     cost and its weight leaves the layout; drop a relaxable constraint and its slacks go."""
-    from gdimitate.retarget.problem import _knot_expressions, _weights
+    from gdimitate.retarget.trajectory.problem import _knot_expressions, _weights
 
     r = robot("hoap2")
     full = P.default_parts((), tuple(range(3, r.model.nq)))
@@ -286,7 +286,7 @@ def test_cone_pyramid_lies_inside_coulombs_circle(mu):
     tangential direction just outside the circle violates a row, and the pyramid's corner
     touches the circle (closed form: ratio √2·μ_p = μ). With μ itself the corner reached
     √2·μ (CMU → G1 planned 0.99 against μ = 0.7). A planar model's one row is the circle."""
-    from gdimitate.retarget.solve import _pyramid_mu
+    from gdimitate.retarget.trajectory.solve import _pyramid_mu
 
     A = wrench_cone(1.0, 1.0, _pyramid_mu(mu, planar=False))[:4]  # the friction rows
     th = np.linspace(0, 2 * np.pi, 721)

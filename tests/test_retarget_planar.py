@@ -26,7 +26,8 @@ from gdimitate.apps.cases import paper_case
 from gdimitate.errors import ContactError, GdimitateError, InvalidInputError, UnknownNameError
 from gdimitate.model.contact import SoleContact
 from gdimitate.model.robot import SIDES
-from gdimitate.retarget import Contact, Limits, Weights, problem, resample, schedule
+from gdimitate.retarget import Contact, Limits, Weights, resample, schedule
+from gdimitate.retarget.trajectory import problem
 
 
 def _slice(m, a, b):

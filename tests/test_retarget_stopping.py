@@ -1,4 +1,4 @@
-"""The adaptor's stopping rule (gdimitate.retarget.stopping.Plateau) on synthetic iterate
+"""The adaptor's stopping rule (gdimitate.retarget.trajectory.stopping.Plateau) on synthetic iterate
 traces with known answers, and ``stop="settled"`` against IPOPT's own convergence test on a
 real problem, both judged by the independent audit."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import gdimitate as gd
-from gdimitate.retarget.stopping import PLATEAU, Plateau
+from gdimitate.retarget.trajectory.stopping import PLATEAU, Plateau
 
 
 def _rule(**kw) -> Plateau:
@@ -96,7 +96,7 @@ def test_the_barrier_parameter_reaches_the_rule_from_ipopt():
     the solve, iteration by iteration), on min (x−1)² + (y−2)² s.t. x + y ≤ 2.5."""
     import casadi as ca
 
-    from gdimitate.retarget.interrupt import Progress, guard
+    from gdimitate.retarget.trajectory.interrupt import Progress, guard
 
     x = ca.MX.sym("x", 2)
     cb = Progress("mu_probe", 2, 1, 0)
@@ -114,7 +114,7 @@ def test_the_barrier_parameter_reaches_the_rule_from_ipopt():
 
 _KEPT_HEAP_PROBE = """
 import ctypes, resource, sys
-from gdimitate.retarget.solve import kept_heap
+from gdimitate.retarget.trajectory.solve import kept_heap
 libc = ctypes.CDLL("libc.so.6")
 libc.malloc.restype = ctypes.c_void_p
 libc.free.argtypes = [ctypes.c_void_p]

@@ -23,7 +23,7 @@ import gdimitate as gd
 from gdimitate.model.robot import SIDES
 from gdimitate.retarget import parts as P
 from gdimitate.retarget.knot import Flags, Knot
-from gdimitate.retarget.problem import symbolic_model
+from gdimitate.retarget.trajectory.problem import symbolic_model
 
 SPLAY = 0.06  # [m] each ankle's lateral offset from its knee
 

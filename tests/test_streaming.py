@@ -1,4 +1,4 @@
-"""The streaming mode's per-frame inverse-dynamics QP (gdimitate/retarget/receding.py,
+"""The streaming mode's per-frame inverse-dynamics QP (gdimitate/retarget/streaming/receding.py,
 streaming.py), judged by the independent audit (Pinocchio recomputation of the output's own
 q, v, a and wrenches) and by Pinocchio's own integration."""
 
@@ -120,7 +120,11 @@ def test_verdicts_in_batches_and_one_by_one_are_the_whole_motion_audits_knot_by_
     ``velocity_consistency``'s tolerance, the dynamics do not change): measured, frames 16–39
     but 18 fail (the left sole in stance from frame 0, the right from 8). A window that left
     out the frame a stance began would pass them."""
-    from gdimitate.retarget.verdict_worker import InlineVerdicts, VerdictWorker, knot_verdicts
+    from gdimitate.retarget.streaming.verdict_worker import (
+        InlineVerdicts,
+        VerdictWorker,
+        knot_verdicts,
+    )
 
     n = 40
     sa, motion, W, _ = _stream(walk, n)
@@ -236,7 +240,7 @@ def test_a_failing_verdict_worker_says_so(walk):
     """A worker that fails (here: fed a malformed frame) raises VerdictWorkerError with its
     traceback, and is reaped; bad ``audit=`` values and ``verdicts()`` without a judge are
     refused."""
-    from gdimitate.retarget.verdict_worker import VerdictWorker, VerdictWorkerError
+    from gdimitate.retarget.streaming.verdict_worker import VerdictWorker, VerdictWorkerError
 
     human, demo, _, talos = walk
     w = VerdictWorker(talos, talos.contacts, 0.0)
@@ -256,7 +260,7 @@ def test_bounded_step_holds_a_joint_at_its_limit_and_lets_the_others_take_its_sh
     """Closed form: ``A = [[2, 1], [1, 2]]``, ``b = (3, 3)`` solves to ``(1, 1)``; with the
     first joint at its upper limit and pushed up, it is held and the second solves
     ``2 dq₂ = 3`` alone (1.5), where clipping would have left it at 1."""
-    from gdimitate.retarget.frameref import _bounded_step
+    from gdimitate.retarget.streaming.frameref import _bounded_step
 
     m = pin.Model()
     for k in range(2):

@@ -5,7 +5,8 @@
 ``"copy"`` keeps the demonstrator's planar joint angles (the paper's "without adaptor"
 baseline). Both keep the torso and ankle angles and place the base so that the stance foot
 stands on the ground without slipping. :func:`gdimitate.adapt` dispatches here; the optimal
-adaptor's warm start (:mod:`gdimitate.retarget.initial`) calls :func:`adapt_planar` directly,
+adaptor's warm start (:mod:`gdimitate.retarget.trajectory.initial`) calls :func:`adapt_planar`
+directly,
 so that the adaptors never import their dispatcher. Both need legs whose joints turn about the
 lateral axis (:class:`~gdimitate.errors.LegDetectionError` otherwise).
 """

@@ -1,9 +1,10 @@
 """The whole-body, contact-consistent optimal adaptor (docs/design.md §6).
 
-One formulation, assembled from named parts, for the trajectory mode (:func:`adapt_optimal`,
-what ``gdimitate.adapt(..., method="optimal")`` runs); the streaming mode
-(:class:`StreamingAdaptor`, ``mode="per_frame"``) shares its body map, limits and soles and
-solves one whole-body inverse-dynamics QP per frame instead (:mod:`.receding`):
+One formulation, assembled from named parts, for the trajectory mode (:mod:`.trajectory`;
+:func:`adapt_optimal`, what ``gdimitate.adapt(..., method="optimal")`` runs); the streaming
+mode (:mod:`.streaming`; :class:`StreamingAdaptor`, ``mode="per_frame"``) shares its body map,
+limits, targets and soles (this folder's modules) and solves one whole-body inverse-dynamics
+QP per frame instead (:mod:`.streaming.receding`):
 
 - decision variables per knot (:mod:`.knot`): the imitator's full configuration ``q``, its
   velocity ``v`` and acceleration ``a`` (Pinocchio's conventions), one contact wrench per foot
@@ -14,16 +15,17 @@ solves one whole-body inverse-dynamics QP per frame instead (:mod:`.receding`):
   joint position and velocity limits, flat-foot contact, the contact wrench cone of each sole
   rectangle, swing clearance of every sole corner, the force direction (the goal);
 - one knot's functions mapped over the knots and the NLP cached per problem shape
-  (:mod:`.problem`); IPOPT; the least-infeasible (elastic, L1) fallback; Ctrl-C stops a solve
-  (:mod:`.interrupt`); the report recomputed by :func:`gdimitate.assess.audit.audit`.
+  (:mod:`.trajectory.problem`); IPOPT; the least-infeasible (elastic, L1) fallback; Ctrl-C
+  stops a solve (:mod:`.trajectory.interrupt`); the report recomputed by
+  :func:`gdimitate.assess.audit.audit`.
 """
 
 from .bodymap import BodyMap, UnmappedJointsWarning, body_map
 from .params import DEFAULT_RATE, Contact, Limits, Weights
-from .problem import clear_cache
-from .solve import MODES, OPTIONS, SolverInfo, Unmet, adapt_optimal
-from .streaming import FrameResult, StreamingAdaptor
+from .streaming.adaptor import FrameResult, StreamingAdaptor
 from .targets import Targets, resample, schedule
+from .trajectory.problem import clear_cache
+from .trajectory.solve import MODES, OPTIONS, SolverInfo, Unmet, adapt_optimal
 
 __all__ = [
     "BodyMap",

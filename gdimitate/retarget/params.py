@@ -34,8 +34,8 @@ parameter μ then weighs a tenth as much against it; the stop's μ test,
 :data:`~.stopping.MU_TOL`, follows the scale): one cycle of the shipped walk, 100 knots,
 Talos 57 → 39 iterations, G1 65 → 34, iCub 76 → 40, Romeo 54 → 47, the whole clip → G1
 49 → 44, the CMU walk → G1 89 → 76, HOAP-2 44 → 29 (with the stop's feasibility at the
-adaptor's ``tol``; docs/design.md §6). ``ipopt=`` adds to them. Kept here,
-not in :mod:`.problem`, so that tuning them does not change the compiled functions' key."""
+adaptor's ``tol``; docs/design.md §6). ``ipopt=`` adds to them. Kept here, not in
+:mod:`.trajectory.problem`, so that tuning them does not change the compiled functions' key."""
 
 #: Default knot rate [knots/s] of the trajectory mode: the demonstration is resampled onto a
 #: grid of this rate. 50 Hz resolves walking (steps of ~0.5 s, contact phases of 0.1–0.6 s)

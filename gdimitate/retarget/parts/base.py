@@ -2,7 +2,7 @@
 constraint (rows with bounds, labels and whether they may relax), written at one knot
 (:class:`~gdimitate.retarget.knot.Knot`) or between two neighbouring knots.
 
-The problem (:mod:`gdimitate.retarget.problem`) is the sum of a list of parts
+The problem (:mod:`gdimitate.retarget.trajectory.problem`) is the sum of a list of parts
 (:func:`gdimitate.retarget.parts.default_parts`): the cost is ``Σ_parts Σ_knots
 |√w · residual|² / T``; the constraint rows are the parts' rows stacked in list order; the
 weight layout (one ``√w`` parameter per distinct :attr:`Cost.weight`, read from
@@ -59,7 +59,7 @@ class Part:
 
     def values(self, ctx) -> dict[str, np.ndarray]:
         """``{name: (T, size)}`` values of :meth:`params` for a demonstration (``ctx``: a
-        :class:`gdimitate.retarget.solve.Context`)."""
+        :class:`gdimitate.retarget.trajectory.solve.Context`)."""
         return {}
 
 
@@ -88,7 +88,8 @@ class Constraint(Part):
       weight ``Weights.elastic``);
     - ``screenable``: rows that are far from their bounds almost everywhere (self-collision):
       a solve leaves such a row out at the knots where the start keeps it farther than
-      :data:`gdimitate.retarget.solve.SCREEN` (scaled units) from its bounds, re-checks every
+      :data:`gdimitate.retarget.trajectory.solve.SCREEN` (scaled units) from its bounds, re-checks
+      every
       left-out row on the result and solves again with those it does not meet.
       :meth:`screenable_rows` says which of its rows may be left out (all by default)."""
 
@@ -143,7 +144,7 @@ class Bound(Part):
     def box(self, var, ctx, spec: Spec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(index (n,) into the knot's variables (layout ``var``), lo (T, n), hi (T, n))``
         (``±inf`` where the box imposes nothing; ``ctx``: a
-        :class:`gdimitate.retarget.solve.Context`)."""
+        :class:`gdimitate.retarget.trajectory.solve.Context`)."""
         raise NotImplementedError  # pragma: no cover - interface
 
 

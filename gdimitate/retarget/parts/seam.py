@@ -5,7 +5,7 @@ A :class:`SeamConstraint` is the wrap-around counterpart of a
 (evaluated at the first knot and at the last), :meth:`~SeamConstraint.rows` combines them
 (``k`` gives the parameters, bound to the first knot's) and :meth:`~SeamConstraint.bounds`
 gives ``(lo, hi)`` each ``(n,)``. Never relaxed; the report labels its rows with its name.
-The problem (:mod:`..problem`) adds these rows once, after the per-knot and pair rows.
+The problem (:mod:`..trajectory.problem`) adds these rows once, after the per-knot and pair rows.
 """
 
 from __future__ import annotations

@@ -12,7 +12,8 @@ The push direction comes first: each residual component ``e`` enters as
 ``e / (1 + (e/δ)²)^¼`` (:data:`DELTA`), quadratic near 0 and growing like ``√(δ|e|)`` beyond
 δ, so that the cost's pull on a step, ``w·d(ρ²)/de``, stays below ``1.1·w·δ`` (11 at the
 default weight 100) however short the step — below the force direction's L1 price
-(:data:`~gdimitate.retarget.solve.GOAL_WEIGHT`, 30 per rad and knot). With a plain square,
+(:data:`~gdimitate.retarget.trajectory.solve.GOAL_WEIGHT`, 30 per rad and knot). With a plain
+square,
 Romeo (whose steps the velocity and torque limits keep 0.4 of a leg short) gave up 0.3–0.65
 rad of its push to lengthen them."""
 

@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..model.footsteps import sole_frames
-from ..model.robot import SIDES
+from ...model.footsteps import sole_frames
+from ...model.robot import SIDES
 from .receding import Tasks, q_of_v
 
 __all__ = ["FrameReference"]
@@ -78,7 +78,7 @@ class FrameReference:
         self.jmap = [(demonstrator.idx_q(dj), act_names.index(ij), sc, off)
                      for dj, (ij, sc, off) in bmap.joints.items() if ij in act_names]
         if act_names:  # the joints no demonstrator joint drives: the rest pose, limbs clear
-            from .parts.self_collision import rest_pose
+            from ..parts.self_collision import rest_pose
 
             rest = rest_pose(imitator, REST_MARGIN, REST_CLEARANCE)
             self.neutral = rest[[imitator.idx_q(j) for j in act_names]]
@@ -338,7 +338,7 @@ def _pelvis(demonstrator, imitator, bmap) -> tuple[int | None, np.ndarray, np.nd
     +x, so the demonstrator's pelvis rotation ``R`` becomes the base rotation ``R @ offset``
     (iCub's base joint is turned by π about z at its neutral pose: its ``root_link`` looks
     back)."""
-    from ..model.kinematics import base_joint_id
+    from ...model.kinematics import base_joint_id
 
     im, dm = imitator.model, demonstrator.model
     root = base_joint_id(imitator)
@@ -379,7 +379,7 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
     demonstrator's scaled centre-of-mass velocity, for a start with its velocity
     (:func:`initial_velocity`): the centre of mass where the demonstrator's is (scaled) and a
     swing sole resting under the capture point ``c + ċ·√(z/g)`` along the walk."""
-    from ..model.kinematics import base_joint_id
+    from ...model.kinematics import base_joint_id
 
     m, d = robot.model, robot.model.createData()
     planar = robot.base == "planar"
@@ -495,7 +495,7 @@ def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo
     """The first frame's velocity ``(nv,)``: both soles still, the centre of mass moving with
     the demonstrator's (scaled), the base turning with its pelvis, the other joints with their
     mapped joints (least squares in the null space of the soles' velocity rows)."""
-    from ..model.kinematics import base_joint_id
+    from ...model.kinematics import base_joint_id
 
     m, d = robot.model, robot.model.createData()
     dm, dd = ref.d.model, ref.d.model.createData()

@@ -32,22 +32,22 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from ..assess.result import AdaptedMotion, compare
-from ..assess.solver import SolverInfo, Unmet
-from ..errors import GdimitateWarning, InvalidInputError, UnknownNameError
-from ..model.contact import ContactForces, SoleContact
-from ..model.heading import facing_yaw, turn_configurations, yaw_matrix
-from ..model.kinematics import robot_motion
-from ..model.motion import Motion
-from ..model.robot import SIDES, Robot
-from . import limits as limits_mod
-from .bodymap import BodyMap, body_map
+from ...assess.result import AdaptedMotion, compare
+from ...assess.solver import SolverInfo, Unmet
+from ...errors import GdimitateWarning, InvalidInputError, UnknownNameError
+from ...model.contact import ContactForces, SoleContact
+from ...model.heading import facing_yaw, turn_configurations, yaw_matrix
+from ...model.kinematics import robot_motion
+from ...model.motion import Motion
+from ...model.robot import SIDES, Robot
+from .. import limits as limits_mod
+from ..bodymap import BodyMap, body_map
+from ..info import limited_robot, resolve_contacts
+from ..knot import base_dofs
+from ..params import Contact, Limits, Weights
+from ..threads import single_thread
 from .frameref import FrameReference, initial_pose, initial_velocity
-from .info import limited_robot, resolve_contacts
-from .knot import base_dofs
-from .params import Contact, Limits, Weights
 from .receding import FrameQP
-from .threads import single_thread
 from .verdict_worker import InlineVerdicts, VerdictWorker, can_fork, knot_verdicts
 
 __all__ = ["StreamingAdaptor", "FrameResult", "adapt_per_frame", "STREAMING_FORCE_MODELS"]
@@ -253,7 +253,7 @@ class StreamingAdaptor:
         m, data = self.imitator.model, self.imitator.model.createData()
         pin.framesForwardKinematics(m, data, q)
         feet = {s: data.oMf[self._fid[s]].copy() for s in SIDES}
-        from ..model.kinematics import base_joint_id
+        from ...model.kinematics import base_joint_id
 
         self._ref.start(f0, pin.centerOfMass(m, data, q), feet,
                         data.oMi[base_joint_id(self.imitator)].rotation.copy(), moving)
@@ -410,7 +410,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags —
     the audit of the assembled motion, knot by knot, run once after the frames (also in
     ``solver``'s ``unmet`` when some frames fail); ``audit`` is that whole motion's."""
-    from ..assess.audit import audit
+    from ...assess.audit import audit
 
     if demo.base_nq and demo.q.shape[1] != demonstrator.model.nq:
         raise InvalidInputError("the demonstration does not match the demonstrator")

@@ -36,7 +36,7 @@ import daqp
 import numpy as np
 import pinocchio as pin
 
-from ..model.robot import SIDES
+from ...model.robot import SIDES
 
 __all__ = ["FrameQP", "Tasks", "SOLVED"]
 
@@ -122,7 +122,7 @@ class FrameQP:
 
     def __init__(self, robot, contacts: dict, base_idx: np.ndarray, act_idx: np.ndarray,
                  f_min: float, cop_margin: float, gains: Gains = Gains()):
-        from ..model.kinematics import base_joint_id
+        from ...model.kinematics import base_joint_id
 
         m = robot.model
         self.robot, self.m, self.g = robot, m, gains
@@ -145,7 +145,7 @@ class FrameQP:
         self.lim_v = np.flatnonzero(np.isfinite(vel) & (vel < 1e30) & (vel > 0))
         self.vel = vel[self.lim_v]
         self.pos = _position_rows(m, self.act_idx)
-        from ..model.selfcollision import self_collision
+        from ...model.selfcollision import self_collision
 
         self.sc = self_collision(robot)  # the audit's pairs (None: no collision geometry)
         if self.sc is not None:
@@ -485,7 +485,7 @@ def _solve(H, f, A, up, lo, sense, kind) -> tuple[np.ndarray, int]:
 def _cone(c, margin: float) -> np.ndarray:
     """``(16, 6)`` wrench cone rows ``A w ≤ 0`` of sole ``c`` with friction μ/√2 (the square
     pyramid inside the circular cone) and the centre-of-pressure rows ``margin`` inside."""
-    from ..model.contact import wrench_cone
+    from ...model.contact import wrench_cone
 
     return wrench_cone(c.half_length, c.half_width, c.mu / np.sqrt(2),
                        cop_length=c.half_length - margin, cop_width=c.half_width - margin)

@@ -12,29 +12,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..assess.metrics import FORCE_MODELS
-from ..assess.solver import SolverInfo, Unmet
-from ..errors import InvalidInputError, SolverError, UnknownNameError
-from ..model.contact import ContactForces, SoleContact
-from ..model.footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
-from ..model.heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
-from ..model.kinematics import actuated_v_indices, robot_motion
-from ..model.motion import Motion
-from ..model.robot import SIDES, Robot
-from . import codegen, limits
+from ...assess.metrics import FORCE_MODELS
+from ...assess.solver import SolverInfo, Unmet
+from ...errors import InvalidInputError, SolverError, UnknownNameError
+from ...model.contact import ContactForces, SoleContact
+from ...model.footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
+from ...model.heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
+from ...model.kinematics import actuated_v_indices, robot_motion
+from ...model.motion import Motion
+from ...model.robot import SIDES, Robot
+from .. import limits
+from ..bodymap import body_map
+from ..info import limited_robot, resolve_contacts
+from ..knot import Flags
+from ..params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
+from ..parts import Bound, ForceDirection, OverFeet, Steps, default_parts, liftoff_knots
+from ..parts.body import body_parts
+from ..targets import Targets, demonstration_targets, direction_frame, resample
+from ..threads import single_thread
+from . import codegen
 from . import problem as pb
-from .bodymap import body_map
-from .info import limited_robot, resolve_contacts
 from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
-from .knot import Flags
-from .params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
-from .parts import Bound, ForceDirection, OverFeet, Steps, default_parts, liftoff_knots
-from .parts.body import body_parts
 from .polish import make_consistent
 from .stopping import MU_TOL, PLATEAU, Plateau
-from .targets import Targets, demonstration_targets, direction_frame, resample
-from .threads import single_thread
 
 __all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "STOPS", "Numbers",
            "Context", "setup", "problem_for", "run_solver", "unmet", "package", "wrenches_of",
@@ -503,7 +504,7 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
 def _per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: str, o: dict,
                cs: dict, bmap, ipopt: dict | None):
     """The streaming mode over a whole demonstration, with its gait measured."""
-    from .streaming import adapt_per_frame
+    from ..streaming.adaptor import adapt_per_frame
 
     out = adapt_per_frame(demo, demonstrator, imitator, force=force, forces=o["forces"],
                           weights=o["weights"], limits=o["limits"], contact=o["contact"],
@@ -641,7 +642,7 @@ def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, pa
             # 76 (docs/design.md §14)
             parts = parts + ((Steps(),) if periodic else (Steps(), OverFeet()))
     if periodic:
-        from .parts.periodic import PeriodicSeam
+        from ..parts.periodic import PeriodicSeam
 
         parts = tuple(parts) + (PeriodicSeam(),)
     return pb.formulation(imitator, flags, tuple(parts))
@@ -742,7 +743,7 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
             info: SolverInfo, periodic: bool = False):
     """The :class:`~gdimitate.AdaptedMotion` of a solution vector ``z`` (``periodic``:
     the seam made exact, :func:`.periodic.close_seam`, and audited)."""
-    from ..assess.result import AdaptedMotion, compare
+    from ...assess.result import AdaptedMotion, compare
 
     T = tg.T
     Z = z.reshape(T, -1).T
@@ -763,7 +764,7 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     motion = base.replace(v=v, a=a)
     push_r = None
     if force in ("measured", "dynamics"):
-        from ..assess.metrics import frame_rotations
+        from ...assess.metrics import frame_rotations
 
         push_r = {s: np.where(tg.stance[s][:, None], -np.einsum(
             "tij,tj->ti", frame_rotations(imitator, q, cs[s].frame), W[s][:, :3]), np.nan)
@@ -771,12 +772,12 @@ def package(c: pb.Compiled, num: Numbers, z: np.ndarray, tg: Targets, demonstrat
     report = compare(demonstrator, tg.demo.replace(contact=tg.stance), imitator, motion,
                      "optimal", {s: np.ones(T, bool) for s in SIDES}, force,
                      push_m=tg.push, push_r=push_r)
-    from ..assess.audit import audit
+    from ...assess.audit import audit
 
     aud = audit(limited_robot(imitator, num.lim), motion, W, cs, target=target,
                 cone_half_angle=copts.cone_half_angle)
     if periodic:
-        from ..assess.audit.periodic import seam_audit
+        from ...assess.audit.periodic import seam_audit
 
         aud = seam_audit(aud, imitator, motion, W, demonstrator, tg.demo.q)
     return AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,

@@ -33,8 +33,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..model.contact import SoleContact
-from ..model.robot import SIDES, Robot
+from ...model.contact import SoleContact
+from ...model.robot import SIDES, Robot
 
 __all__ = ["make_consistent"]
 
@@ -73,8 +73,8 @@ def _correct_wrenches(robot: Robot, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                       contacts: dict[str, SoleContact] | None = None,
                       targets: dict[str, np.ndarray] | None = None, half_angle: float = 0.0
                       ) -> dict[str, np.ndarray]:
-    from ..assess.audit.report import AuditTolerances
-    from ..assess.wrenches import cone_rows
+    from ...assess.audit.report import AuditTolerances
+    from ...assess.wrenches import cone_rows
 
     angle = half_angle + 0.5 * AuditTolerances().force_direction
 

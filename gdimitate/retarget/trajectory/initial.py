@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..errors import GdimitateError
-from ..model.robot import SIDES, Robot
-from ..planar.analytic import adapt_planar
-from .targets import Targets
+from ...errors import GdimitateError
+from ...model.robot import SIDES, Robot
+from ...planar.analytic import adapt_planar
+from ..targets import Targets
 
 
 def initial_q(demonstrator: Robot, imitator: Robot, tg: Targets, q_index: np.ndarray
@@ -56,7 +56,7 @@ def initial_wrenches(robot: Robot, motion, contacts, f_min: float, nw: int
     """Wrenches ``{side: (T, nw)}`` that explain the start's base dynamics inside the cones
     where they can (:func:`gdimitate.assess.wrenches.estimate_wrenches`, a QP per knot; the least
     residual elsewhere), in the variables' layout (planar: f_x, f_z, τ_y)."""
-    from ..assess.wrenches import estimate_wrenches
+    from ...assess.wrenches import estimate_wrenches
 
     est = estimate_wrenches(robot, motion, contacts, method="cone", f_min=f_min)
     cols = [0, 2, 4] if nw == 3 else list(range(6))

@@ -1,4 +1,4 @@
-"""The parametric NLP, assembled from a list of parts (:mod:`.parts`).
+"""The parametric NLP, assembled from a list of parts (:mod:`..parts`).
 
 Two levels, each cached:
 
@@ -26,18 +26,19 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..model import contact, footsteps, kinematics, selfcollision, symbolic
-from ..model import robot as robot_module
-from ..model.robot import Robot
-from ..model.symbolic import SymbolicModel
-from . import bodymap, codegen
-from . import knot as knot_module
-from . import parts as parts_module
+from ...model import contact, footsteps, kinematics, selfcollision, symbolic
+from ...model import robot as robot_module
+from ...model.robot import Robot
+from ...model.symbolic import SymbolicModel
+from .. import bodymap
+from .. import knot as knot_module
+from .. import parts as parts_module
+from ..knot import Flags, Knot
+from ..params import IPOPT_DEFAULTS
+from ..parts import Constraint, Cost, PairConstraint, Part, Spec
+from ..parts.seam import SeamConstraint, seam_functions
+from . import codegen
 from .interrupt import Progress
-from .knot import Flags, Knot
-from .params import IPOPT_DEFAULTS
-from .parts import Constraint, Cost, PairConstraint, Part, Spec
-from .parts.seam import SeamConstraint, seam_functions
 
 __all__ = ["Formulation", "Compiled", "formulation", "compiled", "clear_cache", "BUILD_COUNT",
            "CACHE_SIZE", "fingerprint", "Spec", "IPOPT_DEFAULTS"]
@@ -87,7 +88,7 @@ def symbolic_model(robot: Robot) -> SymbolicModel:
 
 def clear_cache() -> None:
     """Forget every cached NLP, formulation and symbolic model (not the compiled libraries on
-    disk: :func:`gdimitate.retarget.codegen.cache_dir`)."""
+    disk: :func:`gdimitate.retarget.trajectory.codegen.cache_dir`)."""
     _CACHE.clear()
     _FORM.clear()
     _SYM.clear()

@@ -44,11 +44,11 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..errors import GdimitateError, InvalidInputError
-from ..model.contact import SoleContact
-from ..model.kinematics import robot_motion
-from ..model.robot import SIDES, Robot
-from .threads import single_thread
+from ...errors import GdimitateError, InvalidInputError
+from ...model.contact import SoleContact
+from ...model.kinematics import robot_motion
+from ...model.robot import SIDES, Robot
+from ..threads import single_thread
 
 __all__ = ["InlineVerdicts", "VerdictWorker", "VerdictWorkerError", "knot_verdicts",
            "verdict_frames", "can_fork"]
@@ -106,7 +106,7 @@ def knot_verdicts(robot: Robot, contacts: Mapping[str, SoleContact], cone_half_a
     ``w`` (``{side: (6,)}`` [N, N·m], sole frames) per knot, as far as they are final (an
     unknown one is taken as the knot before's). ``tail``: ``(a, w)`` of the last frame (its
     own QP, :meth:`StreamingAdaptor.final`), which ``last`` may then be."""
-    from ..assess.audit import audit
+    from ...assess.audit import audit
 
     n = len(H["t"])
     if tail is not None and len(H["a"]) == n - 1:
@@ -318,7 +318,7 @@ class VerdictWorker:
         if not can_fork():
             raise VerdictWorkerError("this platform cannot fork a verdict worker; use "
                                      "audit='inline'")
-        from ..assess.audit import audit  # noqa: F401  (loaded once, before the fork)
+        from ...assess.audit import audit  # noqa: F401  (loaded once, before the fork)
 
         args = (robot, dict(contacts), float(cone_half_angle))
         down_r, down_w = os.pipe()  # caller -> worker

@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidInputError
-from ..model.contact import ContactForces, FootForces
-from ..model.heading import shift_by_stride, walking_direction
-from ..model.motion import Motion
-from ..model.robot import Robot
+from ...errors import InvalidInputError
+from ...model.contact import ContactForces, FootForces
+from ...model.heading import shift_by_stride, walking_direction
+from ...model.motion import Motion
+from ...model.robot import Robot
 from .polish import make_consistent
 
 __all__ = ["periodic_stride", "periodic_rate", "close_seam"]
