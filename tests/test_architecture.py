@@ -344,6 +344,21 @@ def test_imports_run_down_the_floors():
         f"{m} ({FLOORS[_floor(m)][0]}) -> {d} ({FLOORS[_floor(d)][0]})" for m, d in bad)
 
 
+def test_the_optimal_adaptors_modes_do_not_import_each_other():
+    """retarget/trajectory/ and retarget/streaming/ share the formulation at retarget/'s root
+    (params, limits, body maps, targets, parts) and never import each other; the mode is
+    picked above both (retarget.optimal, which adapt calls)."""
+    graph = gdimitate_graph(typed=True)
+    modes = ("gdimitate.retarget.trajectory", "gdimitate.retarget.streaming")
+
+    def mode(m: str) -> str | None:
+        return next((p for p in modes if m == p or m.startswith(p + ".")), None)
+
+    across = sorted((m, d) for m, deps in graph.items() for d in deps
+                    if mode(m) and mode(d) and mode(m) != mode(d))
+    assert not across, f"the modes import each other: {across}"
+
+
 def test_no_module_named_like_a_public_name():
     """A public function or class of ``gdimitate`` (``gd.adapt``, ``gd.walk``, ``gd.repair``
     ...) is never also a submodule ``gdimitate.<name>``: importing the submodule would rebind

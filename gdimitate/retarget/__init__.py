@@ -20,12 +20,13 @@ QP per frame instead (:mod:`.streaming.receding`):
   :func:`gdimitate.assess.audit.audit`.
 """
 
+from ..assess.solver import SolverInfo, Unmet
 from .bodymap import BodyMap, UnmappedJointsWarning, body_map
+from .optimal import MODES, OPTIONS, adapt_optimal
 from .params import DEFAULT_RATE, Contact, Limits, Weights
 from .streaming.adaptor import FrameResult, StreamingAdaptor
 from .targets import Targets, resample, schedule
 from .trajectory.problem import clear_cache
-from .trajectory.solve import MODES, OPTIONS, SolverInfo, Unmet, adapt_optimal
 
 __all__ = [
     "BodyMap",

@@ -1,5 +1,6 @@
-"""``adapt_optimal``: the whole-body trajectory mode — targets, warm start, the cached NLP,
-IPOPT, the least-infeasible fallback and the honest (recomputed) report."""
+"""The whole-body trajectory mode of :func:`gdimitate.retarget.adapt_optimal` — targets, warm
+start, the cached NLP, IPOPT, the least-infeasible fallback and the honest (recomputed)
+report."""
 
 from __future__ import annotations
 
@@ -12,17 +13,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...assess.metrics import FORCE_MODELS
 from ...assess.solver import SolverInfo, Unmet
-from ...errors import InvalidInputError, SolverError, UnknownNameError
+from ...errors import SolverError
 from ...model.contact import ContactForces, SoleContact
-from ...model.footsteps import SCALINGS, compare_gait, leg_ratio, time_scale
+from ...model.footsteps import compare_gait, leg_ratio, time_scale
 from ...model.heading import forces_on_clock, on_clock, turn_forces, turn_motion, walk_heading
 from ...model.kinematics import actuated_v_indices, robot_motion
 from ...model.motion import Motion
 from ...model.robot import SIDES, Robot
 from .. import limits
-from ..bodymap import body_map
 from ..info import limited_robot, resolve_contacts
 from ..knot import Flags
 from ..params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
@@ -37,21 +36,15 @@ from .interrupt import guard
 from .polish import make_consistent
 from .stopping import MU_TOL, PLATEAU, Plateau
 
-__all__ = ["adapt_optimal", "SolverInfo", "Unmet", "OPTIONS", "MODES", "STOPS", "Numbers",
+__all__ = ["trajectory_mode", "SolverInfo", "Unmet", "STOPS", "Numbers",
            "Context", "setup", "problem_for", "run_solver", "unmet", "package", "wrenches_of",
            "limited_robot", "resolve_contacts", "solve_budgeted", "near_bounds", "rescreen",
            "SCREEN", "SCREEN_KNOTS", "WARM_START"]
 
-MODES = ("trajectory", "per_frame")
 STOPS = ("settled", "converged")
 """``stop=``: ``"settled"`` (default) — the best feasible iterate once the cost has settled
 (:mod:`.stopping`); ``"converged"`` — IPOPT's own convergence test (``tol`` 1e-8; often
 several times slower, the same motion to within the audit's tolerances)."""
-
-GAIT_SCALING = "geometric"
-"""``gait_scaling=``'s default (:data:`gdimitate.model.footsteps.SCALINGS`): lengths × the legs'
-ratio r at the demonstrator's cadence (the paper's); ``"froude"`` also runs the
-demonstration's clock × √r (docs/design.md §13 says how the default was chosen)."""
 
 MAX_ITERATIONS = 150
 """Iterations of one adaptation, the hard solve and the least-infeasible one together (the
@@ -62,10 +55,6 @@ STALLED = "Infeasible_Stalled"
 BUDGET = "Iteration_Budget_Spent"
 APPROXIMATED = ("self_collision",)
 """Audit checks whose optimiser rows are approximations (sphere covers vs collision hulls)."""
-
-OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
-           "tol", "ipopt", "verbose", "contacts", "stop", "periodic", "gait_scaling")
-"""Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
 
 
 @dataclass(frozen=True)
@@ -419,52 +408,13 @@ def run_solver(c: pb.Compiled, num: Numbers, x0: np.ndarray, elastic: bool, verb
     return z, st
 
 
-def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str = "segment",
-                  **options):
-    """The whole-body optimal adaptor (``adapt(..., method="optimal", ...)`` calls it).
-
-    Options (:data:`OPTIONS`):
-
-    - ``forces``: the demonstrator's measured :class:`~gdimitate.contact.ContactForces`
-      (needed by ``force="measured"``; they also give the contact schedule);
-    - ``rate`` [knots/s]: the knot grid (default :data:`~.params.DEFAULT_RATE`, 50 Hz);
-    - ``mode``: ``"trajectory"`` (one problem over all knots) or ``"per_frame"`` (the
-      streaming adaptor, :class:`~.streaming.StreamingAdaptor`, over the frames);
-    - ``weights`` (:class:`~.params.Weights`), ``limits`` (:class:`~.params.Limits`),
-      ``contact`` (:class:`~.params.Contact`: μ, f_min, margins, clearance, cone half-angle,
-      contact rule), ``contacts`` (``{side: SoleContact | {half_length, half_width, mu}}``
-      overriding the measured sole rectangles), ``body_map`` (a
-      :class:`~.bodymap.BodyMap`, dict or JSON path; default: the preset);
-    - ``tol``: feasibility tolerance of the optimiser's own row check (scaled units, default
-      1e-6); ``stop``: when a solve ends (:data:`STOPS`); ``ipopt``: extra IPOPT options;
-      ``verbose`` (default True): progress lines
-      (iteration, cost, constraint violation) on stderr;
-    - ``gait_scaling`` (:data:`GAIT_SCALING`): ``"geometric"`` — the imitator's steps are
-      the demonstrator's × r, the legs' ratio, at its cadence — or ``"froude"`` — also the
-      demonstration's durations × √r (the motion's times then run on that clock); the
-      result's ``gait`` (:class:`~gdimitate.model.footsteps.GaitComparison`) measures the steps
-      against the demonstrator's so scaled;
-    - ``periodic`` (default False): a periodic gait cycle (:mod:`.periodic`) — one stride,
-      heel strike to heel strike of the right foot, whose last knot is its first shifted by
-      one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
-
-    Nothing assumes a heading (:func:`heading_frame`): the demonstration is adapted in its
-    heading frame and the motion turned back about the vertical through the origin, so a
-    walk along any direction gives the same motion up to that turn, and the report's
-    sagittal angles are in the heading frame (forward = along the walk).
-
-    Returns an :class:`~gdimitate.AdaptedMotion` with ``motion`` (``q``, ``v``, ``a``,
-    ``contact`` = the schedule used), ``wrenches`` ``{side: (T, 6)}`` in each sole frame,
-    ``contacts``, ``audit`` (:func:`gdimitate.assess.audit.audit` recomputed from the output) and
-    ``solver`` (:class:`SolverInfo`). Never raises on an infeasible problem: the
-    least-infeasible motion comes back with ``solver.unmet`` and the audit's ``binding``.
-    """
-    o = _options(force, options)
-    cs = resolve_contacts(imitator, o["contact"], options.get("contacts"))
-    bmap = body_map(demonstrator, imitator, options.get("body_map"))
-    if o["mode"] == "per_frame":
-        return _per_frame(demo, demonstrator, imitator, force, o, cs, bmap,
-                          options.get("ipopt"))
+def trajectory_mode(demo: Motion, demonstrator: Robot, imitator: Robot, force: str, o: dict,
+                    cs: dict[str, SoleContact], bmap, options: dict):
+    """:func:`gdimitate.retarget.adapt_optimal`'s trajectory mode: ``o`` its options checked
+    (:func:`gdimitate.retarget.optimal.check_options`), ``cs`` the soles, ``bmap`` the body map,
+    ``options`` as given (``rate``, ``ipopt``). One problem over all knots; returns the
+    :class:`~gdimitate.AdaptedMotion` (turned back out of the heading frame, its gait
+    measured)."""
     rate, forces, periodic = options.get("rate", DEFAULT_RATE), o["forces"], o["periodic"]
     if periodic:
         from .periodic import periodic_rate, periodic_stride
@@ -501,18 +451,6 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
     return dataclasses.replace(out, motion=motion, gait=gait)
 
 
-def _per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: str, o: dict,
-               cs: dict, bmap, ipopt: dict | None):
-    """The streaming mode over a whole demonstration, with its gait measured."""
-    from ..streaming.adaptor import adapt_per_frame
-
-    out = adapt_per_frame(demo, demonstrator, imitator, force=force, forces=o["forces"],
-                          weights=o["weights"], limits=o["limits"], contact=o["contact"],
-                          contacts=cs, body_map=bmap, tol=o["tol"], ipopt=ipopt)
-    return dataclasses.replace(out, gait=compare_gait(demonstrator, demo, imitator,
-                                                      out.motion))
-
-
 def heading_frame(demonstrator: Robot, imitator: Robot, demo: Motion,
                   forces: ContactForces | None, scaling: str
                   ) -> tuple[float, Motion, ContactForces | None]:
@@ -525,45 +463,6 @@ def heading_frame(demonstrator: Robot, imitator: Robot, demo: Motion,
     forces = None if forces is None else turn_forces(forces, -psi, about)
     ts = time_scale(scaling, leg_ratio(demonstrator, imitator))
     return psi, on_clock(demo, ts), None if forces is None else forces_on_clock(forces, ts)
-
-
-def _options(force: str, options: dict) -> dict:
-    """:func:`adapt_optimal`'s options checked, with their defaults."""
-    bad = [k for k in options if k not in OPTIONS]
-    if bad:
-        raise UnknownNameError("optimal-adaptor option", bad[0], OPTIONS)
-    if force not in FORCE_MODELS:
-        raise UnknownNameError("force model", force, FORCE_MODELS)
-    o = {"mode": options.get("mode", "trajectory"), "stop": options.get("stop", "settled"),
-         "weights": options.get("weights") or Weights(),
-         "limits": options.get("limits") or Limits(),
-         "contact": options.get("contact") or Contact(),
-         "forces": options.get("forces"), "verbose": bool(options.get("verbose", True)),
-         "periodic": bool(options.get("periodic", False)),
-         "gait_scaling": options.get("gait_scaling", GAIT_SCALING)}
-    if o["gait_scaling"] not in SCALINGS:
-        raise UnknownNameError("gait scaling", o["gait_scaling"], SCALINGS)
-    if o["mode"] not in MODES:
-        raise UnknownNameError("mode", o["mode"], MODES)
-    for name, typ in (("weights", Weights), ("limits", Limits), ("contact", Contact)):
-        if not isinstance(o[name], typ):
-            raise InvalidInputError(f"{name}= must be a gdimitate.retarget.{typ.__name__}; "
-                                    f"got {type(o[name]).__name__}")
-    o["tol"] = tol = float(options.get("tol", 1e-6))
-    if not (np.isfinite(tol) and tol > 0):
-        raise InvalidInputError(f"tol must be a positive number; got {tol!r}")
-    if force == "measured" and o["forces"] is None:
-        raise InvalidInputError("force='measured' needs forces= (the demonstrator's measured "
-                                "ContactForces)")
-    if o["stop"] not in STOPS:
-        raise UnknownNameError("stop rule", o["stop"], STOPS)
-    if o["mode"] == "per_frame" and o["gait_scaling"] != "geometric":
-        raise InvalidInputError("gait_scaling='froude' needs mode='trajectory' (a stream runs "
-                                "on the demonstrator's clock)")
-    if o["mode"] == "per_frame" and o["periodic"]:
-        raise InvalidInputError("periodic=True needs mode='trajectory' (the seam links the "
-                                "cycle's last knot to its first)")
-    return o
 
 
 def solve_budgeted(c: pb.Compiled, num: Numbers, tol: float, verbose: bool, label: str,
