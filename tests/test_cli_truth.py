@@ -43,7 +43,7 @@ def test_adapt_of_the_sagittal_walk_to_hoap2_says_which_goal_is_unmet(tmp_path, 
     verdict, the solver's record and each unmet goal are printed and in report.json, the exit
     status is 3 whenever the result is not feasible or a goal is unmet, and the audit's
     verdict is recomputed here from the written files (Pinocchio)."""
-    from gdimitate.apps.cli import _error_lines
+    from gdimitate.apps.commands.adapt import _error_lines
     from gdimitate.assess.audit import audit
     from gdimitate.assess.verdict import limits_at_bound, report_lines
     from gdimitate.export.writers import read_wrenches
