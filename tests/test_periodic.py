@@ -15,7 +15,7 @@ import pytest
 import gdimitate as gd
 from gdimitate.assess.audit.periodic import SEAM_TOL, seam_errors
 from gdimitate.errors import InvalidInputError
-from gdimitate.model.heading import walking_direction
+from gdimitate.model.footsteps import walking_direction
 from gdimitate.retarget.knot import Flags, Knot
 from gdimitate.retarget.parts.periodic import PeriodicSeam
 from gdimitate.retarget.parts.seam import seam_functions

@@ -37,7 +37,7 @@ from .robot import SIDES, Robot
 
 __all__ = ["SCALINGS", "KEPT", "sole_frames", "Footprint", "Step", "GaitComparison",
            "leg_ratio", "time_scale", "stance_phases", "footprints", "steps", "travel",
-           "compare_gait"]
+           "compare_gait", "walking_direction", "shift_by_stride"]
 
 SCALINGS = ("geometric", "froude")
 KEPT = (0.8, 1.25)
@@ -250,3 +250,29 @@ def compare_gait(demonstrator: Robot, demo: Motion, imitator: Robot, motion: Mot
                           travel(demonstrator, demo) * r, travel(imitator, motion),
                           float(demo.t[-1] - demo.t[0]) * ts,
                           float(motion.t[-1] - motion.t[0]))
+
+
+
+def walking_direction(robot, q: np.ndarray) -> np.ndarray:
+    """``(2,)`` unit horizontal direction of ``robot``'s base displacement from ``q[0]`` to
+    ``q[-1]`` (free flyer: x, y; planar: +x); (1, 0) when the base does not move."""
+    if robot.base != "free":
+        return np.array([1.0, 0.0])
+    d = np.asarray(q[-1, :2] - q[0, :2], float)
+    n = float(np.linalg.norm(d))
+    return d / n if n > 1e-9 else np.array([1.0, 0.0])
+
+
+def shift_by_stride(robot: Robot, q_first: np.ndarray, q_last: np.ndarray,
+                    direction: np.ndarray) -> np.ndarray:
+    """``q_first`` with its base advanced along ``direction`` ``(2,)`` by the stride of
+    ``q_last`` (the component of ``q_last − q_first``'s horizontal base displacement along
+    it; planar: ``base_x`` of ``q_last``)."""
+    out = np.array(q_first, float)
+    if robot.base == "free":
+        d = np.asarray(direction, float)
+        out[:2] = q_first[:2] + float((q_last[:2] - q_first[:2]) @ d) * d
+    else:
+        ix = robot.idx_q("base_x")
+        out[ix] = q_last[ix]
+    return out

@@ -131,28 +131,3 @@ def forces_on_clock(forces: ContactForces, scale: float) -> ContactForces:
     t = forces.t[0] + scale * (forces.t - forces.t[0])
     return ContactForces(t, forces.feet, forces.source,
                          f"{forces.frame_note}; clock × {scale:.4g}".lstrip("; "))
-
-
-def walking_direction(robot, q: np.ndarray) -> np.ndarray:
-    """``(2,)`` unit horizontal direction of ``robot``'s base displacement from ``q[0]`` to
-    ``q[-1]`` (free flyer: x, y; planar: +x); (1, 0) when the base does not move."""
-    if robot.base != "free":
-        return np.array([1.0, 0.0])
-    d = np.asarray(q[-1, :2] - q[0, :2], float)
-    n = float(np.linalg.norm(d))
-    return d / n if n > 1e-9 else np.array([1.0, 0.0])
-
-
-def shift_by_stride(robot, q_first: np.ndarray, q_last: np.ndarray,
-                    direction: np.ndarray) -> np.ndarray:
-    """``q_first`` with its base advanced along ``direction`` ``(2,)`` by the stride of
-    ``q_last`` (the component of ``q_last − q_first``'s horizontal base displacement along
-    it; planar: ``base_x`` of ``q_last``)."""
-    out = np.array(q_first, float)
-    if robot.base == "free":
-        d = np.asarray(direction, float)
-        out[:2] = q_first[:2] + float((q_last[:2] - q_first[:2]) @ d) * d
-    else:
-        ix = robot.idx_q("base_x")
-        out[ix] = q_last[ix]
-    return out

@@ -32,7 +32,7 @@ def seam_errors(robot: Robot, motion: Motion, wrenches: dict[str, np.ndarray],
                 direction: np.ndarray) -> dict[str, float]:
     """``{"seam_position", "seam_velocity", "seam_acceleration", "seam_wrench",
     "seam_contact"}`` (module docstring); ``direction`` ``(2,)``: the walking direction."""
-    from ...model.heading import shift_by_stride
+    from ...model.footsteps import shift_by_stride
 
     q, (v, a) = motion.q, motion.derivatives("the seam audit")
     shifted = shift_by_stride(robot, q[0], q[-1], direction)
@@ -58,7 +58,7 @@ def seam_audit(report: AuditReport, robot: Robot, motion: Motion,
     """``report`` (the audit of ``motion`` with ``wrenches`` ``{side: (T, 6)}``) with the
     seam checks added, ``feasible`` and ``binding`` updated; ``demo_q`` ``(T, nq)`` of
     ``demonstrator`` gives the walking direction."""
-    from ...model.heading import walking_direction
+    from ...model.footsteps import walking_direction
 
     err = seam_errors(robot, motion, wrenches, walking_direction(demonstrator, demo_q))
     T = motion.T

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...model.heading import walking_direction
+from ...model.footsteps import walking_direction
 from .seam import SeamConstraint
 
 __all__ = ["PeriodicSeam"]

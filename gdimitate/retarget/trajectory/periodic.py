@@ -21,7 +21,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ...model.contact import ContactForces, FootForces
-from ...model.heading import shift_by_stride, walking_direction
+from ...model.footsteps import shift_by_stride, walking_direction
 from ...model.motion import Motion
 from ...model.robot import Robot
 from .polish import make_consistent
