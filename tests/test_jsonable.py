@@ -46,7 +46,7 @@ def test_the_reports_use_it():
     import importlib
     import inspect
 
-    for name in ("audit.report", "sim.simulate", "walk.result"):
+    for name in ("assess.audit.report", "sim.simulate", "walker.result"):
         module = importlib.import_module(f"gdimitate.{name}")
         assert module.jsonable is jsonable
         assert "isfinite(x) else None" not in inspect.getsource(module)
