@@ -21,7 +21,9 @@ assembled motion (knot by knot, the verdict ``adapt(..., mode="per_frame").frame
 reports), and the checks that fail most often are listed with the number of frames each fails.
 Where the adaptor's ``step`` takes ``v_demo`` (the demonstrator's velocity at the first frame),
 it is given, as ``adapt(..., mode="per_frame")`` does, unless ``--no-v-demo`` (a live stream
-has none). With ``--repeats N`` each case runs N times (interleaved) and the table shows the
+has none: the adaptor then shows its first frame and starts at the second, moving with the
+velocity estimated from both; the first frame counts as not feasible, and the assembled
+motion is audited from the second, on the imitator's own stance flags). With ``--repeats N`` each case runs N times (interleaved) and the table shows the
 medians of frames per second and of the verdicts' wait.
 
 The same-run baseline is the streaming of ``--baseline-rev`` (a git revision of this
@@ -78,7 +80,7 @@ _CHILD = textwrap.dedent("""
             return None
         return {s: np.array([np.interp(m.t[k], f.t, f[s].force[:, i]) for i in range(3)])
                 for s in sides}
-    statuses, lag = [], []
+    statuses, lag, own = [], [], {s: [] for s in sides}
     for i in range(T):
         if i == warm:
             t0, c0 = time.perf_counter(), time.process_time()
@@ -87,8 +89,11 @@ _CHILD = textwrap.dedent("""
         r = sa.step(m.q[k], {s: bool(m.contact[s][k]) for s in sides}, forces=fk(k), **extra)
         q[i], v[i] = r.q, r.v
         statuses.append(r.status)
+        for s in sides:
+            own[s].append(r.contact[s] if getattr(r, "contact", None) is not None
+                          else bool(m.contact[s][k]))
         lag += [i - j for j, _ in getattr(r, "verdicts", ())]
-        if i:
+        if r.previous_a is not None:
             a[i - 1] = r.previous_a
             for s in sides:
                 W[s][i - 1] = r.previous_wrenches[s]
@@ -101,10 +106,11 @@ _CHILD = textwrap.dedent("""
     wait = time.perf_counter() - t1
     if hasattr(sa, "close"):
         sa.close()
-    c = {s: np.asarray(m.contact[s][k0:k0 + T], bool) for s in sides}
-    motion = robot_motion(robot, m.t[k0:k0 + T], q, c).replace(v=v, a=a)
-    rep = audit(sa._audit_robot, motion, W, sa.contacts)
-    ok = np.asarray(rep.knot_feasible, bool)
+    sk = getattr(sa, "first_frame", 0)  # a first frame that waited is not in the motion
+    c = {s: np.asarray(own[s][sk:], bool) for s in sides}
+    motion = robot_motion(robot, m.t[k0 + sk:k0 + T], q[sk:], c).replace(v=v[sk:], a=a[sk:])
+    rep = audit(sa._audit_robot, motion, {s: W[s][sk:] for s in sides}, sa.contacts)
+    ok = np.concatenate([np.zeros(sk, bool), np.asarray(rep.knot_feasible, bool)])
     fails = {c.name: int((~k).sum()) for c, k in zip(rep.checks, rep.knot_checks) if (~k).any()}
     top = sorted(fails.items(), key=lambda x: -x[1])[:4]
     out = {"frames_per_s": (T - warm) / elapsed, "cpu_frames_per_s": (T - warm) / cpu,

@@ -33,7 +33,8 @@ def walk():
 def _stream(walk, n: int, audit=False, robot=None, results: list | None = None):
     """Stream the walk's first ``n`` frames; ``(adaptor, motion, wrenches, verdicts)`` — the
     verdicts of every frame (``sa.verdicts()`` after ``final()``; ``[]`` with audit=False);
-    ``results`` collects each step's :class:`FrameResult`."""
+    ``results`` collects each step's :class:`FrameResult`. The motion's stance flags are the
+    robot's own (``FrameResult.contact``: a sole lands before its stance begins)."""
     human, demo, forces, talos = walk
     talos = talos if robot is None else robot
     sa = gd.retarget.StreamingAdaptor(human, talos, "measured", dt=demo.dt, audit=audit)
@@ -41,6 +42,7 @@ def _stream(walk, n: int, audit=False, robot=None, results: list | None = None):
     nq, nv = talos.model.nq, talos.model.nv
     q, v, a = np.zeros((n, nq)), np.zeros((n, nv)), np.zeros((n, nv))
     W = {s: np.zeros((n, 6)) for s in SIDES}
+    c = {s: np.zeros(n, bool) for s in SIDES}
     for k in range(n):
         f = {s: np.array([np.interp(demo.t[k], forces.t, forces[s].force[:, i])
                           for i in range(3)]) for s in SIDES}
@@ -48,6 +50,8 @@ def _stream(walk, n: int, audit=False, robot=None, results: list | None = None):
         r = sa.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, forces=f,
                     v_demo=v0 if k == 0 else None)
         q[k], v[k] = r.q, r.v
+        for s in SIDES:
+            c[s][k] = r.contact[s]
         if results is not None:
             results.append(r)
         if k:
@@ -59,7 +63,6 @@ def _stream(walk, n: int, audit=False, robot=None, results: list | None = None):
         W[s][-1] = wl[s]
     flags = list(sa.verdicts(timeout=60)) if audit else []
     sa.close()
-    c = {s: np.asarray(demo.contact[s][:n], bool) for s in SIDES}
     motion = robot_motion(talos, demo.t[:n], q, c).replace(v=v, a=a)
     return sa, motion, W, flags
 

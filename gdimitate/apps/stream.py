@@ -54,11 +54,15 @@ class StreamLog:
     demonstrator's ``q_demo`` ``(nq_d,)``, stance, the imitator's ``q``, ``v``, ``a`` (``a``
     and ``w`` one frame late: :class:`~gdimitate.retarget.FrameResult`), the wrenches ``w``
     ``{side: (6,)}``, latencies and the steps' own durations [s]; frames received, dropped
-    and, among those, not numbers (``invalid``); verdicts ``{frame: ok}``."""
+    and, among those, not numbers (``invalid``); verdicts ``{frame: ok}``; ``own``: the
+    imitator's stance flags (:attr:`~gdimitate.retarget.FrameResult.contact`); ``waited``:
+    the first frame, shown but not adapted (the stream starts at the second, with the
+    velocity estimated from both: :class:`~gdimitate.retarget.StreamingAdaptor`)."""
 
     t: list[float] = field(default_factory=list)
     q_demo: list[np.ndarray] = field(default_factory=list)
     contact: list[dict[str, bool]] = field(default_factory=list)
+    own: list[dict[str, bool]] = field(default_factory=list)
     q: list[np.ndarray] = field(default_factory=list)
     v: list[np.ndarray] = field(default_factory=list)
     a: list[np.ndarray] = field(default_factory=list)
@@ -68,6 +72,8 @@ class StreamLog:
     received: int = 0
     dropped: int = 0
     invalid: int = 0
+    waited: int = 0
+    t_waited: float | None = None
     verdicts: dict[int, bool] = field(default_factory=dict)
 
 
@@ -178,7 +184,8 @@ def _stream_loop(source: LiveSource, sa: Any, log: StreamLog, stop: dict, *,
             continue
         log.received += skipped + 1
         log.dropped += skipped
-        if log.t and frame.t <= log.t[-1]:  # no time passed since the last frame: not one
+        last = log.t[-1] if log.t else log.t_waited
+        if last is not None and frame.t <= last:  # no time passed since the last: not one
             log.dropped += 1
             continue
         try:
@@ -188,18 +195,22 @@ def _stream_loop(source: LiveSource, sa: Any, log: StreamLog, stop: dict, *,
             log.invalid += 1
             continue
         t_step = time.perf_counter()
-        r = sa.step(q_demo, contact, frame.t - log.t[-1] if log.t else None)
+        r = sa.step(q_demo, contact, None if last is None else frame.t - last)
         log.step.append(time.perf_counter() - t_step)
         log.latency.append(source.now() - frame.arrived)
         if view is not None:
             view.offer(r.q)
+        if r.status == "waiting":  # the first frame: a preview, not a frame of the motion
+            log.waited, log.t_waited = log.waited + 1, frame.t
+            continue
         for k, x in (("t", frame.t), ("q_demo", q_demo), ("contact", contact), ("q", r.q),
-                     ("v", r.v)):
+                     ("v", r.v), ("own", r.contact)):
             getattr(log, k).append(x)
         if r.previous_a is not None:
             log.a.append(r.previous_a)
             log.w.append(r.previous_wrenches)
-        log.verdicts.update(r.verdicts)
+        log.verdicts.update((f - sa.first_frame, ok) for f, ok in r.verdicts
+                            if f >= sa.first_frame)
         if delay_s:
             time.sleep(delay_s)
 
@@ -223,9 +234,10 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
 
     t = np.asarray(log.t) - log.t[0]
     contact = {s: np.array([c[s] for c in log.contact], bool) for s in SIDES}
+    own = {s: np.array([c[s] for c in log.own], bool) for s in SIDES}
     demonstrator, imitator = sa.demonstrator, sa.imitator
     demo = robot_motion(demonstrator, t, np.stack(log.q_demo), contact)
-    motion = robot_motion(imitator, t, np.stack(log.q), contact).replace(
+    motion = robot_motion(imitator, t, np.stack(log.q), own).replace(
         v=np.stack(log.v), a=np.stack(log.a))
     W = {s: np.stack([w[s] for w in log.w]) for s in SIDES}
     aud = audit(sa._audit_robot, motion, W, sa.contacts,
@@ -252,6 +264,7 @@ def _record(source: LiveSource, log: StreamLog, reason: str, wall_s: float,
     return {"source": source.description, "stopped": reason, "seconds": wall_s,
             "frames_received": log.received, "frames_adapted": len(log.t),
             "frames_dropped": log.dropped, "frames_invalid": log.invalid,
+            "frames_waited": log.waited,
             "frame_period_ms": 1e3 / source.rate,
             "latency_ms": {"median": float(np.median(lat)),
                            "p95": float(np.percentile(lat, 95)), "max": float(lat.max())},
@@ -272,7 +285,9 @@ def stream_lines(report: dict) -> list[str]:
              f"{s['stopped']} ({s['seconds']:.2f} s)",
              f"received {s['frames_received']} frames, dropped {s['frames_dropped']} (the "
              "loop takes the newest frame: those that arrived while it was busy"
-             + (f"; {s['frames_invalid']} not numbers" if s["frames_invalid"] else "") + ")",
+             + (f"; {s['frames_invalid']} not numbers" if s["frames_invalid"] else "") + ")"
+             + (f"; the first {s['frames_waited']} shown, not adapted (the stream starts "
+                "moving with the velocity estimated from it)" if s["frames_waited"] else ""),
              f"latency receive → command: median {lat['median']:.2f} ms, p95 {lat['p95']:.2f} "
              f"ms, max {lat['max']:.2f} ms (frame period {s['frame_period_ms']:.2f} ms; the "
              f"adaptor's step alone: median {s['step_ms']['median']:.2f} ms, max "
@@ -319,7 +334,7 @@ def run_stream(source: LiveSource, imitator: Robot, out: Path, *, frames: int | 
         a, w, _ = sa.final()
         log.a.append(a)
         log.w.append(w)
-        verdicts = sa.verdicts(wait=True, timeout=VERDICT_WAIT_S)
+        verdicts = sa.verdicts(wait=True, timeout=VERDICT_WAIT_S)[sa.first_frame:]
     finally:
         sa.close()
         if view is not None:

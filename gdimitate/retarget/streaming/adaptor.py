@@ -60,6 +60,17 @@ AUDIT_MODES = ("worker", "inline", "off")
 #: (the robot coasts: the audit fails those frames)
 MAX_SPEED = 100.0
 _STATUS = {1: "QP", 2: "QP, relaxed", -99: "coasting"}
+#: how a stream given no ``v_demo`` starts (:class:`StreamingAdaptor`'s ``start``):
+#: ``"estimate"`` waits for its second frame and starts there, moving with the demonstrator's
+#: velocity estimated from the two; ``"rest"`` starts at its first frame at rest
+STARTS = ("estimate", "rest")
+#: a foot the demonstration puts down starts its stance at the next frame when its sole's
+#: highest corner is at most LANDED_GAP [m] above the floor (under the audit's ``contact_gap``
+#: tolerance, 1 mm; a swing sole's corners stay 0.5 mm above it, ``receding.FLOOR_MARGIN``)
+#: and it moves slower than LANDED_SPEED [m/s]; until then it lands (its resting pose, a hard
+#: row). Stance taken at the demonstration's flag instead held a sole that had not landed
+#: where it was: Talos joining the shipped walk at rest hovered 3.7 mm up for 46 frames.
+LANDED_GAP, LANDED_SPEED = 9e-4, 0.05
 
 
 class FrameResult(NamedTuple):
@@ -72,7 +83,11 @@ class FrameResult(NamedTuple):
     the first frame), ``iterations`` and ``time_s`` [s] (the frame's solve, the verdict's
     bookkeeping left out); ``verdicts`` ``((frame, feasible), ...)``: the verdicts (the
     audit's knot verdict; frames counted from 0 since the last
-    :meth:`~StreamingAdaptor.reset`) delivered since the previous step, in frame order."""
+    :meth:`~StreamingAdaptor.reset`) delivered since the previous step, in frame order;
+    ``contact`` ``{side: bool}``: the new frame's stance flags, the robot's own — the
+    demonstration's, except that a foot it puts down starts its stance only once its sole
+    is on the floor (:data:`LANDED_GAP`), one frame or more later (the audit's and the
+    verdicts' contact schedule)."""
 
     q: np.ndarray
     v: np.ndarray
@@ -83,6 +98,7 @@ class FrameResult(NamedTuple):
     iterations: int
     time_s: float
     verdicts: tuple[tuple[int, bool], ...] = ()
+    contact: dict | None = None
 
 
 class StreamingAdaptor:
@@ -102,16 +118,27 @@ class StreamingAdaptor:
     ``False``/``"off"``: none (audit the assembled motion afterwards, as
     :func:`adapt_per_frame` does). Both judges run :func:`.verdict_worker.knot_verdicts` and
     give the same verdicts. :meth:`close` (or a ``with`` block) stops the worker; so do
-    garbage collection and the interpreter's exit.
+    garbage collection and the interpreter's exit. ``start`` (:data:`STARTS`): a stream given
+    no ``v_demo`` at its first frame — a live one, or one joined mid-walk — waits for its
+    second frame (``"estimate"``: the first frame's result is a preview, the rest pose, with
+    ``status="waiting"`` and the verdict False; :attr:`first_frame` is then 1) and starts
+    there moving with the demonstrator's velocity estimated from the two frames; or starts at
+    rest at its first frame (``"rest"``; from rest a robot cannot catch up with a walk it
+    joined: on the shipped walk 1.0 s in, Talos's frames were 56 of 65 feasible so against
+    65 of 65).
     """
 
     def __init__(self, demonstrator: Robot, imitator: Robot, force: str = "segment", *,
                  weights: Weights | None = None, limits: Limits | None = None,
                  contact: Contact | None = None, contacts: dict | None = None,
                  body_map: BodyMap | dict | str | None = None, dt: float = 1 / 60,
-                 ipopt: dict | None = None, audit: bool | str = True):
+                 ipopt: dict | None = None, audit: bool | str = True,
+                 start: str = "estimate"):
         if force not in STREAMING_FORCE_MODELS:
             raise UnknownNameError("streaming force model", force, STREAMING_FORCE_MODELS)
+        if start not in STARTS:
+            raise UnknownNameError("stream start", start, STARTS)
+        self.start = start
         if not (np.isfinite(dt) and dt > 0):
             raise InvalidInputError(f"dt must be a positive period in seconds; got {dt!r}")
         self.contact = contact or Contact()
@@ -154,11 +181,16 @@ class StreamingAdaptor:
                                    self._act_names, self.force)
         self._hist: dict[str, list] = {k: [] for k in ("t", "q", "v", "a", "c", "w")}
         self._anchor: dict[str, pin.SE3] = {}
-        self._lift: dict[str, float] = {}
+        self._lift: dict[str, float] = {}  # the demonstration's lift-offs [s]
+        self._demo_flags: dict[str, bool] = {}
         self._a_prev = np.zeros(self.imitator.model.nv)
         self._n = 0
         self._frame: tuple[float, np.ndarray] = (0.0, np.zeros(2))
-        self._verdicts: list[bool] = []  # frames 0, 1, ... judged so far
+        self._verdicts: list[bool] = []  # the motion's frames 0, 1, ... judged so far
+        #: the first frame while it waits for the second (start="estimate"): (q_demo, flags,
+        #: forces)
+        self._waiting: tuple[np.ndarray, dict, dict | None] | None = None
+        self._skip = 0  # stream frames before the motion's first (the one that waited)
         self._last_verdict: tuple[int, bool] | None = None  # final()'s, of the last frame
         if self._judge is not None:
             self._judge.reset()
@@ -184,7 +216,7 @@ class StreamingAdaptor:
         if q_demo.shape != (d.model.nq,):
             raise InvalidInputError(f"q_demo must have shape ({d.model.nq},) for {d.name}; "
                                     f"got {q_demo.shape}")
-        if not self._hist["t"]:
+        if not self._hist["t"] and self._waiting is None:
             self._frame = stream_frame(d, q_demo)
         yaw, about = self._frame
         if yaw:
@@ -211,21 +243,79 @@ class StreamingAdaptor:
         t = H["t"][-1] + dt if H["t"] else 0.0
         flags = {s: bool(contact[s]) for s in SIDES}
         t0 = time.perf_counter()
+        if not H["t"] and v_demo is None and self.start == "estimate":
+            if self._waiting is None:
+                return self._wait(q_demo, flags, forces, t0)
+            v_demo = pin.difference(self.demonstrator.model, self._waiting[0], q_demo) / dt
+            self._waiting, self._skip = None, 1
         self._ref.frames.append(self._ref.features(t, q_demo, flags, forces))
         if not H["t"]:
             return self._first(t, flags, t0, v_demo)
+        own = self._own_flags(flags)
         with single_thread():
-            a, W, flag = self._solve(len(H["t"]) - 1, flags)
+            a, W, flag = self._solve(len(H["t"]) - 1, own)
         v_next = H["v"][-1] + self._h * a
         if not (np.all(np.isfinite(a)) and all(np.all(np.isfinite(W[s])) for s in SIDES)
                 and np.max(np.abs(v_next)) < MAX_SPEED):  # no usable step: coast
             a, W, flag = np.zeros_like(a), {s: np.zeros(6) for s in SIDES}, -99
-        q, v = self._commit(t, flags, a, W)
+        q, v = self._commit(t, flags, own, a, W)
         elapsed = time.perf_counter() - t0
         new, ok = self._judged()
         self._n += 1
         return FrameResult(q.copy(), v.copy(), a.copy(), {s: W[s].copy() for s in SIDES}, ok,
-                           _STATUS.get(flag, f"QP failed ({flag})"), 1, elapsed, new)
+                           _STATUS.get(flag, f"QP failed ({flag})"), 1, elapsed, new,
+                           dict(own))
+
+    def _own_flags(self, flags: dict) -> dict:
+        """The robot's stance flags for the new frame, from the demonstration's ``flags``: a
+        foot already in stance, or one that has landed (:data:`LANDED_GAP`,
+        :data:`LANDED_SPEED`), may be down; a foot the demonstration lifts is lifted, unless
+        the other has not landed yet (it then stays down: no flight the demonstration does
+        not have)."""
+        H = self._hist
+        prev = H["c"][-1]
+        out = dict(flags) if all(prev[s] or not flags[s] for s in SIDES) else \
+            self._landed(flags, prev)
+        for s in SIDES:
+            if prev[s] and not out[s] and not any(out.values()) and any(flags.values()):
+                out[s] = True
+        return out
+
+    def _landed(self, flags: dict, prev: dict) -> dict:
+        """:meth:`_own_flags` before its no-flight rule: the demonstration's ``flags`` with a
+        foot it puts down kept in swing until its sole is on the floor."""
+        m, data = self.imitator.model, self._qp.d1
+        H = self._hist
+        pin.forwardKinematics(m, data, H["q"][-1], H["v"][-1])
+        pin.updateFramePlacements(m, data)
+        out = {}
+        for s in SIDES:
+            if not flags[s] or prev[s]:
+                out[s] = flags[s]
+                continue
+            oMf = data.oMf[self._fid[s]]
+            top = float(np.max(oMf.translation[2] + self.contacts[s].corners() @
+                               oMf.rotation[2]))
+            speed = float(np.linalg.norm(pin.getFrameVelocity(
+                m, data, self._fid[s], pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).linear))
+            out[s] = top <= LANDED_GAP and speed <= LANDED_SPEED
+        return out
+
+    @property
+    def first_frame(self) -> int:
+        """The stream frame (counted from 0 since the last :meth:`reset`) that is the motion's
+        first: 1 when the first waited for the second (``start="estimate"`` without
+        ``v_demo``), else 0."""
+        return self._skip
+
+    def _wait(self, q_demo: np.ndarray, flags: dict, forces, t0: float) -> FrameResult:
+        """The first frame of a stream without the demonstrator's velocity: kept, and shown
+        as the rest pose it would start from (a preview, not a frame of the motion)."""
+        f0 = self._ref.features(0.0, q_demo, flags, forces)
+        q = initial_pose(self.imitator, self._ref, f0, self._act, None, collision=self._qp.sc)
+        self._waiting = (q_demo.copy(), flags, forces)
+        return FrameResult(q, np.zeros(self.imitator.model.nv), None, None, None, "waiting",
+                           0, time.perf_counter() - t0, (), dict(flags))
 
     def _first(self, t: float, flags: dict, t0: float, v_demo) -> FrameResult:
         f0 = self._ref.frames[0]
@@ -240,7 +330,7 @@ class StreamingAdaptor:
             dm, dd = self.demonstrator.model, self.demonstrator.model.createData()
             pin.centerOfMass(dm, dd, f0["q"], v_demo)
             cv = self._ref.k * dd.vcom[0]
-        q = initial_pose(self.imitator, self._ref, f0, self._act, cv)
+        q = initial_pose(self.imitator, self._ref, f0, self._act, cv, collision=self._qp.sc)
         v0 = (initial_velocity(self.imitator, q, self._ref, f0, v_demo, self._act) if moving
               else np.zeros(self.imitator.model.nv))
         # scaled down, as a whole (the soles stay still), into the joints' velocity limits
@@ -261,11 +351,13 @@ class StreamingAdaptor:
         H = self._hist
         for k, x in (("t", t), ("q", q), ("v", v0), ("c", flags)):
             H[k].append(x)
+        self._demo_flags = dict(flags)
         elapsed = time.perf_counter() - t0
         new, _ = self._judged()
         self._n += 1
         return FrameResult(q.copy(), v0.copy(), None, None, None,
-                           "moving start" if moving else "rest pose", 0, elapsed, new)
+                           "moving start" if moving else "rest pose", 0, elapsed, new,
+                           dict(flags))
 
     def _solve(self, j: int, nxt: dict) -> tuple[np.ndarray, dict, int]:
         """Knot ``j``'s QP (the next knot's stance flags ``nxt``)."""
@@ -282,27 +374,30 @@ class StreamingAdaptor:
         self._h = h
         return a, W, flag
 
-    def _commit(self, t: float, flags: dict, a: np.ndarray, W: dict):
-        """Knot j's ``a``, wrenches final; knot k's ``q``, ``v`` by exact integration."""
+    def _commit(self, t: float, flags: dict, own: dict, a: np.ndarray, W: dict):
+        """Knot j's ``a``, wrenches final; knot k's ``q``, ``v`` by exact integration, its
+        stance flags ``own`` (the robot's; ``flags``: the demonstration's, whose touch-downs
+        time the next swings)."""
         H, m = self._hist, self.imitator.model
         v = H["v"][-1] + self._h * a
         q = pin.integrate(m, H["q"][-1], self._h * v)
         H["a"].append(a)
         H["w"].append(W)
         self._a_prev = a
-        prev = H["c"][-1]
+        prev, demo_prev = H["c"][-1], self._demo_flags
         data = self._qp.d1
         pin.framesForwardKinematics(m, data, q)
         for s in SIDES:
-            if flags[s] and not prev[s]:  # touch-down: the stance's pose is this one
+            if own[s] and not prev[s]:  # touch-down: the stance's pose is this one
                 self._anchor[s] = data.oMf[self._fid[s]].copy()
-                if s in self._lift:
-                    self._ref.touched_down(s, t - self._lift.pop(s), t)
-            elif not flags[s]:
+            elif not own[s]:
                 self._anchor.pop(s, None)
-                if prev[s]:
-                    self._lift[s] = t
-        for k, x in (("t", t), ("q", q), ("v", v), ("c", flags)):
+            if flags[s] and not demo_prev[s] and s in self._lift:
+                self._ref.touched_down(s, t - self._lift.pop(s), t)
+            elif not flags[s] and demo_prev[s]:
+                self._lift[s] = t
+        self._demo_flags = dict(flags)
+        for k, x in (("t", t), ("q", q), ("v", v), ("c", own)):
             H[k].append(x)
         return q, v
 
@@ -312,6 +407,11 @@ class StreamingAdaptor:
         frames it reads: :func:`.verdict_worker.knot_verdicts`), None with ``audit=False``;
         :meth:`verdicts` then includes it."""
         H = self._hist
+        if not H["t"] and self._waiting is not None:  # one frame in all: it starts at rest
+            q_demo, flags, forces = self._waiting
+            self._waiting = None
+            self._ref.frames.append(self._ref.features(0.0, q_demo, flags, forces))
+            self._first(0.0, flags, time.perf_counter(), None)
         j = len(H["t"]) - 1
         if j < 0:
             raise InvalidInputError("final() needs at least one step()")
@@ -334,13 +434,17 @@ class StreamingAdaptor:
         k = len(H["t"]) - 1
         prev = (H["a"][-1], H["w"][-1]) if k else (None, None)
         self._judge.add((H["t"][k], H["q"][k], H["v"][k], H["c"][k], *prev))
-        new = tuple(self._judge.collect())
-        self._verdicts.extend(ok for _, ok in new)
+        got = tuple(self._judge.collect())
+        self._verdicts.extend(ok for _, ok in got)
+        new = tuple((f + self._skip, ok) for f, ok in got)
+        if k == 0 and self._skip:  # the frame that waited: a preview, not feasible
+            new = ((0, False), *new)
         return new, (self._verdicts[k - 1] if 0 < k <= len(self._verdicts) else None)
 
     def verdicts(self, wait: bool = True, timeout: float | None = None) -> np.ndarray:
         """``(K,)`` bool: the verdicts of frames ``0..K−1`` delivered so far (each the
-        audit's knot verdict). ``wait``: first wait for every frame's — all but the newest,
+        audit's knot verdict; a first frame that waited, :attr:`first_frame`: False).
+        ``wait``: first wait for every frame's — all but the newest,
         whose verdict needs the next frame (or :meth:`final`, after which it is included) —
         at most ``timeout`` [s] (None: no limit; :class:`~.verdict_worker.VerdictWorkerError`
         when it passes or the worker failed). After :meth:`close`: those delivered before.
@@ -354,7 +458,7 @@ class StreamingAdaptor:
         last = self._last_verdict
         if last is not None and last[0] == len(out) == len(self._hist["t"]) - 1:
             out.append(last[1])
-        return np.array(out, bool)
+        return np.array([False] * self._skip + out, bool)
 
     def close(self) -> None:
         """Stop the verdict worker, keeping the verdicts delivered so far (:meth:`verdicts`);
@@ -409,7 +513,8 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     ``a``, whose ``solver`` is a :class:`~.info.SolverInfo` (frames per second in
     ``time_s``/``knots``) and whose ``frame_feasible`` ``(T,)`` are the per-frame flags —
     the audit of the assembled motion, knot by knot, run once after the frames (also in
-    ``solver``'s ``unmet`` when some frames fail); ``audit`` is that whole motion's."""
+    ``solver``'s ``unmet`` when some frames fail); ``audit`` is that whole motion's. The
+    motion's stance flags are the imitator's own (:attr:`FrameResult.contact`)."""
     from ...assess.audit import audit
 
     if demo.base_nq and demo.q.shape[1] != demonstrator.model.nq:
@@ -423,6 +528,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     nq, nv = imitator.model.nq, imitator.model.nv
     q, v, a = np.zeros((T, nq)), np.zeros((T, nv)), np.zeros((T, nv))
     W = {s: np.zeros((T, 6)) for s in SIDES}
+    contact_used = {s: np.zeros(T, bool) for s in SIDES}  # the imitator's own stance flags
     statuses = []
     v0 = None
     if T > 1:  # the demonstrator's velocity at the first frame: start moving with it
@@ -437,6 +543,8 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
         r = ad.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, f_k,
                     v_demo=v0 if k == 0 else None)
         q[k], v[k] = r.q, r.v
+        for s in SIDES:
+            contact_used[s][k] = r.contact[s]
         if k:
             a[k - 1] = r.previous_a
             assert r.previous_wrenches is not None  # every frame after the first settles one
@@ -447,7 +555,6 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     for s in SIDES:
         W[s][-1] = wl[s]
     elapsed = time.perf_counter() - t0
-    contact_used = {s: np.asarray(demo.contact[s], bool) for s in SIDES}
     motion = robot_motion(imitator, demo.t, q, contact_used).replace(v=v, a=a)
     aud = audit(ad._audit_robot, motion, W, ad.contacts,
                 cone_half_angle=ad.contact.cone_half_angle)

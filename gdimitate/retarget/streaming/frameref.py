@@ -19,6 +19,9 @@ the linear inverted pendulum over the stance sole, predicted for the expected to
 (the last swing's duration; :data:`FIRST_SWING` before the first), landing within
 :data:`LAND` of that duration, and then rests flat on the floor, unloaded, until the
 demonstration's contact flag says it is in stance — so that it touches down still and flat.
+A sole the demonstration puts down before it has landed (a swing shorter than expected, a
+robot catching up with a walk it joined) goes straight to its landing pose, resting; its
+stance begins when it is there (:class:`~.streaming.StreamingAdaptor`'s own touch-down).
 The landing point keeps at least :data:`SEPARATION` times the neutral stance's lateral
 distance from the other sole and at most :data:`MAX_STEP` legs ahead of or behind it.
 
@@ -35,13 +38,20 @@ import numpy as np
 import pinocchio as pin
 
 from ...model.footsteps import sole_frames
+from ...model.heading import yaw_matrix
 from ...model.robot import SIDES
-from .receding import Tasks, q_of_v
+from .receding import Tasks, distance_rows, q_of_v
 
 __all__ = ["FrameReference"]
 
 LAND, FIRST_SWING, TAU_OFFSET, CLEARANCE, SEPARATION, RAMP = 0.95, 0.45, 0.15, 0.08, 1.0, 0.6
 KEEP_GOING, MAX_STEP, STEP_RATIO = 0.0, 0.5, 0.75
+#: a sole late for its touch-down (the demonstration's foot is down, the robot's not yet)
+#: lands where it is, flat, at its own yaw, LATE_LAND of its pose error removed per frame (a
+#: resting sole's 0.2, ``receding.Gains.rest``, took G1's 14 mm to 2 mm in 8 frames, while it
+#: was still pulled sideways to its step's goal; turned to the step's yaw as it landed,
+#: Romeo's hip yaw went past its velocity limit)
+LATE_LAND = 0.5
 #: the rest pose (:func:`.parts.self_collision.rest_pose`): pairs of collision geometries
 #: closer than REST_MARGIN [m] at the neutral pose moved REST_CLEARANCE [m] apart (the
 #: trajectory mode's 1 cm / 1.5 cm left Talos's hands against its swinging thighs)
@@ -202,6 +212,12 @@ class FrameReference:
                 self.lift[x] = None
             else:
                 tk.feet[x] = self._swing(x, f1, f0, f2, feet, h)
+                if f2["contact"][x]:  # late: down where it is, flat, faster than a rest
+                    p, R = feet[x].translation, feet[x].rotation
+                    yaw = np.arctan2(R[1, 0], R[0, 0])
+                    tk.feet[x] = (np.array([p[0], p[1], 0.0]), yaw_matrix(yaw),
+                                  *tk.feet[x][2:])
+                    tk.land[x] = LATE_LAND
         return tk
 
     def _swing(self, x: str, f1: dict, f0: dict, f2: dict, feet: dict, h: float) -> tuple:
@@ -213,7 +229,8 @@ class FrameReference:
         L = self.lift[x]
         T = LAND * self.t_swing
         phi = min((t - L["t0"]) / T, 1.0)
-        if L["goal"] is None or phi < FREEZE:
+        late = bool(f2["contact"][x])  # the demonstration is down, this sole not yet: land
+        if L["goal"] is None or (phi < FREEZE and not late):
             sole = f1["soles"][x]
             # the capture point ξ = c + ċ/ω at the expected touch-down, diverging from the
             # stance sole p as ξ(t + τ) = p + (ξ − p) e^{ωτ} (linear inverted pendulum),
@@ -228,8 +245,7 @@ class FrameReference:
             yaw = np.arctan2(R[1, 0], R[0, 0])
             L["goal"] = (self._apart(x, goal, feet), yaw)
         goal, yaw = L["goal"]
-        c, s_ = np.cos(yaw), np.sin(yaw)
-        Rg = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+        Rg = yaw_matrix(yaw)
         sig, dsig, ddsig = _quintic(phi)
         b, db, ddb = _bump(phi)
         p0 = L["p0"]
@@ -242,7 +258,7 @@ class FrameReference:
         R = L["R0"] @ pin.exp3(sig * w)
         om = L["R0"] @ w * dsig / T
         al = L["R0"] @ w * ddsig / T**2
-        if phi >= 1.0:  # resting on the floor until the touch-down
+        if phi >= 1.0 or late:  # resting on the floor until the touch-down (or going there)
             return np.append(goal, 0.0), Rg, np.zeros(6), np.zeros(6), True
         return pos, R, np.concatenate([vel, om]), np.concatenate([acc, al]), False
 
@@ -369,34 +385,58 @@ def _bump(phi: float) -> tuple[float, float, float]:
     return 64 * p**3 * u**3, 192 * p * p * u * u * (u - p), 384 * p * u * ((u - p) ** 2 - p * u)
 
 
+#: the first frame's base height, in the neutral pose's: tried in this order until both soles
+#: are on their goals within SOLE_TOL [m] (G1 at the shipped walk's first frame, at rest: at
+#: 0.92 both knees stuck at their hyperextension limit with the stance sole 1.5 mm and the
+#: resting swing sole 14 mm above the floor, and the stance held them there: 115 of 124 frames
+#: failed ``contact_gap``)
+BASE_HEIGHTS, SOLE_TOL = (0.92, 0.88, 0.84, 0.80, 0.75, 0.70), 1e-4
+#: the least distance [m] of the robot's own collision pairs at the first frame (Talos at the
+#: shipped walk's frame 1.0 s: its right gripper 4.4 cm inside its thigh, which the first
+#: step's collision rows could not undo within its torque limits)
+START_CLEARANCE, CLEARANCE_WEIGHT, NEAR = 3e-3, 1e5, 0.1
+#: the first frame's Gauss–Newton steps stop when no coordinate moves more than STILL [rad, m]
+STILL = 1e-10
+
+
 def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
-                 com_vel: np.ndarray | None, iterations: int = 100) -> np.ndarray:
+                 com_vel: np.ndarray | None, iterations: int = 100,
+                 collision=None) -> np.ndarray:
     """The first frame's configuration ``(nq,)`` (the robot at rest): stance soles flat on
     the floor and swing soles flat on it too (resting), both under the demonstrator's
-    scaled soles, the centre of mass over the stance soles, the base at 92 % of its neutral height
-    with the demonstrator's pelvis orientation, the other joints near their targets — damped
-    Gauss–Newton steps on the configuration's Lie group. ``com_vel`` ``(3,)`` [m/s]: the
-    demonstrator's scaled centre-of-mass velocity, for a start with its velocity
+    scaled soles, the centre of mass over the stance soles, the base at 92 % of its neutral
+    height (lower, down :data:`BASE_HEIGHTS`, where the soles cannot reach their goals from
+    there) with the demonstrator's pelvis orientation, the other joints near their targets —
+    damped Gauss–Newton steps on the configuration's Lie group. ``com_vel`` ``(3,)`` [m/s]:
+    the demonstrator's scaled centre-of-mass velocity, for a start with its velocity
     (:func:`initial_velocity`): the centre of mass where the demonstrator's is (scaled) and a
-    swing sole resting under the capture point ``c + ċ·√(z/g)`` along the walk."""
-    from ...model.kinematics import base_joint_id
+    swing sole resting under the capture point ``c + ċ·√(z/g)`` along the walk.
+    ``collision``: the robot's :class:`~gdimitate.model.selfcollision.SelfCollision` pairs, kept
+    :data:`START_CLEARANCE` apart (a penalty row per pair closer than that)."""
+    goals, centre = _start_goals(robot, ref, f0, com_vel)
+    best = (np.inf, robot.neutral)
+    for height in BASE_HEIGHTS:
+        q, err = _pose_at(robot, ref, f0, act_idx, goals, centre, height, iterations,
+                          collision)
+        if err < best[0]:
+            best = (err, q)
+        if err <= SOLE_TOL:
+            break
+    return best[1]
 
-    m, d = robot.model, robot.model.createData()
+
+def _start_goals(robot, ref: FrameReference, f0: dict, com_vel: np.ndarray | None
+                 ) -> tuple[dict, np.ndarray]:
+    """The first frame's sole goals ``{side: SE3}`` and the centre of mass's goal ``(3,)``
+    (:func:`initial_pose`)."""
     planar = robot.base == "planar"
-    comp = np.array([0, 2, 4] if planar else range(6))
-    root = base_joint_id(robot)
-    q = robot.neutral.copy()
-    fids = {x: m.getFrameId(robot.require_contacts()[x].frame) for x in SIDES}
-    pin.framesForwardKinematics(m, d, q)
-    z_root = d.oMi[root].translation[2] - min(d.oMf[f].translation[2] for f in fids.values())
     goals = {}
     for x in SIDES:
         sole = f0["soles"][x]
         R = sole.rotation
         yaw = 0.0 if planar else np.arctan2(R[1, 0], R[0, 0])
-        c, s_ = np.cos(yaw), np.sin(yaw)
         p = np.r_[ref.s * sole.translation[:2], 0.0]
-        goals[x] = pin.SE3(np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]), p)
+        goals[x] = pin.SE3(yaw_matrix(yaw), p)
     down = [x for x in SIDES if f0["contact"][x]] or list(SIDES)
     moving = com_vel is not None
     if len(down) == 1:  # keep the swing sole clear of the stance sole
@@ -414,8 +454,28 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
     if moving:  # where the demonstrator's centre of mass is relative to its soles, scaled
         dem = np.mean([f0["soles"][x].translation[:2] for x in down], axis=0)
         centre = np.r_[centre[:2] + ref.k * (f0["com"][:2] - dem), 0.0]
+    return goals, centre
+
+
+def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: dict,
+             centre: np.ndarray, height: float, iterations: int, collision=None
+             ) -> tuple[np.ndarray, float]:
+    """:func:`initial_pose`'s Gauss–Newton solve with the base at ``height`` times its neutral
+    height: ``(q (nq,), the soles' largest error to their goals (the norm of its log6: m
+    and rad))``; ``collision``: as :func:`initial_pose`'s."""
+    from ...model.kinematics import base_joint_id
+
+    m, d = robot.model, robot.model.createData()
+    planar = robot.base == "planar"
+    comp = np.array([0, 2, 4] if planar else range(6))
+    root = base_joint_id(robot)
+    q = robot.neutral.copy()
+    fids = {x: m.getFrameId(robot.require_contacts()[x].frame) for x in SIDES}
+    pin.framesForwardKinematics(m, d, q)
+    z_root = d.oMi[root].translation[2] - min(d.oMf[f].translation[2] for f in fids.values())
     rot = f0["base"] if f0["base"] is not None else ref.root0
     targets = f0["joints"]
+    near = _Near(m, collision)
     qa, vl = q_of_v(m, act_idx), _leg_dofs(m, fids, act_idx)  # vl: held at their limits
     for _ in range(iterations):
         pin.computeJointJacobians(m, d, q)
@@ -436,7 +496,7 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
         ang = [4] if planar else [3, 4, 5]
         J.append(Jr[[2] + ang])
         Rb = d.oMi[root].rotation
-        e.append(np.r_[0.92 * z_root - d.oMi[root].translation[2],
+        e.append(np.r_[height * z_root - d.oMi[root].translation[2],
                        pin.log3(rot @ Rb.T)[[a - 3 for a in ang]]])
         w.append(np.full(1 + len(ang), 10.0))
         Js = np.zeros((act_idx.size, m.nv))
@@ -444,12 +504,53 @@ def initial_pose(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray,
         J.append(Js)
         e.append(targets - q[qa])
         w.append(np.full(act_idx.size, 0.1))
+        near.rows(q, d, J, e, w)
         Ja, ea, wa = np.vstack(J), np.concatenate(e), np.concatenate(w)
-        q = pin.integrate(m, q, _bounded_step(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv),
-                                              Ja.T @ (wa * ea), m, q, vl))
-        q = np.clip(q, m.lowerPositionLimit, m.upperPositionLimit)
-    return q
+        dq = _bounded_step(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv), Ja.T @ (wa * ea),
+                           m, q, vl)
+        q = np.clip(pin.integrate(m, q, dq), m.lowerPositionLimit, m.upperPositionLimit)
+        if np.max(np.abs(dq)) < STILL:  # converged
+            break
+    pin.framesForwardKinematics(m, d, q)
+    err = max(float(np.linalg.norm(pin.log6(d.oMf[fids[x]].actInv(goals[x])).vector[comp]))
+              for x in SIDES)
+    return q, err
 
+
+
+class _Near:
+    """:func:`initial_pose`'s self-collision rows: each pair of ``collision`` (a
+    :class:`~gdimitate.model.selfcollision.SelfCollision`, or None: none) closer than
+    :data:`START_CLEARANCE` asks, weighted :data:`CLEARANCE_WEIGHT`, to be that far apart."""
+
+    def __init__(self, m, collision):
+        self.m, self.c = m, collision
+        self.near: np.ndarray | None = None  # the pairs closer than NEAR [m] at the first call
+        if collision is not None:
+            g = collision.geometry
+            self.gdata = pin.GeometryData(g)
+            self.joints = [(int(g.geometryObjects[p.first].parentJoint),
+                            int(g.geometryObjects[p.second].parentJoint))
+                           for p in g.collisionPairs]
+
+    def rows(self, q: np.ndarray, d, J: list, e: list, w: list) -> None:
+        """Append the rows at ``q`` (``d``: its data, joint Jacobians computed)."""
+        if self.c is None:
+            return
+        g = self.c.geometry
+        if self.near is None:  # every pair once; then those that were near (steps are small)
+            pin.computeDistances(self.m, d, g, self.gdata, q)
+            self.near = np.flatnonzero([r.min_distance < NEAR
+                                        for r in self.gdata.distanceResults])
+        else:
+            pin.updateGeometryPlacements(self.m, d, g, self.gdata, q)
+            for i in self.near:
+                pin.computeDistance(g, self.gdata, int(i))
+        for dist, Jd in distance_rows(self.m, d, self.gdata, self.joints, self.near,
+                                      START_CLEARANCE):
+            J.append(Jd[None])
+            e.append(np.array([START_CLEARANCE - dist]))
+            w.append(np.array([CLEARANCE_WEIGHT]))
 
 
 def _leg_dofs(m, fids: dict, act_idx: np.ndarray) -> np.ndarray:

@@ -29,7 +29,7 @@ says which frames it could not make feasible.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import daqp
@@ -71,7 +71,9 @@ class Tasks:
     ``(3,)``; base rotation ``base_rot`` ``(3, 3)``; swing-foot references ``feet`` {side:
     (position (3,), rotation (3, 3), velocity (6,), acceleration (6,), resting: bool)}; ``joints``,
     ``joints_vel`` ``(n_act,)``; ``push`` {side: unit (3,) direction of the ground force on
-    the robot, or None}; ``anchor`` {side: pin.SE3 of a stance foot's sole}."""
+    the robot, or None}; ``anchor`` {side: pin.SE3 of a stance foot's sole}; ``land`` {side:
+    fraction of a resting swing foot's pose error removed per step, instead of
+    :attr:`Gains.rest`} (a late touch-down)."""
 
     com: np.ndarray
     com_vel: np.ndarray
@@ -82,6 +84,7 @@ class Tasks:
     joints_vel: np.ndarray
     push: dict
     anchor: dict
+    land: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -370,25 +373,10 @@ class FrameQP:
             for i in self._near:
                 pin.computeDistance(geom, gd, int(i))
         self._count += 1
-        A, lb, jac = [], [], {}
-        for i in self._near:
-            res, (ja, jb) = gd.distanceResults[int(i)], self.sc_joints[i]
-            if res.min_distance >= COLLISION_WATCH:
-                continue
-            n = np.asarray(res.normal, float)
-            Jd = np.zeros(m.nv)
-            for j, p, sgn in ((jb, res.getNearestPoint2(), 1.0),
-                              (ja, res.getNearestPoint1(), -1.0)):
-                if j > 0:
-                    if j not in jac:
-                        jac[j] = pin.getJointJacobian(m, d, j, _LWA)
-                    J = jac[j]
-                    r = np.asarray(p) - d.oMi[j].translation
-                    rn = np.array([r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2],
-                                   r[0] * n[1] - r[1] * n[0]])
-                    Jd += sgn * (n @ J[:3] + rn @ J[3:])  # nᵀ(v + ω × r) = nᵀv + (r × n)ᵀω
+        A, lb = [], []
+        for dist, Jd in distance_rows(m, d, gd, self.sc_joints, self._near, COLLISION_WATCH):
             A.append(h * h * Jd)
-            lb.append(COLLISION_MARGIN - res.min_distance - h * Jd @ v)
+            lb.append(COLLISION_MARGIN - dist - h * Jd @ v)
         if A:
             M = np.zeros((len(A), rows.n))
             M[:, :m.nv] = np.array(A)
@@ -408,7 +396,8 @@ class FrameQP:
                 now = t["feet"][s][0]
                 if rest:
                     p, R = tk.feet[s][0], tk.feet[s][1]
-                    u = self.g.rest * pin.log6(now.actInv(pin.SE3(R, p))).vector / h
+                    u = (tk.land.get(s, self.g.rest)
+                         * pin.log6(now.actInv(pin.SE3(R, p))).vector / h)
                 elif s in tk.anchor:
                     u = self.g.hold * pin.log6(now.actInv(tk.anchor[s])).vector / h
                 else:  # touch-down: still
@@ -480,6 +469,32 @@ def _solve(H, f, A, up, lo, sense, kind) -> tuple[np.ndarray, int]:
         if flag in SOLVED:
             return np.asarray(x), 2
     return np.linalg.lstsq(H + 1e-9 * np.eye(H.shape[0]), -f, rcond=None)[0], int(flag)
+
+
+def distance_rows(m, d, gdata, joints: list, pairs, watch: float) -> list:
+    """``[(distance [m], ∂distance/∂v (nv,)), ...]`` of the collision ``pairs`` (indices into
+    ``gdata.distanceResults``, computed at ``d``'s configuration, whose joint Jacobians are
+    computed) closer than ``watch`` [m]; ``joints``: each pair's parent joints ``(a, b)``.
+    ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` from a to b)."""
+    out, jac = [], {}
+    for i in pairs:
+        res, (ja, jb) = gdata.distanceResults[int(i)], joints[int(i)]
+        if res.min_distance >= watch:
+            continue
+        n = np.asarray(res.normal, float)
+        Jd = np.zeros(m.nv)
+        for j, p, sgn in ((jb, res.getNearestPoint2(), 1.0),
+                          (ja, res.getNearestPoint1(), -1.0)):
+            if j > 0:
+                if j not in jac:
+                    jac[j] = pin.getJointJacobian(m, d, j, _LWA)
+                J = jac[j]
+                r = np.asarray(p) - d.oMi[j].translation
+                rn = np.array([r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2],
+                               r[0] * n[1] - r[1] * n[0]])
+                Jd += sgn * (n @ J[:3] + rn @ J[3:])  # nᵀ(v + ω × r) = nᵀv + (r × n)ᵀω
+        out.append((float(res.min_distance), Jd))
+    return out
 
 
 def _cone(c, margin: float) -> np.ndarray:
