@@ -23,8 +23,9 @@ Where the adaptor's ``step`` takes ``v_demo`` (the demonstrator's velocity at th
 it is given, as ``adapt(..., mode="per_frame")`` does, unless ``--no-v-demo`` (a live stream
 has none: the adaptor then shows its first frame and starts at the second, moving with the
 velocity estimated from both; the first frame counts as not feasible, and the assembled
-motion is audited from the second, on the imitator's own stance flags). With ``--repeats N`` each case runs N times (interleaved) and the table shows the
-medians of frames per second and of the verdicts' wait.
+motion is audited from the second, on the imitator's own stance flags). With ``--repeats
+N`` each case runs N times (interleaved) and the table shows the medians of frames per second
+and of the verdicts' wait.
 
 The same-run baseline is the streaming of ``--baseline-rev`` (a git revision of this
 repository, extracted with ``git archive`` into a temporary folder and run in its own process,
@@ -80,7 +81,7 @@ _CHILD = textwrap.dedent("""
             return None
         return {s: np.array([np.interp(m.t[k], f.t, f[s].force[:, i]) for i in range(3)])
                 for s in sides}
-    statuses, lag, own = [], [], {s: [] for s in sides}
+    statuses, lag, stance = [], [], {s: [] for s in sides}
     for i in range(T):
         if i == warm:
             t0, c0 = time.perf_counter(), time.process_time()
@@ -90,8 +91,8 @@ _CHILD = textwrap.dedent("""
         q[i], v[i] = r.q, r.v
         statuses.append(r.status)
         for s in sides:
-            own[s].append(r.contact[s] if getattr(r, "contact", None) is not None
-                          else bool(m.contact[s][k]))
+            stance[s].append(r.contact[s] if getattr(r, "contact", None) is not None
+                             else bool(m.contact[s][k]))
         lag += [i - j for j, _ in getattr(r, "verdicts", ())]
         if r.previous_a is not None:
             a[i - 1] = r.previous_a
@@ -107,7 +108,7 @@ _CHILD = textwrap.dedent("""
     if hasattr(sa, "close"):
         sa.close()
     sk = getattr(sa, "first_frame", 0)  # a first frame that waited is not in the motion
-    c = {s: np.asarray(own[s][sk:], bool) for s in sides}
+    c = {s: np.asarray(stance[s][sk:], bool) for s in sides}
     motion = robot_motion(robot, m.t[k0 + sk:k0 + T], q[sk:], c).replace(v=v[sk:], a=a[sk:])
     rep = audit(sa._audit_robot, motion, {s: W[s][sk:] for s in sides}, sa.contacts)
     ok = np.concatenate([np.zeros(sk, bool), np.asarray(rep.knot_feasible, bool)])
