@@ -543,6 +543,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
         r = ad.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt, f_k,
                     v_demo=v0 if k == 0 else None)
         q[k], v[k] = r.q, r.v
+        assert r.contact is not None  # every step says the robot's stance
         for s in SIDES:
             contact_used[s][k] = r.contact[s]
         if k:

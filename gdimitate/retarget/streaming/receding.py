@@ -355,7 +355,7 @@ class FrameQP:
 
     def _collisions(self, rows, q, v, h) -> None:
         """Each pair of the robot's own collision geometries (the audit's,
-        :mod:`gdimitate.selfcollision`) closer than :data:`COLLISION_WATCH` at knot j stays
+        :mod:`gdimitate.model.selfcollision`) closer than :data:`COLLISION_WATCH` at knot j stays
         :data:`COLLISION_MARGIN` apart at knot k, to first order: ``d + h ḋ(v_k) ≥ margin``
         with ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` from a to b), ``v_k = v + h a``.
         iCub's chest came down onto its swinging thigh (8 cm deep) when it leaned as the
