@@ -312,7 +312,8 @@ class StreamingAdaptor:
         """The first frame of a stream without the demonstrator's velocity: kept, and shown
         as the rest pose it would start from (a preview, not a frame of the motion)."""
         f0 = self._ref.features(0.0, q_demo, flags, forces)
-        q = initial_pose(self.imitator, self._ref, f0, self._act, None, collision=self._qp.sc)
+        q = initial_pose(self.imitator, self._ref, f0, self._act, None)  # (a preview: no
+        # collision rows, which cost ~0.2 s)
         self._waiting = (q_demo.copy(), flags, forces)
         return FrameResult(q, np.zeros(self.imitator.model.nv), None, None, None, "waiting",
                            0, time.perf_counter() - t0, (), dict(flags))

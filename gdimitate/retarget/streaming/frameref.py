@@ -395,6 +395,8 @@ BASE_HEIGHTS, SOLE_TOL = (0.92, 0.88, 0.84, 0.80, 0.75, 0.70), 1e-4
 #: shipped walk's frame 1.0 s: its right gripper 4.4 cm inside its thigh, which the first
 #: step's collision rows could not undo within its torque limits)
 START_CLEARANCE, CLEARANCE_WEIGHT, NEAR = 3e-3, 1e5, 0.1
+#: every REFRESH-th Gauss–Newton step measures all the pairs; in between, those within NEAR
+REFRESH = 10
 #: the first frame's Gauss–Newton steps stop when no coordinate moves more than STILL [rad, m]
 STILL = 1e-10
 
@@ -525,7 +527,8 @@ class _Near:
 
     def __init__(self, m, collision):
         self.m, self.c = m, collision
-        self.near: np.ndarray | None = None  # the pairs closer than NEAR [m] at the first call
+        self.near = np.zeros(0, int)  # the pairs closer than NEAR [m] at the last refresh
+        self.calls = 0
         if collision is not None:
             g = collision.geometry
             self.gdata = pin.GeometryData(g)
@@ -538,7 +541,7 @@ class _Near:
         if self.c is None:
             return
         g = self.c.geometry
-        if self.near is None:  # every pair once; then those that were near (steps are small)
+        if self.calls % REFRESH == 0:  # every pair; in between, those that were near
             pin.computeDistances(self.m, d, g, self.gdata, q)
             self.near = np.flatnonzero([r.min_distance < NEAR
                                         for r in self.gdata.distanceResults])
@@ -546,6 +549,7 @@ class _Near:
             pin.updateGeometryPlacements(self.m, d, g, self.gdata, q)
             for i in self.near:
                 pin.computeDistance(g, self.gdata, int(i))
+        self.calls += 1
         for dist, Jd in distance_rows(self.m, d, self.gdata, self.joints, self.near,
                                       START_CLEARANCE):
             J.append(Jd[None])
