@@ -279,6 +279,36 @@ def test_layout_slacks_and_labels_follow_the_list(robot):
     assert "swing clearance: left" not in sizes["fewer"][1]
 
 
+def test_parts_state_typed_rows_and_bounds(robot):
+    """The kinds of part are abstract (a part missing its residual, rows, carry or box cannot
+    be made); every constraint of the default list states its rows at a knot as one
+    :class:`P.Rows` (one label and one screenable flag per row, checked) and its bounds as
+    :class:`P.Bounds` of ``(T, n)``; a :class:`P.Rows` with a label short is refused."""
+
+    class Unfinished(P.Constraint):
+        pass
+
+    for kind in (P.Cost, P.Constraint, P.PairConstraint, P.Bound, Unfinished):
+        with pytest.raises(TypeError):
+            kind()
+    r = robot("hoap2")
+    parts = P.default_parts((), tuple(range(3, r.model.nq)))
+    k0 = Knot(r, symbolic_model(r), Flags())
+    T = 5
+    on = {s: np.ones(T, bool) for s in SIDES}
+    spec = P.Spec(T=T, stance=on, swing={s: ~on[s] for s in SIDES}, liftoff=on,
+                  goal_active=on, planar=True, free=False, cone=False, clearance=0.01,
+                  leg_length=0.2, n_base=len(k0.base_idx), n_act=len(k0.act_idx))
+    for c in (p for p in parts if isinstance(p, P.Constraint)):
+        rows = c.at(k0)
+        assert isinstance(rows, P.Rows) and rows.n == c.size(k0) == len(rows.labels)
+        assert rows.screenable.shape == (rows.n,) and rows.scale == c.scale(k0)
+        b = c.bounds(spec)
+        assert isinstance(b, P.Bounds) and b.lower.shape == b.upper.shape == (T, rows.n)
+    with pytest.raises(RuntimeError, match="1 labels for 2 rows"):
+        P.Rows(ca.SX.sym("g", 2), ("one",), 1.0, np.zeros(2, bool))
+
+
 @pytest.mark.parametrize("mu", [0.3, 0.7, 1.2])
 def test_cone_pyramid_lies_inside_coulombs_circle(mu):
     """The trajectory adaptor's 3-D cone rows take the friction coefficient of a square

@@ -4,8 +4,6 @@ joint angles, segment orientations and the force direction of each stance foot."
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..assess.metrics import force_direction
@@ -16,45 +14,10 @@ from ..model.kinematics import anchor_schedule, frame_placements
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
 from .bodymap import BodyMap
+from .context import Targets
 
 __all__ = ["Targets", "configurations_at", "resample", "schedule", "demonstration_targets",
            "direction_frame", "relative_rotations", "segment_rotations"]
-
-
-@dataclass(frozen=True)
-class Targets:
-    """Per knot ``k`` of ``t`` ``(T,)`` [s]: ``stance`` ``{side: (T,) bool}`` (the imitator's
-    contacts) and ``swing`` (feet held above the floor: not in the demonstrator's stance —
-    under the ``"anchor"`` rule a second stance foot is neither); ``height`` ``{side: (T,)}``,
-    ``placement`` ``{side: (T, 2)}``, ``shank`` and ``thigh`` ``{side: (T, 3)}`` unit vectors
-    (the demonstrator's scaled keypoints), ``foot`` ``{side: (T, 3, 3)}`` its sole frames'
-    world rotations;
-    ``segments`` ``(T, n_seg, 3, 3)`` the imitator's segment frames' world rotations
-    (:func:`segment_rotations`: the demonstrator's since its neutral pose); ``joints``
-    ``(T, n_act)`` joint targets [rad] (unmapped joints: the rest pose,
-    :func:`.parts.self_collision.rest_pose`) and
-    ``mapped`` ``(n_act,)`` bool; ``push`` ``{side: (T, 3)}`` the demonstrator's unit
-    push on the ground (NaN where there is none; projected onto the x–z plane for planar
-    imitators, which can only keep its sagittal direction); ``demo``: the resampled
-    demonstration."""
-
-    t: np.ndarray
-    stance: dict[str, np.ndarray]
-    swing: dict[str, np.ndarray]
-    height: dict[str, np.ndarray]
-    placement: dict[str, np.ndarray]
-    shank: dict[str, np.ndarray]
-    thigh: dict[str, np.ndarray]
-    foot: dict[str, np.ndarray]
-    segments: np.ndarray
-    joints: np.ndarray
-    mapped: np.ndarray
-    push: dict[str, np.ndarray]
-    demo: Motion
-
-    @property
-    def T(self) -> int:
-        return int(self.t.size)
 
 
 def configurations_at(robot: Robot, motion: Motion, t: np.ndarray) -> np.ndarray:

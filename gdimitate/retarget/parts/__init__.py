@@ -1,11 +1,24 @@
 """The parts of the whole-body problem — costs and constraints, one small class each
-(:mod:`.base` says what a part declares) — and :func:`default_parts`, the list the adaptor
-sums. A new part is a class in its own module added to that list (or passed by a caller):
-the weight layout, the elastic slacks, the row labels and the cache key follow from it."""
+(:mod:`.base` says what a part declares: the abstract :class:`Part` and its kinds, with the
+value objects a constraint states, :class:`Rows` and :class:`Bounds`) — and
+:func:`default_parts`, the list the adaptor sums. A new part is a class in its own module
+added to that list (or passed by a caller): the weight layout, the elastic slacks, the row
+labels and the cache key follow from it."""
 
 from __future__ import annotations
 
-from .base import Bound, Constraint, Cost, PairConstraint, Part, Spec, per_side_labels
+from .base import (
+    Bound,
+    Bounds,
+    Box,
+    Constraint,
+    Cost,
+    PairConstraint,
+    Part,
+    Rows,
+    Spec,
+    per_side_labels,
+)
 from .base_dynamics import BaseDynamics
 from .cone import WrenchCone
 from .contact_hold import ContactHold
@@ -27,7 +40,8 @@ from .thigh import Thigh
 from .torque_limits import TorqueLimits
 from .wrench import WrenchRegularisation
 
-__all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Bound", "Spec", "per_side_labels",
+__all__ = ["Part", "Cost", "Constraint", "PairConstraint", "Bound", "Spec", "Rows", "Bounds",
+           "Box", "per_side_labels",
            "default_parts", "BaseDynamics", "TorqueLimits", "FlatContact", "ContactHold",
            "WrenchCone", "SwingClearance", "ForceDirection", "Integration", "QuaternionNorm",
            "Height", "OverFeet", "Placement", "Shank", "Thigh", "Foot", "Segments", "Joints",

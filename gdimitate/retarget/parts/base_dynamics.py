@@ -9,22 +9,30 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
-from .base import Constraint
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec
 
 
 @dataclass(frozen=True)
 class BaseDynamics(Constraint):
+    """The unactuated base rows of the whole-body dynamics, ``(n_base,)`` [N, N·m] (module
+    docstring), equal to 0 at every knot."""
+
     name: str = "dynamics: base residual"
     relaxable: bool = False
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(n_base, 1)`` base rows of ``rnea − Σ Jᵀw`` [N, N·m]."""
         return k.torques()[k.base_idx.tolist()]
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """0 on both sides, ``(T, n_base)``."""
         z = np.zeros((spec.T, spec.n_base))
-        return z, z
+        return Bounds(z, z)
 
-    def scale(self, k) -> float:
+    def scale(self, k: Knot) -> float:
+        """m·g [N]: the rows over it are in scaled units."""
         return k.mg

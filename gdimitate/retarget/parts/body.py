@@ -6,20 +6,24 @@ other) and its limbs kept apart (:class:`.SelfCollision`, robots with collision 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
+from ...model.robot import Robot
+from .base import Part
 from .posture_range import PostureRange
 from .self_collision import SelfCollision, leg_separation, rest_floors, rest_pose, sphere_pairs
 
 __all__ = ["body_parts"]
 
 
-def body_parts(imitator, act_names) -> tuple:
+def body_parts(imitator: Robot, act_names: Sequence[str]) -> tuple[Part, ...]:
     """``(PostureRange, SelfCollision)`` for ``imitator`` (a :class:`~gdimitate.Robot`) and
     its actuated joints ``act_names`` (which of them the body map leaves out is a parameter of
     the posture range; the self-collision part is left out for a robot without collision
     geometry)."""
     from ..bodymap import HOLD_RANGE
 
-    out: list = []
+    out: list[Part] = []
     rest = rest_pose(imitator)
     if act_names:
         idx = tuple(int(imitator.idx_q(j)) for j in act_names)

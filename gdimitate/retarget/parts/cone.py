@@ -22,7 +22,8 @@ import numpy as np
 
 from ...model.contact import PLANAR_CONE_ROWS, wrench_cone_rows
 from ...model.robot import SIDES
-from .base import Constraint, per_side_labels
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec, per_side_labels
 
 
 def rows_per_side(planar: bool) -> int:
@@ -30,10 +31,13 @@ def rows_per_side(planar: bool) -> int:
     return (len(PLANAR_CONE_ROWS) if planar else 16) + 1
 
 
-def cone_rows(w, X, Y, mu, Xc, Yc, f_min, planar: bool) -> list:
+def cone_rows(w: ca.SX, X: ca.SX, Y: ca.SX, mu: ca.SX, Xc: ca.SX, Yc: ca.SX, f_min: ca.SX,
+              planar: bool) -> list[ca.SX]:
     """The rows (each ≤ 0 inside the cone) of a sole wrench ``w = [f; τ]`` (6,) [N, N·m]:
     :func:`gdimitate.model.contact.wrench_cone_rows` (the one formula of the cone; planar models
-    keep its rows :data:`~gdimitate.contact.PLANAR_CONE_ROWS`), then ``f_min − f_z``."""
+    keep its rows :data:`~gdimitate.contact.PLANAR_CONE_ROWS`), then ``f_min − f_z``; the
+    sole's half-length ``X`` and half-width ``Y`` [m], friction ``mu``, the centre-of-pressure
+    half-sizes ``Xc``, ``Yc`` [m] and ``f_min`` [N] (scalars or SX), each row in N or N·m."""
     rows = wrench_cone_rows(w, X, Y, mu, cop_length=Xc, cop_width=Yc)
     if planar:
         rows = [rows[i] for i in PLANAR_CONE_ROWS]
@@ -42,10 +46,15 @@ def cone_rows(w, X, Y, mu, Xc, Yc, f_min, planar: bool) -> list:
 
 @dataclass(frozen=True)
 class WrenchCone(Constraint):
+    """Per foot the cone's rows (16, planar 4) and ``f_min − f_z``, over m·g, ≤ 0 in
+    stance."""
+
     name: str = "contact wrench cone"
     relaxable: bool = True
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(2·n_side, 1)``: left foot's rows, then the right's (:func:`rows_per_side`),
+        dimensionless (over m·g)."""
         out = []
         for s in SIDES:
             X, Y, mu, Xc, Yc = (k.P(f"sole_{s}")[i] for i in range(5))
@@ -53,12 +62,13 @@ class WrenchCone(Constraint):
             out.append(ca.vertcat(*rows) / k.mg)
         return ca.vertcat(*out)
 
-    def labels(self, k):
+    def labels(self, k: Knot) -> list[str]:
         return per_side_labels(self.name, rows_per_side(k.planar))
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """``(−inf, 0)`` at a foot's stance knots, free elsewhere; each ``(T, 2·n_side)``."""
         n = rows_per_side(spec.planar)
         hi = np.full((spec.T, 2 * n), np.inf)
         for i, s in enumerate(SIDES):
             hi[spec.stance[s], i * n:(i + 1) * n] = 0.0
-        return np.full_like(hi, -np.inf), hi
+        return Bounds(np.full_like(hi, -np.inf), hi)

@@ -11,7 +11,8 @@ import casadi as ca
 import numpy as np
 
 from ...model.robot import SIDES
-from .base import PairConstraint
+from ..knot import Knot
+from .base import Bounds, PairConstraint, Spec
 
 
 @dataclass(frozen=True)
@@ -22,14 +23,18 @@ class ContactHold(PairConstraint):
 
     name: str = "contact hold (slip)"
 
-    def carry(self, k):
+    def carry(self, k: Knot) -> ca.SX:
+        """``(8, 1)`` per foot the sole origin's ``p_x``, ``p_y`` [m] and its x axis's world
+        ``R[0, 0]``, ``R[1, 0]`` (planar ``(2, 1)``: ``p_x`` per foot)."""
         out = []
         for s in SIDES:
             p, R = k.sole_p[s], k.sole_R[s]
             out += [p[0]] if k.planar else [p[0], p[1], R[0, 0], R[1, 0]]
         return ca.vertcat(*out)
 
-    def rows(self, k, prev, cur):
+    def rows(self, k: Knot, prev: ca.SX, cur: ca.SX) -> ca.SX:
+        """``(6, 1)`` per foot ``Δp_x``, ``Δp_y`` [m] and ``sin Δψ`` (planar ``(2, 1)``:
+        ``Δp_x`` per foot)."""
         if k.planar:
             return cur - prev
         rows = []
@@ -39,10 +44,12 @@ class ContactHold(PairConstraint):
                      cur[o + 3] * prev[o + 2] - cur[o + 2] * prev[o + 3]]  # sin Δψ
         return ca.vertcat(*rows)
 
-    def bounds(self, spec, n):
+    def bounds(self, spec: Spec, n: int) -> Bounds:
+        """0 where the foot is held (stance at k − 1, stance or lift-off at k), free
+        elsewhere; each ``(T − 1, n)``."""
         m = n // 2
         lo = np.full((spec.T - 1, n), -np.inf)
         for i, s in enumerate(SIDES):
             h = (spec.stance[s] | spec.liftoff[s])[1:] & spec.stance[s][:-1]
             lo[h, i * m:(i + 1) * m] = 0.0
-        return lo, np.where(np.isfinite(lo), 0.0, np.inf)
+        return Bounds(lo, np.where(np.isfinite(lo), 0.0, np.inf))

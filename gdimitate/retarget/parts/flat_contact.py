@@ -51,7 +51,8 @@ import casadi as ca
 import numpy as np
 
 from ...model.robot import SIDES
-from .base import Constraint, per_side_labels
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec, per_side_labels
 
 __all__ = ["FlatContact", "velocity_knots", "liftoff_knots", "PLANAR_VELOCITY_ROWS"]
 
@@ -64,7 +65,7 @@ def _per_side(planar: bool) -> tuple[int, int]:
     return (2, len(PLANAR_VELOCITY_ROWS)) if planar else (3, 6)
 
 
-def sole_velocity(k, side: str) -> ca.SX:
+def sole_velocity(k: Knot, side: str) -> ca.SX:
     """``(6,)`` ``J_c(q) v`` of the foot's sole frame (``[m/s; rad/s]``, world axes; Pinocchio's
     ``LOCAL_WORLD_ALIGNED``), planar models its x, z, pitch rows ``(3,)``."""
     V = ca.mtimes(k.sym.frame_jacobian(k.contacts[side].frame)(k.q), k.v)
@@ -96,7 +97,10 @@ class FlatContact(Constraint):
     name: str = "flat contact"
     relaxable: bool = False
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(18, 1)``: per foot ``p_z`` [m], ``R[2, 0]``, ``R[2, 1]``, then ``J_c v``
+        ``(6,)`` [m/s, rad/s] (planar ``(10, 1)``: ``p_z``, ``R[2, 0]`` and 3 velocity rows
+        per foot)."""
         out = []
         for s in SIDES:
             p, R = k.sole_p[s], k.sole_R[s]
@@ -104,10 +108,12 @@ class FlatContact(Constraint):
             out.append(sole_velocity(k, s))
         return ca.vertcat(*out)
 
-    def labels(self, k):
+    def labels(self, k: Knot) -> list[str]:
         return per_side_labels(self.name, sum(_per_side(k.planar)))
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """0 for the pose rows at stance and lift-off knots and for the velocity rows at
+        :func:`velocity_knots`, free elsewhere; each ``(T, n)``."""
         npose, nvel = _per_side(spec.planar)
         n = npose + nvel
         lo = np.full((spec.T, 2 * n), -np.inf)
@@ -115,9 +121,9 @@ class FlatContact(Constraint):
             o = i * n
             lo[spec.stance[s] | spec.liftoff[s], o:o + npose] = 0.0
             lo[velocity_knots(spec.stance[s], spec.swing[s]), o + npose:o + n] = 0.0
-        return lo, np.where(np.isfinite(lo), 0.0, np.inf)
+        return Bounds(lo, np.where(np.isfinite(lo), 0.0, np.inf))
 
-    def start_velocity_rows(self, spec) -> np.ndarray:
+    def start_velocity_rows(self, spec: Spec) -> np.ndarray:
         """Indices, within this part's rows, of the velocity rows of both feet (a caller that
         fixes knot 0's ``v`` to a previous solve's — the streaming window — frees them at
         knot 0: that velocity was the previous step's, held by that step's rows)."""

@@ -9,13 +9,17 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ...model.robot import SIDES
+from ..knot import Knot
 from .base import Cost
 
 
 @dataclass(frozen=True)
 class Foot(Cost):
+    """Each sole frame's world rotation minus the demonstrator's (module docstring)."""
+
     name: str = "foot"
     weight: str = "foot"
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(18, 1)``: per foot the 9 entries of ``R_sole − R_demo`` (column-major)."""
         return ca.vertcat(*[ca.vec(k.sole_R[s]) - k.P(f"foot_{s}") for s in SIDES])

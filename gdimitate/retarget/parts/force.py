@@ -24,16 +24,19 @@ import casadi as ca
 import numpy as np
 
 from ...model.robot import SIDES
-from .base import Constraint, per_side_labels
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec, per_side_labels
 from .shank import unit_segment
 
 
 def rows_per_side(cone: bool) -> int:
+    """Rows of one foot: 2 for a cone, 3 for the equality."""
     return 2 if cone else 3
 
 
-def vector(k, side: str) -> ca.SX:
-    """The imitator's ``c`` (see the module docstring)."""
+def vector(k: Knot, side: str) -> ca.SX:
+    """``(3, 1)`` the imitator's ``c`` at foot ``side`` (see the module docstring;
+    dimensionless)."""
     goal = k.flags.goal
     if goal == "force":
         return k.wrench_world(side)[:3] / k.mg
@@ -44,10 +47,15 @@ def vector(k, side: str) -> ca.SX:
 
 @dataclass(frozen=True)
 class ForceDirection(Constraint):
+    """Per foot the imitator's vector ``c`` along the demonstrator's direction ``d``
+    (module docstring)."""
+
     name: str = "force direction"
     relaxable: bool = True
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(6, 1)`` per foot ``e1·c``, ``e2·c``, ``d·c``; a cone ``(4, 1)`` per foot
+        ``(e1·c)² + (e2·c)² − tan²α (d·c)²``, ``d·c`` (dimensionless)."""
         out = []
         for s in SIDES:
             c = vector(k, s)
@@ -57,10 +65,12 @@ class ForceDirection(Constraint):
                 [a, b, dc]
         return ca.vertcat(*out)
 
-    def labels(self, k):
+    def labels(self, k: Knot) -> list[str]:
         return per_side_labels(self.name, rows_per_side(k.flags.cone))
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """Where the goal is active (``Spec.goal_active``): ``e1·c = e2·c = 0`` (planar:
+        ``e2`` free), ``d·c ≥ 0``; a cone's first row ≤ 0, ``d·c ≥ 0``. Each ``(T, n)``."""
         n = rows_per_side(spec.cone)
         lo = np.full((spec.T, 2 * n), -np.inf)
         hi = np.full((spec.T, 2 * n), np.inf)
@@ -75,4 +85,4 @@ class ForceDirection(Constraint):
                 if not spec.planar:
                     lo[on, o + 1] = hi[on, o + 1] = 0.0
                 lo[on, o + 2] = 0.0
-        return lo, hi
+        return Bounds(lo, hi)

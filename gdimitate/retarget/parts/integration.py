@@ -20,23 +20,30 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .base import PairConstraint
+from ..knot import Knot
+from .base import Bounds, PairConstraint, Spec
 
 
 @dataclass(frozen=True)
 class Integration(PairConstraint):
+    """``q_k = q_{k−1} ⊕ h_k v_k`` and ``v_k = v_{k−1} + h_k a_{k−1}`` (module docstring)."""
+
     name: str = "integration"
 
-    def carry(self, k):
+    def carry(self, k: Knot) -> ca.SX:
+        """``(nq + 2·nv, 1)``: ``q``, ``v``, ``a``."""
         return ca.vertcat(k.q, k.v, k.a)
 
-    def rows(self, k, prev, cur):
+    def rows(self, k: Knot, prev: ca.SX, cur: ca.SX) -> ca.SX:
+        """``(nq + nv, 1)``: ``q_k − q_{k−1} ⊕ h v_k`` [rad, m], ``v_k − v_{k−1} − h a_{k−1}``
+        [rad/s, m/s] (``h``: knot k's step [s])."""
         nq, nv = k.sym.nq, k.sym.nv
         q0, v0, a0 = prev[:nq], prev[nq:nq + nv], prev[nq + nv:]
         q1, v1 = cur[:nq], cur[nq:nq + nv]
         h = k.P("h")[0]
         return ca.vertcat(q1 - k.sym.integrate(q0, h * v1), v1 - v0 - h * a0)
 
-    def bounds(self, spec, n):
+    def bounds(self, spec: Spec, n: int) -> Bounds:
+        """0 on both sides, ``(T − 1, n)``."""
         z = np.zeros((spec.T - 1, n))
-        return z, z
+        return Bounds(z, z)

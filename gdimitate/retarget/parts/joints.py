@@ -7,6 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
+
+from ..knot import Knot
 from .base import Cost
 
 
@@ -18,6 +21,7 @@ class Joints(Cost):
     name: str = "joints"
     weight: str | None = None
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(n_act, 1)``: ``√w_j (q_j − q_j,target)`` [√weight · rad]."""
         q = k.q[list(map(int, self.q_index))]
         return k.P("joint_weight") * (q - k.P("joint_target"))  # carries √weight

@@ -20,23 +20,31 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from ...model.kinematics import frame_paths
 from ...model.robot import SIDES
+from ..context import Context
+from ..knot import Knot
 from .base import Cost
 from .steps import bounded, footprint_places
 
 
 @dataclass(frozen=True)
 class OverFeet(Cost):
+    """The hips' midpoint along the demonstrator's facing relative to the stance soles, in
+    leg lengths, minus the demonstrator's (module docstring)."""
+
     name: str = "over_feet"
     weight: str = "over_feet"
 
-    def params(self, k):
+    def params(self, k: Knot) -> dict[str, int]:
         return {"over_feet": 1, "over_feet_dir": 2, "over_feet_w": 2, "over_feet_on": 1}
 
-    def values(self, ctx):
+    def values(self, ctx: Context) -> dict[str, np.ndarray]:
+        """``over_feet`` ``(T, 1)`` [leg lengths], ``over_feet_dir`` ``(T, 2)`` unit,
+        ``over_feet_w`` ``(T, 2)`` the soles' shares, ``over_feet_on`` ``(T, 1)`` 0 or 1."""
         tg, d = ctx.tg, ctx.demonstrator
         L, place = footprint_places(ctx)
         w = np.column_stack([np.isfinite(place[s][:, 0]) for s in SIDES]).astype(float)
@@ -53,7 +61,9 @@ class OverFeet(Cost):
         return {"over_feet": np.where(on, target, 0.0)[:, None], "over_feet_dir": e,
                 "over_feet_w": w, "over_feet_on": on.astype(float)[:, None]}
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(1, 1)`` dimensionless, bounded (:func:`~.steps.bounded`), 0 without a stance
+        foot."""
         L = float(np.mean([k.leg[s].length for s in SIDES]))
         w = k.P("over_feet_w")
         mid = (k.hip["left"][:2] + k.hip["right"][:2]) / 2

@@ -14,6 +14,9 @@ import casadi as ca
 import numpy as np
 
 from ...model.footsteps import walking_direction
+from ..context import Context
+from ..knot import Knot
+from .base import Bounds, Spec
 from .seam import SeamConstraint
 
 __all__ = ["PeriodicSeam"]
@@ -25,17 +28,21 @@ class PeriodicSeam(SeamConstraint):
 
     name: str = "periodic seam"
 
-    def params(self, k):
+    def params(self, k: Knot) -> dict[str, int]:
         return {"seam_dir": 2}
 
-    def values(self, ctx):
+    def values(self, ctx: Context) -> dict[str, np.ndarray]:
+        """``seam_dir`` ``(T, 2)``: the walking direction (unit, horizontal) at every knot."""
         d = walking_direction(ctx.demonstrator, ctx.tg.demo.q)
         return {"seam_dir": np.tile(d, (ctx.tg.T, 1))}
 
-    def carry(self, k):
+    def carry(self, k: Knot) -> ca.SX:
+        """``(nq + nv, 1)``: ``q``, ``v``."""
         return ca.vertcat(k.q, k.v)
 
-    def rows(self, k, first, last):
+    def rows(self, k: Knot, first: ca.SX, last: ca.SX) -> ca.SX:
+        """Free-flyer ``(nq − 2 + nv, 1)``: ``n⊥·Δp_xy``, ``Δz`` [m], ``Δquat``, the joints'
+        ``Δq`` [rad, m], ``Δv``; planar ``(nq − 1 + nv, 1)``: ``Δq`` but ``base_x``, ``Δv``."""
         nq = k.sym.nq
         dq, dv = last[:nq] - first[:nq], last[nq:] - first[nq:]
         if k.planar:
@@ -46,6 +53,7 @@ class PeriodicSeam(SeamConstraint):
         across = d[0] * dq[1] - d[1] * dq[0]
         return ca.vertcat(across, dq[2:], dv)
 
-    def bounds(self, spec, n):
+    def bounds(self, spec: Spec, n: int) -> Bounds:
+        """0 on both sides, ``(n,)``."""
         z = np.zeros(n)
-        return z, z
+        return Bounds(z, z)

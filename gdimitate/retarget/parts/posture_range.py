@@ -15,7 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import Bound
+from ..context import Context
+from ..knot import Layout
+from .base import Bound, Bounds, Box, Spec
 
 __all__ = ["PostureRange"]
 
@@ -30,20 +32,23 @@ class PostureRange(Bound):
     half_range: float = 0.1
     name: str = "posture range"
 
-    def values(self, ctx):
+    def values(self, ctx: Context) -> dict[str, np.ndarray]:
         """``{"hold": (T, n)}``: 1 for a joint the body map leaves out (and not frozen), else
         0 (the box's mask; not a parameter of the knot)."""
         hold = ~np.asarray(ctx.tg.mapped, bool) & ~np.asarray(ctx.lim.frozen, bool)
         return {"hold": np.tile(hold.astype(float), (ctx.tg.T, 1))}
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
         """``(lo, hi)`` ``(T, n)`` [rad] of ``q_j − q_j,neutral`` where a joint is held."""
         n = len(self.q_index)
-        return np.full((spec.T, n), -self.half_range), np.full((spec.T, n), self.half_range)
+        return Bounds(np.full((spec.T, n), -self.half_range),
+                      np.full((spec.T, n), self.half_range))
 
-    def box(self, var, ctx, spec):
+    def box(self, var: Layout, ctx: Context, spec: Spec) -> Box:
+        """The held joints' ``q`` within ``held ± half_range`` [rad], ``(T, n)``; free where
+        a joint is mapped or frozen."""
         held = self.values(ctx)["hold"] > 0
         lo, hi = self.bounds(spec)
         mid = np.asarray(self.held, float)[None, :]
         idx = var["q"].start + np.asarray(self.q_index, int)
-        return (idx, np.where(held, mid + lo, -np.inf), np.where(held, mid + hi, np.inf))
+        return Box(idx, np.where(held, mid + lo, -np.inf), np.where(held, mid + hi, np.inf))

@@ -4,16 +4,19 @@ A :class:`SeamConstraint` is the wrap-around counterpart of a
 :class:`~.base.PairConstraint`: :meth:`~SeamConstraint.carry` is what of a knot the rows need
 (evaluated at the first knot and at the last), :meth:`~SeamConstraint.rows` combines them
 (``k`` gives the parameters, bound to the first knot's) and :meth:`~SeamConstraint.bounds`
-gives ``(lo, hi)`` each ``(n,)``. Never relaxed; the report labels its rows with its name.
+gives :class:`~.base.Bounds` each ``(n,)``. Never relaxed; the report labels its rows with its name.
 The problem (:mod:`..trajectory.problem`) adds these rows once, after the per-knot and pair rows.
 """
 
 from __future__ import annotations
 
-import casadi as ca
-import numpy as np
+from abc import abstractmethod
+from collections.abc import Sequence
 
-from .base import Part
+import casadi as ca
+
+from ..knot import Knot
+from .base import Bounds, Part, Spec
 
 __all__ = ["SeamConstraint", "seam_functions"]
 
@@ -21,17 +24,22 @@ __all__ = ["SeamConstraint", "seam_functions"]
 class SeamConstraint(Part):
     """Rows linking the last knot to the first (see module)."""
 
-    def carry(self, k) -> ca.SX:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abstractmethod
+    def carry(self, k: Knot) -> ca.SX:
+        """``(m, 1)`` SX: what of knot ``k`` the rows need (a function of ``k.x`` only)."""
 
-    def rows(self, k, first: ca.SX, last: ca.SX) -> ca.SX:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abstractmethod
+    def rows(self, k: Knot, first: ca.SX, last: ca.SX) -> ca.SX:
+        """``(n, 1)`` SX rows from :meth:`carry` at the first knot (``first``) and at the
+        last (``last``), both ``(m, 1)``."""
 
-    def bounds(self, spec, n: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
-        raise NotImplementedError
+    @abstractmethod
+    def bounds(self, spec: Spec, n: int) -> Bounds:
+        """:class:`~.base.Bounds` of the ``n`` rows, each ``(n,)``, for a demonstration."""
 
 
-def seam_functions(k, seams) -> tuple[dict[str, ca.Function], list[str], list[int]]:
+def seam_functions(k: Knot, seams: Sequence[SeamConstraint]
+                   ) -> tuple[dict[str, ca.Function], list[str], list[int]]:
     """``({"sg", "sjac", "sh"}, labels, sizes)`` of the seam parts at knot symbols ``k``:
     ``sg (x_first, x_last, p) -> rows``, ``sjac`` their Jacobian in ``(x_first, x_last)``,
     ``sh (x_first, x_last, p, λ)`` the Hessian of ``λᵀ rows`` (kept as SX functions: they are

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from ..knot import Knot
 from .base import Cost
 
 
@@ -19,7 +20,8 @@ class Segments(Cost):
     name: str = "segments"
     weight: str = "torso"
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(9·n_frames, 1)``: per frame the 9 entries of ``R − R_target`` (column-major)."""
         tgt = k.P("torso")
         out = [ca.vec(k.sym.placement(f)[0]) - tgt[9 * i: 9 * i + 9]
                for i, f in enumerate(self.frames)]

@@ -20,18 +20,34 @@ least-infeasible solve reports an unmet pair of frames)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from .base import Constraint
+from ...model.robot import Robot
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec
+
+if TYPE_CHECKING:
+    from ...model.selfcollision import SelfCollision as Hulls
 
 __all__ = ["SelfCollision", "soft_min", "rest_floors", "SHARPNESS", "sphere_pairs",
            "left_out_sphere_pairs", "leg_separation", "MARGIN", "ACTIVE", "MAX_SPHERES",
            "PROXIMAL", "PROXIMAL_ARM",
-           "rest_pose", "REST_CLEAR"]
+           "rest_pose", "REST_CLEAR", "SpherePair", "LegSeparation", "LeftOut"]
+
+SpherePair = tuple[str, tuple[float, ...], float, str, tuple[float, ...], float, float]
+"""``(frame_a, centre_a (3,) [m], r_a [m], frame_b, centre_b (3,) [m], r_b [m], gap [m])``:
+two spheres, their centres in Pinocchio joint frames, and the least gap between their
+surfaces."""
+LegSeparation = tuple[str, str, str, float]
+"""``(left sole frame, right sole frame, root joint, least separation [m])``."""
+LeftOut = tuple[str, str, float]
+"""``(geometry a, geometry b, hull distance [m])``: a pair left out of the rows."""
 
 #: The adaptor's clearance between sphere covers [m] (the audit's bound is 0 between hulls).
 MARGIN = 0.01
@@ -80,9 +96,9 @@ class SelfCollision(Constraint):
     (:meth:`~gdimitate.model.symbolic.SymbolicModel.root_placement`): a distance between two bodies
     does not depend on the base's pose, and so its row's derivatives carry no base column."""
 
-    pairs: tuple = ()
-    legs: tuple = ()
-    floors: tuple = ()
+    pairs: tuple[SpherePair, ...] = ()
+    legs: tuple[LegSeparation, ...] = ()
+    floors: tuple[float, ...] = ()
     name: str = "self-collision"
     relaxable: bool = True
     screenable = True  # rows that are far from their bounds at most knots
@@ -95,7 +111,9 @@ class SelfCollision(Constraint):
             out.setdefault((fa, fb), []).append(i)
         return tuple((fa, fb, tuple(ix)) for (fa, fb), ix in out.items())
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(n_groups + n_legs, 1)``: each frame pair's soft-minimum clearance, then the
+        soles' separation along the root's y axis, both over the leg length."""
         L = k.leg["left"].length
         out = []
         for _, _, ix in self.groups():
@@ -112,12 +130,14 @@ class SelfCollision(Constraint):
             out.append((Ro.T @ (k.sym.placement(fl)[1] - k.sym.placement(fr)[1]))[1] / L)
         return ca.vertcat(*out) if out else ca.SX(0, 1)
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """Below: :attr:`floors` (0 by default) and each legs row's least separation over
+        the leg length; above: free. Each ``(T, n)``."""
         lo = np.tile(list(self.floors or [0.0] * len(self.groups()))
                      + [y / spec.leg_length for *_, y in self.legs], (spec.T, 1))
-        return lo, np.full_like(lo, np.inf)
+        return Bounds(lo, np.full_like(lo, np.inf))
 
-    def screenable_rows(self, k) -> np.ndarray:
+    def screenable_rows(self, k: Knot) -> np.ndarray:
         """The frame pairs' rows; never the legs-apart row, one per knot, that binds
         wherever the swing foot passes the stance foot: screened out by the warm start's
         parallel feet, it came back violated on the result and cost a second solve (one cycle
@@ -125,12 +145,13 @@ class SelfCollision(Constraint):
         clip → G1 76 → 49)."""
         return np.r_[np.ones(len(self.groups()), bool), np.zeros(len(self.legs), bool)]
 
-    def labels(self, k):
+    def labels(self, k: Knot) -> list[str]:
         return ([f"{self.name}: {fa}/{fb}" for fa, fb, _ in self.groups()]
                 + [f"{self.name}: legs apart ({fl}/{fr})" for fl, fr, *_ in self.legs])
 
 
-def rest_floors(robot, pairs: tuple, q: np.ndarray) -> tuple[float, ...]:
+def rest_floors(robot: Robot, pairs: tuple[SpherePair, ...], q: np.ndarray
+                ) -> tuple[float, ...]:
     """:attr:`SelfCollision.floors` for ``pairs`` taken at the pose ``q`` (``(nq,)``,
     :func:`sphere_pairs`): per pair of frames, ``min(0, soft minimum of its clearances at q)``
     [leg lengths]. A sphere pair closer than the margin at ``q`` keeps its gap there
@@ -154,7 +175,7 @@ def rest_floors(robot, pairs: tuple, q: np.ndarray) -> tuple[float, ...]:
     return tuple(out)
 
 
-def soft_min(x: list, sharpness: float | None = None):
+def soft_min(x: Sequence[ca.SX | float], sharpness: float | None = None) -> ca.SX | float:
     """``−log(Σ exp(−β xᵢ)) / β`` of the SX (or float) values ``x`` (β = ``sharpness``,
     default :data:`SHARPNESS`), written about their minimum ``m`` so that nothing overflows:
     ``m − log(Σ exp(−β (xᵢ − m))) / β`` (its derivatives through ``m`` cancel). Never above
@@ -168,7 +189,7 @@ def soft_min(x: list, sharpness: float | None = None):
     return m - ca.log(sum(ca.exp(-b * (xi - m)) for xi in x)) / b
 
 
-def _vertices(g) -> np.ndarray:
+def _vertices(g: pin.GeometryObject) -> np.ndarray:
     """Points ``(n, 3)`` in the geometry's own frame whose convex hull contains the shape
     (sphere: its centre only; capsule: its cylinder, the caps covered by the spheres' radius
     only approximately)."""
@@ -190,7 +211,7 @@ def _vertices(g) -> np.ndarray:
     return np.zeros((1, 3))
 
 
-def _cover(g) -> list[tuple[np.ndarray, float]]:
+def _cover(g: pin.GeometryObject) -> list[tuple[np.ndarray, float]]:
     """Spheres ``[(centre (3,) in the geometry's frame, radius)]`` enclosing it: its vertices
     split into up to :data:`MAX_SPHERES` clusters (k-means from farthest-point seeds, a few
     Lloyd steps), each cluster's sphere centred on its mean with the radius of its farthest
@@ -215,7 +236,7 @@ def _cover(g) -> list[tuple[np.ndarray, float]]:
             for i in range(len(C)) if np.any(near == i)]
 
 
-def _proximal(robot) -> dict[int, str | None]:
+def _proximal(robot: Robot) -> dict[int, str | None]:
     """``{joint id: where it meets the trunk}``: for a joint on one of a leg's first
     :data:`PROXIMAL` joints or another limb's first :data:`PROXIMAL_ARM`,
     ``"limb:<top>@<trunk joint it hangs from>"``; for a trunk joint, ``"trunk@<joint>"``;
@@ -237,7 +258,7 @@ def _proximal(robot) -> dict[int, str | None]:
     return out
 
 
-def _leg_limbs(robot) -> set[str]:
+def _leg_limbs(robot: Robot) -> set[str]:
     """The limb labels (:func:`~gdimitate.model.selfcollision.limb_groups`) of the robot's legs."""
     from ...model.selfcollision import limb_groups
 
@@ -265,7 +286,8 @@ def _two_legs(ja: int, jb: int, limbs: dict[int, str], legs: set[str]) -> bool:
     return limbs[ja] != limbs[jb] and limbs[ja] in legs and limbs[jb] in legs
 
 
-def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tuple:
+def leg_separation(robot: Robot, margin: float = MARGIN, active: float = ACTIVE
+                   ) -> tuple[LegSeparation, ...]:
     """:attr:`SelfCollision.legs` of ``robot``: ``((left sole frame, right sole frame, root
     joint, least separation [m]),)`` — the soles' separation along the root's y axis at least
     its neutral value less the legs' closest hull distance there less ``margin``, a smooth row
@@ -275,9 +297,9 @@ def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tup
     from ...model.selfcollision import limb_groups, self_collision
 
     sc = self_collision(robot)
-    if sc is None or set(robot.legs) != {"left", "right"}:
-        return ()
     model, cm = robot.model, robot.collision_model
+    if sc is None or cm is None or set(robot.legs) != {"left", "right"}:
+        return ()
     limbs, legs = limb_groups(robot), _leg_limbs(robot)
     joint = {n: int(cm.geometryObjects[cm.getGeometryId(n)].parentJoint)
              for pair in sc.pairs for n in pair}
@@ -296,8 +318,8 @@ def leg_separation(robot, margin: float = MARGIN, active: float = ACTIVE) -> tup
     return ((a, b, model.names[1], float(y0 - max(min(d) - margin, 0.0))),)
 
 
-def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE,
-                 q: np.ndarray | None = None) -> tuple:
+def sphere_pairs(robot: Robot, margin: float = MARGIN, active: float = ACTIVE,
+                 q: np.ndarray | None = None) -> tuple[SpherePair, ...]:
     """The :class:`SelfCollision` pairs of ``robot`` (empty without collision geometry): the
     sphere pairs closer than :data:`ACTIVE_SPHERES` of the active geometry pairs at least
     ``margin`` [m] apart at the pose ``q`` (default: the neutral pose; the adaptor's:
@@ -305,20 +327,22 @@ def sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE,
     return _sphere_pairs(robot, margin, active, q)[0]
 
 
-def left_out_sphere_pairs(robot, margin: float = MARGIN, active: float = ACTIVE,
-                          q: np.ndarray | None = None) -> tuple:
+def left_out_sphere_pairs(robot: Robot, margin: float = MARGIN, active: float = ACTIVE,
+                          q: np.ndarray | None = None) -> tuple[LeftOut, ...]:
     """The active geometry pairs left out because they are closer than ``margin`` [m] at the
     pose ``q`` (default: neutral): ``((geometry a, geometry b, hull distance at q [m]), …)``."""
     return _sphere_pairs(robot, margin, active, q)[1]
 
 
-def _active_pairs(robot, sc) -> list[tuple[str, str, int, int]]:
+def _active_pairs(robot: Robot, sc: Hulls) -> list[tuple[str, str, int, int]]:
     """``[(geometry a, geometry b, joint a, joint b)]``: the pairs of ``sc`` (a
     :class:`gdimitate.model.selfcollision.SelfCollision`) that may get sphere rows — not where limbs
     meet the trunk (:func:`_near_root`), not across the two legs (:func:`_two_legs`)."""
     from ...model.selfcollision import limb_groups
 
     cm = robot.collision_model
+    if cm is None:  # sc exists only for a robot with collision geometry
+        return []
     prox, legs, limbs = _proximal(robot), _leg_limbs(robot), limb_groups(robot)
     out = []
     for a, b in sc.pairs:
@@ -328,7 +352,7 @@ def _active_pairs(robot, sc) -> list[tuple[str, str, int, int]]:
     return out
 
 
-def rest_pose(robot, margin: float = MARGIN, clear: float = REST_CLEAR) -> np.ndarray:
+def rest_pose(robot: Robot, margin: float = MARGIN, clear: float = REST_CLEAR) -> np.ndarray:
     """``(nq,)``: the pose the adaptor holds the joints a body map leaves out near
     (:class:`.PostureRange`) and takes its sphere pairs at — the neutral pose, with the arms
     (and head) moved the least so that the active pairs closer than ``margin`` there are
@@ -350,8 +374,8 @@ def rest_pose(robot, margin: float = MARGIN, clear: float = REST_CLEAR) -> np.nd
     return q
 
 
-def _clear_limbs(robot, sc, q: np.ndarray, margin: float, clear: float, groups: dict,
-                 trunk: str) -> np.ndarray:
+def _clear_limbs(robot: Robot, sc: Hulls, q: np.ndarray, margin: float, clear: float,
+                 groups: dict[int, str], trunk: str) -> np.ndarray:
     """:func:`rest_pose`'s steps from ``q``."""
     model = robot.model
     legs = _leg_limbs(robot)
@@ -384,8 +408,8 @@ def _clear_limbs(robot, sc, q: np.ndarray, margin: float, clear: float, groups: 
     return q
 
 
-def _sphere_pairs(robot, margin: float, active: float, q: np.ndarray | None = None
-                  ) -> tuple[tuple, tuple]:
+def _sphere_pairs(robot: Robot, margin: float, active: float, q: np.ndarray | None = None
+                  ) -> tuple[tuple[SpherePair, ...], tuple[LeftOut, ...]]:
     """``(kept, left out)`` sphere pairs (:func:`sphere_pairs`, :func:`left_out_sphere_pairs`)
     at the pose ``q`` (default neutral), cached on the robot per ``(margin, active, q)``."""
     from ...model.selfcollision import placement, self_collision
@@ -395,8 +419,8 @@ def _sphere_pairs(robot, margin: float, active: float, q: np.ndarray | None = No
     key = (margin, active, q.tobytes())
     if key in cache:
         return cache[key]
-    sc = self_collision(robot)
-    if sc is None:
+    sc, cm = self_collision(robot), robot.collision_model
+    if sc is None or cm is None:
         return (), ()
     model = robot.model
     dq = dict(zip(sc.pairs, sc.distances(q)))
@@ -412,7 +436,7 @@ def _sphere_pairs(robot, margin: float, active: float, q: np.ndarray | None = No
             continue
         ends = []
         for n in (a, b):
-            g = robot.collision_model.geometryObjects[robot.collision_model.getGeometryId(n)]
+            g = cm.geometryObjects[cm.getGeometryId(n)]
             j, M = int(g.parentJoint), placement(g)
             ends.append([(model.names[j], M.act(ci), r, data.oMi[j].act(M.act(ci)))
                          for ci, r in _cover(g)])

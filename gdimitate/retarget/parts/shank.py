@@ -10,10 +10,11 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ...model.robot import SIDES
+from ..knot import Knot
 from .base import Cost
 
 
-def unit_segment(k, side: str, segment: int) -> ca.SX:
+def unit_segment(k: Knot, side: str, segment: int) -> ca.SX:
     """``(3,)`` the imitator's unit vector along a leg segment, world axes: ``segment`` 0 the
     thigh (hip → knee), 1 the shank (knee → ankle, or the sole without an ankle), the joint
     positions' difference divided by the segment's 3-D length ``Leg.segments`` [m] (rigid, so
@@ -24,8 +25,11 @@ def unit_segment(k, side: str, segment: int) -> ca.SX:
 
 @dataclass(frozen=True)
 class Shank(Cost):
+    """Per leg the unit shank vector minus the demonstrator's."""
+
     name: str = "shank"
     weight: str = "shank"
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(6, 1)`` dimensionless: per leg x, y, z."""
         return ca.vertcat(*[unit_segment(k, s, 1) - k.P(f"shank_{s}") for s in SIDES])

@@ -21,10 +21,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from ...model.footsteps import footprints
 from ...model.robot import SIDES
+from ..context import Context
+from ..knot import Knot
 from .base import Cost
 
 DELTA = 0.1
@@ -33,25 +36,31 @@ DELTA = 0.1
 
 @dataclass(frozen=True)
 class Steps(Cost):
+    """In double support the left sole's place relative to the right's, in leg lengths,
+    minus the demonstrator's footprints' (module docstring)."""
+
     name: str = "steps"
     weight: str = "steps"
 
-    def params(self, k):
+    def params(self, k: Knot) -> dict[str, int]:
         return {"steps": 2, "steps_on": 1}
 
-    def values(self, ctx):
+    def values(self, ctx: Context) -> dict[str, np.ndarray]:
+        """``steps`` ``(T, 2)`` [leg lengths] (0 outside double support), ``steps_on``
+        ``(T,)`` 1 in double support, else 0."""
         L, place = footprint_places(ctx)
         rel = (place["left"] - place["right"]) / L
         on = np.all(np.isfinite(rel), axis=1)
         return {"steps": np.where(on[:, None], rel, 0.0), "steps_on": on.astype(float)}
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(2, 1)`` dimensionless, bounded (:func:`bounded`), 0 outside double support."""
         L = float(np.mean([k.leg[s].length for s in SIDES]))
         e = (k.sole_p["left"][:2] - k.sole_p["right"][:2]) / L - k.P("steps")
         return k.P("steps_on")[0] * bounded(e)
 
 
-def footprint_places(ctx) -> tuple[float, dict[str, np.ndarray]]:
+def footprint_places(ctx: Context) -> tuple[float, dict[str, np.ndarray]]:
     """``(L, {side: (T, 2)})``: the demonstrator's mean leg length [m] and, per knot, the
     horizontal place [m] of each foot's current footprint (NaN where the foot is not in the
     imitator's stance) — what the gait parts compare the imitator's soles with."""
@@ -63,7 +72,7 @@ def footprint_places(ctx) -> tuple[float, dict[str, np.ndarray]]:
     return L, place
 
 
-def bounded(e):
+def bounded(e: ca.SX) -> ca.SX:
     """``e / (1 + (e/δ)²)^¼`` (δ = :data:`DELTA`): ``e`` for ``|e| ≪ δ``, its square grows
     like ``δ·|e|`` beyond δ, so that a weight's pull on ``e`` stays below ``1.1·w·δ``."""
     return e / (1 + (e / DELTA) ** 2) ** 0.25

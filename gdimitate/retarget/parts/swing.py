@@ -12,15 +12,18 @@ import casadi as ca
 import numpy as np
 
 from ...model.robot import SIDES
-from .base import Constraint, per_side_labels
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec, per_side_labels
 
 
 def rows_per_side(planar: bool) -> int:
+    """Rows of one foot: its 4 corners (planar: 2 edges)."""
     return 2 if planar else 4
 
 
-def corners(k, side: str) -> list[ca.SX]:
-    """World heights of the sole corners (front-left, front-right, back-right, back-left)."""
+def corners(k: Knot, side: str) -> list[ca.SX]:
+    """World heights [m] of the sole corners (front-left, front-right, back-right, back-left;
+    planar: front, back)."""
     X, Y = k.P(f"sole_{side}")[0], k.P(f"sole_{side}")[1]
     p, R = k.sole_p[side], k.sole_R[side]
     pts = [(X, 0), (-X, 0)] if k.planar else [(X, Y), (X, -Y), (-X, -Y), (-X, Y)]
@@ -29,20 +32,25 @@ def corners(k, side: str) -> list[ca.SX]:
 
 @dataclass(frozen=True)
 class SwingClearance(Constraint):
+    """Every sole corner of a swing foot at least ``clearance`` above the floor."""
+
     name: str = "swing clearance"
     relaxable: bool = True
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(8, 1)`` per foot its corners' heights over the leg length (planar ``(4, 1)``)."""
         L = k.leg["left"].length
         return ca.vertcat(*[ca.vertcat(*corners(k, s)) / L for s in SIDES])
 
-    def labels(self, k):
+    def labels(self, k: Knot) -> list[str]:
         return per_side_labels(self.name, rows_per_side(k.planar))
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """Below: ``clearance / leg_length`` at a foot's swing knots but its lift-off knot,
+        free elsewhere; above: free. Each ``(T, n)``."""
         n = rows_per_side(spec.planar)
         lo = np.full((spec.T, 2 * n), -np.inf)
         for i, s in enumerate(SIDES):
             up = spec.swing[s] & ~spec.liftoff[s]
             lo[up, i * n:(i + 1) * n] = spec.clearance / spec.leg_length
-        return lo, np.full_like(lo, np.inf)
+        return Bounds(lo, np.full_like(lo, np.inf))

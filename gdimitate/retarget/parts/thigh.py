@@ -9,14 +9,18 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ...model.robot import SIDES
+from ..knot import Knot
 from .base import Cost
 from .shank import unit_segment
 
 
 @dataclass(frozen=True)
 class Thigh(Cost):
+    """Per leg the unit thigh vector minus the demonstrator's."""
+
     name: str = "thigh"
     weight: str = "thigh"
 
-    def residual(self, k):
+    def residual(self, k: Knot) -> ca.SX:
+        """``(6, 1)`` dimensionless: per leg x, y, z."""
         return ca.vertcat(*[unit_segment(k, s, 0) - k.P(f"thigh_{s}") for s in SIDES])

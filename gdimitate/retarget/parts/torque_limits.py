@@ -7,22 +7,28 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
-from .base import Constraint
+from ..knot import Knot
+from .base import Bounds, Constraint, Spec
 
 
 @dataclass(frozen=True)
 class TorqueLimits(Constraint):
+    """Each actuated joint's torque over its effort limit, within [−1, 1]."""
+
     name: str = "torque limit"
     relaxable: bool = True
 
-    def rows(self, k):
+    def rows(self, k: Knot) -> ca.SX:
+        """``(n_act, 1)`` ``τ_j / τ_max,j`` (dimensionless; 0 without a limit)."""
         return k.torques()[k.act_idx.tolist()] * k.P("inv_effort")
 
-    def bounds(self, spec):
+    def bounds(self, spec: Spec) -> Bounds:
+        """−1 and 1, each ``(T, n_act)``."""
         one = np.ones((spec.T, spec.n_act))
-        return -one, one
+        return Bounds(-one, one)
 
-    def labels(self, k) -> list[str]:
+    def labels(self, k: Knot) -> list[str]:
         return [f"torque limit: {n}" for n in k.act_names]

@@ -31,6 +31,7 @@ from ...model import robot as robot_module
 from ...model.robot import Robot
 from ...model.symbolic import SymbolicModel
 from .. import bodymap
+from .. import context as context_module
 from .. import knot as knot_module
 from .. import parts as parts_module
 from ..knot import Flags, Knot
@@ -179,21 +180,22 @@ def _knot_expressions(k: Knot, parts) -> tuple:
     cons = [p for p in parts if isinstance(p, Constraint)]
     pairs = [p for p in parts if isinstance(p, PairConstraint)]
     costs = [p for p in parts if isinstance(p, Cost)]
-    rows = [c.rows(k) for c in cons]
-    n_relax = sum(int(r.shape[0]) for c, r in zip(cons, rows) if c.relaxable)
+    stated = [c.at(k) for c in cons]
+    n_relax = sum(rows.n for c, rows in zip(cons, stated) if c.relaxable)
     k.add_slacks(n_relax)
-    out, labels, scale, slices, o, used = [], [], [], [], 0, 0
-    for c, r in zip(cons, rows):
-        n = int(r.shape[0])
+    out: list[ca.SX] = []
+    labels: list[str] = []
+    scale: list[float] = []
+    slices: list[slice] = []
+    o = used = 0
+    for c, rows in zip(cons, stated):
+        n, r = rows.n, rows.expr
         if c.relaxable:  # the elastic pair s⁺ − s⁻ of each row (0 outside the fallback)
             r = r + k.s_plus[used:used + n] - k.s_minus[used:used + n]
             used += n
         out.append(r)
-        lab = c.labels(k)
-        if len(lab) != n:
-            raise RuntimeError(f"part {c.name!r}: {len(lab)} labels for {n} rows")
-        labels += lab
-        scale += [c.scale(k)] * n
+        labels += rows.labels
+        scale += [rows.scale] * n
         slices.append(slice(o, o + n))
         o += n
     x0 = ca.SX.sym("x_prev", k.var.size)
@@ -269,11 +271,13 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
 
 
 # what the compiled functions' layout and expressions come from: this module (their layout),
-# codegen (how they are generated), the parts, the knot, the symbolic model and the contact
-# wrench cone the cone part evaluates (contact.wrench_cone_rows); every module these import
-# from gdimitate is listed (tests/test_retarget_codegen.py checks it)
-SOURCE_MODULES = (parts_module, knot_module, symbolic, codegen, contact, robot_module,
-                  selfcollision, bodymap, kinematics, footsteps, sys.modules[__name__])
+# codegen (how they are generated), the parts, the knot, the context the parts read, the
+# symbolic model and the contact wrench cone the cone part evaluates
+# (contact.wrench_cone_rows); every module these import from gdimitate is listed
+# (tests/test_retarget_codegen.py checks it)
+SOURCE_MODULES = (parts_module, knot_module, context_module, symbolic, codegen, contact,
+                  robot_module, selfcollision, bodymap, kinematics, footsteps,
+                  sys.modules[__name__])
 _SOURCE = codegen.source_digest(*SOURCE_MODULES)
 
 

@@ -22,6 +22,7 @@ from ...model.kinematics import actuated_v_indices, robot_motion
 from ...model.motion import Motion
 from ...model.robot import SIDES, Robot
 from .. import limits
+from ..context import Context
 from ..info import limited_robot, resolve_contacts
 from ..knot import Flags
 from ..params import DEFAULT_RATE, IPOPT_DEFAULTS, Contact, Limits, Weights
@@ -55,21 +56,6 @@ STALLED = "Infeasible_Stalled"
 BUDGET = "Iteration_Budget_Spent"
 APPROXIMATED = ("self_collision",)
 """Audit checks whose optimiser rows are approximations (sphere covers vs collision hulls)."""
-
-
-@dataclass(frozen=True)
-class Context:
-    """What a part's :meth:`~.parts.Part.values` may read: the demonstration's
-    :class:`~.targets.Targets` ``tg``, the robots, the :class:`~.params.Weights`, the resolved
-    limits ``lim``, the :class:`~.params.Contact` options and the soles ``cs``."""
-
-    tg: Targets
-    imitator: Robot
-    demonstrator: Robot
-    weights: Weights
-    lim: limits.Resolved
-    contact: Contact
-    cs: dict
 
 
 @dataclass
