@@ -41,8 +41,8 @@ class PeriodicSeam(SeamConstraint):
         return ca.vertcat(k.q, k.v)
 
     def rows(self, k: Knot, first: ca.SX, last: ca.SX) -> ca.SX:
-        """Free-flyer ``(nq − 2 + nv, 1)``: ``n⊥·Δp_xy``, ``Δz`` [m], ``Δquat``, the joints'
-        ``Δq`` [rad, m], ``Δv``; planar ``(nq − 1 + nv, 1)``: ``Δq`` but ``base_x``, ``Δv``."""
+        """``(nq − 1 + nv, 1)``. Free-flyer: ``n⊥·Δp_xy``, ``Δz`` [m], ``Δquat``, the joints'
+        ``Δq`` [rad, m], ``Δv``; planar: every ``Δq`` but ``base_x``'s, ``Δv``."""
         nq = k.sym.nq
         dq, dv = last[:nq] - first[:nq], last[nq:] - first[nq:]
         if k.planar:
