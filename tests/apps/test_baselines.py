@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import importlib.util
 import sys
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -28,6 +27,7 @@ from gdimitate.apps.baselines import (
 from gdimitate.assess.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
 from gdimitate.model.sagittal import leg_angles, sagittal_leg
+from tests.helpers import ROOT
 
 SIDES = ("left", "right")
 
@@ -190,7 +190,7 @@ def test_errors(walk, g1):
 
 
 def _peers():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "peers.py"
+    path = ROOT / "benchmarks" / "peers.py"
     spec = importlib.util.spec_from_file_location("gdimitate_benchmark_peers", path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod  # its dataclasses look their module up there

@@ -6,10 +6,10 @@ import sys
 
 import numpy as np
 import pytest
-from printed import flat, numbers
 
 from gdimitate.apps.cli import main
 from gdimitate.planar import eq1
+from tests.helpers.printed import flat, numbers
 
 
 @pytest.mark.slow

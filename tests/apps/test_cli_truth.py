@@ -13,11 +13,11 @@ import warnings
 
 import numpy as np
 import pytest
-from printed import numbers
 
 import gdimitate as gd
 from gdimitate.apps.cli import EXIT_STATUS, build_parser, main
 from gdimitate.io.gait import human_walk_path
+from tests.helpers.printed import numbers
 
 SAG = human_walk_path()
 SAG_GRF = SAG.parent / "walk_gait1018_subject01_grf.mot"

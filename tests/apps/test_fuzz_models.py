@@ -28,7 +28,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from isolated import call
 
 import gdimitate as gd
 from gdimitate.errors import (
@@ -44,6 +43,7 @@ from gdimitate.errors import (
     URDFLimitError,
 )
 from gdimitate.safety import MAX_BVH_BYTES, MAX_URDF_DOF, MAX_URDF_GEOMETRIES
+from tests.helpers.isolated import call
 
 CMU = Path(gd.__file__).parent / "data" / "gait" / "cmu_02_01" / "cmu_02_01.bvh"
 BAD_NUMBERS = ["nan", "inf", "-inf", "1e309", "", "x", "١", "0x10", "1_0"]

@@ -27,6 +27,7 @@ from gdimitate.errors import (
     UnknownNameError,
     UnknownRobotError,
 )
+from tests.helpers import ROOT
 
 ANALYTIC = BatchOptions("hoap2", method="analytic")
 
@@ -379,7 +380,7 @@ def test_bvh_batch_optimal_matches_direct_adaptation(tmp_path):
 
 def test_imitator_model_file_named_relative_runs_by_absolute_path(inputs, tmp_path,
                                                                   monkeypatch):
-    repo = Path(__file__).resolve().parents[1]
+    repo = ROOT
     monkeypatch.chdir(repo)
     res = run_batch(inputs, tmp_path / "urdf", BatchOptions("urdf/hoap2.urdf",
                                                             method="analytic"),

@@ -27,9 +27,10 @@ from gdimitate.io.c3d import ForcePlate, read_c3d, write_c3d
 from gdimitate.io.c3d.plates import assign_plates
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.io.opensim import Markers, read_grf, read_trc
+from tests.helpers import ROOT, TESTS
 
-W2 = Path(__file__).parent / "data/c3d/opensim_walking2"
-D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
+W2 = TESTS / "data/c3d/opensim_walking2"
+D3 = ROOT / "gdimitate/data/gait/opensim_subject01_walk1_3d"
 
 
 def _sto(path: Path) -> tuple[list[str], np.ndarray]:

@@ -31,7 +31,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from isolated import call
 
 from gdimitate.errors import (
     C3DFormatError,
@@ -47,8 +46,10 @@ from gdimitate.io.c3d.layout import C3DLayout, check_c3d
 from gdimitate.io.opensim import Markers, read_trc
 from gdimitate.model.osim.model import MAX_OSIM_BYTES, read_osim
 from gdimitate.safety import MAX_TABLE_BYTES
+from tests.helpers import ROOT
+from tests.helpers.isolated import call
 
-D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
+D3 = ROOT / "gdimitate/data/gait/opensim_subject01_walk1_3d"
 HEAD = ("PathFileType\t4\t(X/Y/Z)\tm.trc\n"
         "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\n")
 

@@ -27,9 +27,10 @@ from gdimitate.errors import InvalidInputError, MarkerGapWarning, OpenSimDataErr
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.io.opensim import WORLD_FROM_OPENSIM as C
 from gdimitate.io.opensim import Markers, inverse_kinematics, read_trc
+from tests.helpers import ROOT, TESTS
 
-D3 = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
-SCRIPT = Path(__file__).parent / "opensim_ref/osim_ik.py"
+D3 = ROOT / "gdimitate/data/gait/opensim_subject01_walk1_3d"
+SCRIPT = TESTS / "opensim_ref/osim_ik.py"
 LEG_JOINTS = [f"{j}_{s}" for s in "rl" for j in ("hip_flexion", "hip_adduction",
                                                   "hip_rotation", "knee_angle", "ankle_angle")]
 
@@ -173,7 +174,7 @@ def test_walker_knee_followers_follow_their_coordinate():
     follower equals its spline of the fitted knee angle."""
     from gdimitate.io.opensim import follow_coordinates
 
-    robot = Robot.from_osim(Path(__file__).parent / "data/osim/rajagopal_like.osim")
+    robot = Robot.from_osim(TESTS / "data/osim/rajagopal_like.osim")
     names = list(robot.osim.markers)
     T = 12
     t = np.arange(T) / 60

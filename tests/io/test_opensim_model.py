@@ -36,15 +36,16 @@ from gdimitate.io.opensim import (
     pelvis_to_freeflyer,
     read_osim,
 )
+from tests.helpers import ROOT, TESTS
 
-DATA = Path(__file__).resolve().parents[1] / "gdimitate/data/gait/opensim_subject01_walk1_3d"
+DATA = ROOT / "gdimitate/data/gait/opensim_subject01_walk1_3d"
 if not (DATA / "subject01.osim").is_file():  # the package copy, else the shared data folder
-    DATA = Path(__file__).resolve().parents[2] / "shared/data/gait/opensim_subject01_walk1_3d"
+    DATA = ROOT.parent / "shared/data/gait/opensim_subject01_walk1_3d"
 SUBJECT = DATA / "subject01.osim"
 IK = DATA / "subject01_walk1_ik.mot"
-SYNTH = Path(__file__).parent / "data/osim/rajagopal_like.osim"
-MINIMAL = Path(__file__).parent / "data/osim/minimal_prefixed.osim"
-SCRIPT = Path(__file__).parent / "opensim_ref/osim_kinematics.py"
+SYNTH = TESTS / "data/osim/rajagopal_like.osim"
+MINIMAL = TESTS / "data/osim/minimal_prefixed.osim"
+SCRIPT = TESTS / "opensim_ref/osim_kinematics.py"
 
 needs_opensim = pytest.mark.skipif(importlib.util.find_spec("opensim") is None,
                                    reason="the OpenSim reference needs the `opensim` wheel")

@@ -23,8 +23,9 @@ from gdimitate.io.opensim.coordinates import read_coordinates
 from gdimitate.io.opensim.grf import read_external_loads, read_grf
 from gdimitate.model.osim.trc import read_trc
 from gdimitate.model.robot import Robot
+from tests.helpers import ROOT, TESTS
 
-DATA = Path(__file__).parent / "data" / "opensim_files"
+DATA = TESTS / "data" / "opensim_files"
 Y_UP = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # OpenSim (X, Y, Z) → ours (x, y, z)
 
 
@@ -427,7 +428,7 @@ def test_sagittal_reader_refuses_full_body_files(tmp_path):
 
 
 # ====================================================================== the shipped 3-D walk
-WALK = Path(__file__).parent.parent / "gdimitate" / "data" / "gait" / "opensim_subject01_walk1_3d"
+WALK = ROOT / "gdimitate" / "data" / "gait" / "opensim_subject01_walk1_3d"
 LEG_MOMENTS = [f"{c}_{s}" for c in ("hip_flexion", "hip_adduction", "knee_angle", "ankle_angle")
                for s in "rl"]
 

@@ -1,7 +1,6 @@
 """Robots: our generated URDFs, library models, measured legs, bad input."""
 
 import functools
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -15,8 +14,8 @@ from gdimitate.model.library import library_entry
 from gdimitate.model.robot import Robot
 from gdimitate.model.sagittal import compose_q, leg_angles
 from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
+from tests.helpers import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 LIBRARY = ["human", "talos", "romeo", "icub", "g1", "bolt"]
 
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 import importlib.util
 import re
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.helpers import ROOT
+
 BENCHMARKS = ROOT / "benchmarks"
 
 

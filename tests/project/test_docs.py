@@ -18,8 +18,8 @@ import pytest
 import yaml
 
 import gdimitate
+from tests.helpers import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / "docs" / "reference" / "index.md"
 
 

@@ -4,14 +4,15 @@
 from __future__ import annotations
 
 import shutil
-from pathlib import Path
 
 import pytest
+
+from tests.helpers import ROOT
 
 nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")
 
-NOTEBOOKS = sorted((Path(__file__).parents[1] / "notebooks").glob("*.ipynb"))
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 #: An executed notebook must stay under this size [bytes] (embedded 3-D scenes are ~25 MB).
 MAX_EXECUTED_BYTES = 3_000_000
 

@@ -23,7 +23,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.helpers import ROOT
+
 README = ROOT / "README.md"
 #: The blocks skipped as placeholders: (page, the section they are in).
 PLACEHOLDERS = {

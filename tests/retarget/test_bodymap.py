@@ -13,6 +13,7 @@ import pytest
 from gdimitate.errors import InvalidInputError, UnknownNameError
 from gdimitate.planar import sagittal_leg
 from gdimitate.retarget import BodyMap, UnmappedJointsWarning, body_map
+from tests.helpers import TESTS
 
 
 def _axis(robot, joint):
@@ -126,7 +127,7 @@ def armed():
 
     import gdimitate as gd
 
-    sys.path.insert(0, str(Path(__file__).parent / "opensim_ref"))
+    sys.path.insert(0, str(TESTS / "opensim_ref"))
     from with_arms import write_model
 
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
@@ -231,14 +232,13 @@ def test_g1_swings_its_arms_like_the_demonstrator(armed):
     0.90 / 0.83, wrists within 0.100 rad, 13.2 mm clear (20 knots/s: 0.89 / 0.85, 13.5 mm)."""
     import sys
     import warnings
-    from pathlib import Path
 
     import gdimitate as gd
     from gdimitate.io.opensim import read_coordinates, read_grf
     from gdimitate.retarget.bodymap import HOLD_RANGE, following
     from gdimitate.retarget.parts.self_collision import rest_pose
 
-    sys.path.insert(0, str(Path(__file__).parent / "opensim_ref"))
+    sys.path.insert(0, str(TESTS / "opensim_ref"))
     from with_arms import arm_swing
 
     folder = gd.gait.human_walk_3d_folder()

@@ -210,7 +210,6 @@ def test_self_collision_rows_match_pinocchio():
     with no column on the base's q (a distance between two bodies does not see the base);
     bounds 0, no gap above the 1 cm margin; labels per pair of frames."""
     import casadi as ca
-    from test_retarget_parts import _fd_check, knot_of, random_point
 
     from gdimitate.retarget.parts import Spec
     from gdimitate.retarget.parts.self_collision import (
@@ -219,6 +218,7 @@ def test_self_collision_rows_match_pinocchio():
         SelfCollision,
         sphere_pairs,
     )
+    from tests.retarget.parts.test_parts import _fd_check, knot_of, random_point
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -261,8 +261,6 @@ def test_self_collision_rows_match_pinocchio():
 def _rest_rows(robot):
     """``(rest pose, self-collision part with its rest floors, rows(q) -> the part's CasADi
     rows at the pose q, their lower bounds)`` of ``robot``'s adaptor."""
-    from test_retarget_parts import knot_of, random_point
-
     from gdimitate.retarget.parts import Spec
     from gdimitate.retarget.parts.self_collision import (
         SelfCollision,
@@ -270,6 +268,7 @@ def _rest_rows(robot):
         rest_pose,
         sphere_pairs,
     )
+    from tests.retarget.parts.test_parts import knot_of, random_point
 
     rest = rest_pose(robot)
     pairs = sphere_pairs(robot, q=rest)

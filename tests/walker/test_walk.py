@@ -12,12 +12,12 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
-from printed import numbers
 
 from gdimitate.errors import InvalidInputError, PlanError
 from gdimitate.model.robot import SIDES
 from gdimitate.sim.periodic import PeriodicReference
 from gdimitate.walker import WalkNetwork, periodic_cycle, walk
+from tests.helpers.printed import numbers
 
 
 @pytest.fixture(scope="module")

@@ -17,13 +17,13 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 import pytest
-from test_any_leg_axes import LEG, biped_urdf
 
 import gdimitate as gd
 from gdimitate.model.robot import SIDES
 from gdimitate.retarget import parts as P
 from gdimitate.retarget.knot import Flags, Knot
 from gdimitate.retarget.trajectory.problem import symbolic_model
+from tests.adaptation.test_any_leg_axes import LEG, biped_urdf
 
 SPLAY = 0.06  # [m] each ankle's lateral offset from its knee
 
