@@ -478,7 +478,7 @@ def negative_control(rows: list[Row]) -> str:
                       else "did not fall")
                    + f", slip {r.slip_cm:.1f} cm — the negative control "
                    + ("fails the physics check, as it must." if fails else
-                      "PASSES the physics check (see tests/test_baselines.py)."))
+                      "PASSES the physics check (see tests/apps/test_baselines.py)."))
     return "\n".join(out)
 
 

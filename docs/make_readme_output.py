@@ -7,7 +7,7 @@ lies in README.md between ``<!-- output: NAME -->`` and ``<!-- /output -->`` (a 
 without a language). ``demo`` runs ``gdimitate demo --out gdimitate-demo`` in a temporary
 folder, puts the table it printed into the block — elapsed and solver seconds included, as
 that run measured them — and stores the run's ``summary.json`` as
-``docs/output/demo_summary.json``; ``tests/test_readme.py`` renders the table from that file
+``docs/output/demo_summary.json``; ``tests/project/test_readme.py`` renders the table from that file
 with the current printing code (:func:`gdimitate.apps.demo.summary_table`) and compares it with
 the README's block, so a change of the printed table fails until this script is run again.
 """

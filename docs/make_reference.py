@@ -7,8 +7,8 @@ One page per public module of ``gdimitate`` (the modules in ``gdimitate.__all__`
 ``__all__``, each as a mkdocstrings entry under the module that defines it (a function that
 shares its name with a module, as ``gdimitate.sim.simulate``, is documented from its home).
 ``docs/reference/index.md`` (written by hand) holds ``gdimitate.__all__`` itself.
-``tests/test_docs.py`` checks that every page lists its module's ``__all__``, so a new public
-name fails the suite until this script is run again.
+``tests/project/test_docs.py`` checks that every page lists its module's ``__all__``, so a new
+public name fails the suite until this script is run again.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ which is not API.
 # ``import gdimitate`` and ``gdimitate --help`` stay quick and load no engine (Pinocchio,
 # CasADi, MuJoCo, meshcat, numba ...) until a name that needs one is touched. Static type
 # checkers and IDEs read the ``TYPE_CHECKING`` imports below; both lists name the same things
-# (tests/test_architecture.py checks that every name resolves).
+# (tests/project/test_architecture.py checks that every name resolves).
 from __future__ import annotations
 
 import importlib

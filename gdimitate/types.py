@@ -1,9 +1,9 @@
 """Names of the closed sets of choices, as ``Literal`` types for signatures and type checkers.
 
-Each alias matches the values its module checks at run time (tests/test_architecture.py keeps
-them equal): :data:`Side` = :data:`SIDES` (= :data:`gdimitate.model.legs.SIDES`),
-:data:`ForceModel` = :data:`gdimitate.assess.metrics.FORCE_MODELS`, :data:`ContactRule` = the rules
-of
+Each alias matches the values its module checks at run time
+(tests/project/test_architecture.py keeps them equal): :data:`Side` = :data:`SIDES`
+(= :data:`gdimitate.model.legs.SIDES`), :data:`ForceModel` =
+:data:`gdimitate.assess.metrics.FORCE_MODELS`, :data:`ContactRule` = the rules of
 :class:`gdimitate.retarget.Contact`, :data:`BaseKind` = the values of ``Robot.base``.
 Importing this module loads nothing else.
 """

@@ -13,7 +13,7 @@ a motion file repaired on its own robot) and ``outputs`` (the files ``adapt``, `
 ``repair`` write). Their names may change between releases without a deprecation period.
 
 Only the command line (:mod:`gdimitate.apps.cli`), ``benchmarks/``, ``notebooks/``, ``docs/``
-and ``tests/`` import this package; nothing in the library below it does (``tests/
-test_architecture.py`` checks, docs/design.md §8). The one documented public name defined
-here, :func:`gdimitate.paper_case`, is re-exported lazily by ``gdimitate/__init__``.
+and ``tests/`` import this package; nothing in the library below it does
+(``tests/project/test_architecture.py`` checks, docs/design.md §8). The one documented public
+name defined here, :func:`gdimitate.paper_case`, is re-exported lazily by ``gdimitate/__init__``.
 """

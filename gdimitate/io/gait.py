@@ -113,7 +113,7 @@ def read_opensim(path: str | Path, height: float = 1.75, mass: float | None = No
     ``pelvis_tx``/``pelvis_ty`` plus a treadmill ``belt_speed`` [m/s] (estimated from the
     stance feet when ``None``), shifted so the stance soles touch z = 0 on average — the
     measured body motion, whose centre-of-mass acceleration reproduces the measured GRF
-    direction (see ``tests/test_gait.py``).
+    direction (see ``tests/io/test_gait.py``).
     """
     from ..model.kinematics import kinematic_contact, robot_motion
     from ..model.robot import Robot

@@ -37,7 +37,7 @@ Coupled axes are approximated, keeping every URDF joint value equal to its coord
 :class:`Approximation` records, per joint, the largest error of the child body origin [m] and
 orientation [rad] over the coordinates' whole ranges (the tests compare both against OpenSim).
 
-Measured (tests/test_opensim_model.py, OpenSim 4.6 as reference):
+Measured (tests/io/test_opensim_model.py, OpenSim 4.6 as reference):
 
 * gait2354-family knee (subject01, translation splines of ``knee_angle``): the fixed hinge is
   within 3.2 mm of the spline knee over its whole range (−120°…+10°), and within 1.6 mm at
