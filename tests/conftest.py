@@ -1,34 +1,40 @@
-import functools
+"""Session fixtures shared by every test folder: the library's robots, the shipped
+demonstrations and one adapted G1 stride, each built once per test session
+(:mod:`tests.helpers.shared`). They are read-only: no test changes them in place."""
 
 import pytest
 
-from gdimitate.model.robot import Robot
+from tests.helpers.shared import library_robot, walk_3d, walk_sagittal
 
 
-@functools.cache
-def _robot(name: str) -> Robot:
-    return Robot.from_library(name)
-
-
-@pytest.fixture
+@pytest.fixture(scope="session")
 def robot():
-    """robot(name) → a cached Robot (models are read-only in the tests)."""
-    return _robot
+    """robot(name) → the library's Robot ``name``, loaded once per session (read-only)."""
+    return library_robot
 
 
-@functools.cache
-def _g1_stride():
-    import gdimitate as gd
-
-    h, m, f = gd.gait.human_walk_3d()
-    stride, fs = gd.gait.one_stride(m, f)
-    r = gd.adapt(stride, h, _robot("g1"), force="measured", forces=fs, verbose=False)
-    return h, stride, fs, r
+@pytest.fixture(scope="session", name="walk_3d")
+def walk_3d_fixture():
+    """``(demonstrator, motion, forces)``: the shipped full-body 3-D walk
+    (``gd.gait.human_walk_3d()``), read once per session (read-only)."""
+    return walk_3d()
 
 
-@pytest.fixture
+@pytest.fixture(scope="session", name="walk_sagittal")
+def walk_sagittal_fixture():
+    """``(demonstrator, motion)``: the shipped sagittal walk with its measured-GRF contact
+    (``gd.gait.human_walk()``), read once per session (read-only)."""
+    return walk_sagittal()
+
+
+@pytest.fixture(scope="session")
 def g1_stride():
     """``(demonstrator, stride, forces, adapted)``: one right stride of the shipped 3-D walk
     adapted to G1 with the defaults (measured push), computed once per test session for the
     tests that compare other adaptations with it (read-only)."""
-    return _g1_stride()
+    import gdimitate as gd
+
+    h, m, f = walk_3d()
+    stride, fs = gd.gait.one_stride(m, f)
+    r = gd.adapt(stride, h, library_robot("g1"), force="measured", forces=fs, verbose=False)
+    return h, stride, fs, r

@@ -22,8 +22,8 @@ from gdimitate.model.robot import SIDES
 
 
 @pytest.fixture(scope="module")
-def walk():
-    return gd.gait.human_walk_3d()
+def walk(walk_3d):
+    return walk_3d
 
 
 def test_stance_phases():

@@ -25,8 +25,8 @@ from gdimitate.model.robot import SIDES
 
 
 @pytest.fixture(scope="module")
-def walk():
-    h, m, f = gd.gait.human_walk_3d()
+def walk(walk_3d):
+    h, m, f = walk_3d
     return h, m, f
 
 

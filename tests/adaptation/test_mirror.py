@@ -18,8 +18,8 @@ from gdimitate.model.robot import SIDES
 
 
 @pytest.fixture(scope="module")
-def walk():
-    return gd.gait.human_walk_3d()
+def walk(walk_3d):
+    return walk_3d
 
 
 def _random_motion(robot, n=4, seed=0) -> Motion:

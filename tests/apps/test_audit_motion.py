@@ -22,6 +22,7 @@ from gdimitate.assess.verdict import EXIT_NOT_FEASIBLE
 from gdimitate.assess.wrenches import estimate_wrenches
 from gdimitate.io.demonstration import load_demonstration
 from gdimitate.model.motion import differentiate
+from tests.helpers import shared
 
 
 def _slice(m, a, b):
@@ -143,11 +144,11 @@ def test_a_csv_export_audits_as_the_motion_it_holds(case2, optimal, tmp_path, ca
 
 
 @pytest.fixture(scope="module")
-def g1_copy():
+def g1_copy(walk_3d, robot):
     """G1, a joint copy of 70 frames (60 Hz) of the shipped 3-D walk (no compilation) and the
     reference: the audit of its q alone."""
-    human, walk, _ = gd.gait.human_walk_3d()
-    g1 = gd.Robot.from_library("g1")
+    human, walk, _ = walk_3d
+    g1 = robot("g1")
     motion = gd.adapt(_slice(walk, 0, 70), human, g1, method="copy").motion
     assert np.allclose(np.diff(motion.t), 1 / 60)
     return g1, motion, gd.audit_motion(g1, motion.replace(contact={}, v=None, a=None))
@@ -161,8 +162,8 @@ FORMAT_FILES = {"csv": "walk.csv", "npz": "walk.npz", "mujoco": "walk_mujoco.npz
 
 @functools.cache
 def _talos_copy():
-    human, walk, _ = gd.gait.human_walk_3d()
-    talos = gd.Robot.from_library("talos")
+    human, walk, _ = shared.walk_3d()
+    talos = shared.library_robot("talos")
     return talos, gd.adapt(_slice(walk, 0, 70), human, talos, method="copy").motion
 
 

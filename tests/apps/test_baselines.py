@@ -33,18 +33,18 @@ SIDES = ("left", "right")
 
 
 @pytest.fixture(scope="module")
-def walk():
-    return gd.gait.human_walk_3d()
+def walk(walk_3d):
+    return walk_3d
 
 
 @pytest.fixture(scope="module")
-def talos():
-    return gd.Robot.from_library("talos")
+def talos(robot):
+    return robot("talos")
 
 
 @pytest.fixture(scope="module")
-def g1():
-    return gd.Robot.from_library("g1")
+def g1(robot):
+    return robot("g1")
 
 
 @pytest.fixture(scope="module")

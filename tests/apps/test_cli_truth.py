@@ -210,7 +210,8 @@ def test_adapt_entrain_view_default_to_the_demos_walk_and_g1(tmp_path, capsys):
     assert sub["entrain"].get_default("robot") == "g1"
     assert sub["demo"].get_default("imitator") == "g1"
     # walk's default is the story's robot again: G1's periodic cycle at walk.WALK_RATE is
-    # audit-feasible and walks 20 steps (tests/test_walk.py); HOAP-2's stride was 0.27 scaled.
+    # audit-feasible and walks 20 steps (tests/walker/test_walk.py); HOAP-2's stride was 0.27
+    # scaled.
     assert sub["walk"].get_default("imitator") == "g1"
     robot, stride, forces = default_demonstration()
     c = stride.contact["right"]
@@ -224,9 +225,9 @@ def test_adapt_entrain_view_default_to_the_demos_walk_and_g1(tmp_path, capsys):
 
 # ------------------------------------------------------------------ the CPG learns the stride
 @pytest.fixture(scope="module")
-def walks():
-    human, walk = gd.gait.human_walk()
-    hoap2 = gd.Robot.from_library("hoap2")
+def walks(walk_sagittal, robot):
+    human, walk = walk_sagittal
+    hoap2 = robot("hoap2")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         optimal = gd.adapt(walk, human, hoap2, rate=20.0, verbose=False).motion

@@ -29,6 +29,7 @@ from gdimitate.io.gait import read_mot, read_opensim
 from gdimitate.io.opensim import read_coordinates, read_grf
 from gdimitate.model.motion import Motion
 from gdimitate.model.robot import Robot
+from tests.helpers import shared
 
 FAST = settings(max_examples=200, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -133,7 +134,7 @@ def _grf_lines() -> list[str]:
             "\t".join(["time", *cols]), *rows]
 
 
-HOAP2 = Robot.from_library("hoap2")
+HOAP2 = shared.library_robot("hoap2")
 
 
 @FAST
@@ -272,7 +273,7 @@ def test_fuzz_urdf(text):
 
 
 # ------------------------------------------------------------------------- adapt
-DEMO = Robot.from_library("case1_demonstrator")
+DEMO = shared.library_robot("case1_demonstrator")
 
 
 def _demo_motion(rng: np.random.Generator, T: int) -> Motion:
@@ -331,7 +332,7 @@ def test_fuzz_seeds_are_valid(tmp_path):
 # ----------------------------------------------------- issue 22: the classes of hostile input
 @functools.cache
 def _g1() -> Robot:
-    return Robot.from_library("g1")
+    return shared.library_robot("g1")
 
 
 @contextlib.contextmanager

@@ -111,8 +111,8 @@ def _motion(robot: Robot, T: int = 150, rate: float = 60.0, amp: float = 0.3) ->
 
 
 @pytest.fixture(scope="module")
-def hoap2() -> Robot:
-    return Robot.from_library("hoap2")
+def hoap2(robot) -> Robot:
+    return robot("hoap2")
 
 
 def test_npz_files_that_are_not_motions(tmp_path, hoap2):
@@ -343,8 +343,8 @@ def test_adapt_of_read_coordinates_motion_says_how_to_get_contacts():
 
 
 @pytest.fixture(scope="module")
-def g1() -> Robot:
-    return Robot.from_library("g1")
+def g1(robot) -> Robot:
+    return robot("g1")
 
 
 def _g1_motion(g1: Robot, quat) -> Motion:

@@ -28,13 +28,13 @@ G = 9.81
 
 
 @pytest.fixture(scope="module")
-def talos() -> Robot:
-    return Robot.from_library("talos")
+def talos(robot) -> Robot:
+    return robot("talos")
 
 
 @pytest.fixture(scope="module")
-def hoap2() -> Robot:
-    return Robot.from_library("hoap2")
+def hoap2(robot) -> Robot:
+    return robot("hoap2")
 
 
 # ---------------------------------------------------------------------- independent helpers

@@ -99,11 +99,6 @@ def _single_support(motion):
     return {"left": c["left"] & ~c["right"], "right": c["right"] & ~c["left"]}
 
 
-@pytest.fixture(scope="module")
-def walk_3d():
-    return gd.gait.human_walk_3d()
-
-
 def _compare(est, meas, mask):
     k = mask & np.isfinite(est) & np.isfinite(meas)
     return float(np.corrcoef(est[k], meas[k])[0, 1]), _rmse_deg(est[k], meas[k]), int(k.sum())

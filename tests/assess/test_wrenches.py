@@ -30,13 +30,13 @@ GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
 
 
 @pytest.fixture(scope="module")
-def talos() -> Robot:
-    return Robot.from_library("talos")
+def talos(robot) -> Robot:
+    return robot("talos")
 
 
 @pytest.fixture(scope="module")
-def hoap2() -> Robot:
-    return Robot.from_library("hoap2")
+def hoap2(robot) -> Robot:
+    return robot("hoap2")
 
 
 def corner_wrench(contact, rng, fz_total, shrink=0.8, planar=False):

@@ -5,7 +5,7 @@ Classes of input covered, each by a generator:
 
 * C3D truncated at every section boundary (inside the header, the parameter section, the
   data section; block boundaries and one byte short) — in a child process
-  (``tests/isolated.py``): ezc3d segfaulted at 522 bytes, hung at 700, and read 13/74/136 of
+  (``tests/helpers/isolated.py``): ezc3d segfaulted at 522 bytes, hung at 700, and read 13/74/136 of
   151 frames at 10/50/90 % — now a ``C3DFormatError`` saying "truncated" with both sizes;
   a complete file minus its last block's padding still reads every frame;
 * C3D header and parameter fields overwritten with NaN/inf/huge/negative numbers and random

@@ -13,8 +13,8 @@ GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
 
 
 @pytest.fixture(scope="module")
-def walk():
-    return human_walk()
+def walk(walk_sagittal):
+    return walk_sagittal
 
 
 def _table(path):

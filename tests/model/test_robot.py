@@ -108,7 +108,7 @@ def test_neutral_pose_stands_on_ground_facing_forward(name, robot):
     r = robot(name)
     soles = frame_paths(r, r.neutral[None], [r.legs[s].sole for s in ("left", "right")])
     zl, zr = (soles[r.legs[s].sole][0, 2] for s in ("left", "right"))
-    # the neutral pose stands on the measured soles (tests/test_contact.py checks those at
+    # the neutral pose stands on the measured soles (tests/model/test_contact.py checks those at
     # z = 0 to 1e-5); the URDFs' own sole frames sit within 1.2 mm of that geometry
     assert min(zl, zr) == pytest.approx(0.0, abs=1.5e-3 if r.contacts else 1e-12)
     hips = joint_paths(r, r.neutral[None], [r.legs[s].hip for s in ("left", "right")])

@@ -24,6 +24,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.model.selfcollision import self_collision
+from tests.helpers import shared
 
 #: The COLLADA specification's change of axes from a Y_UP asset to a Z_UP world:
 #: right +x stays x, up +y becomes z, "in" +z becomes −y.
@@ -33,7 +34,7 @@ Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 def _robot(name: str) -> gd.Robot:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return gd.Robot.from_library(name)
+        return shared.library_robot(name)
 
 
 def _collada_positions(path: str) -> tuple[np.ndarray, str]:

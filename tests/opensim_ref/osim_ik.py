@@ -1,4 +1,4 @@
-"""OpenSim's own inverse kinematics of a marker file, for tests/test_ik.py (run in a
+"""OpenSim's own inverse kinematics of a marker file, for tests/io/test_opensim_ik.py (run in a
 subprocess: the ``opensim`` wheel cannot share a process with ``casadi``, hence gdimitate).
 
 Usage: ``python osim_ik.py MODEL.osim MARKERS.trc OUT.npz T0 T1 [WEIGHTS.json]``

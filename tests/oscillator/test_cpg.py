@@ -9,6 +9,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.oscillator.replay import _compose, body_signals
+from tests.helpers import shared
 
 
 @pytest.mark.parametrize("which", ["3d", "planar"])
@@ -17,10 +18,10 @@ def test_body_signals_reconstruct_the_motion(which):
     (Pinocchio's configuration difference ≤ 1e-12), for the free-flyer 3-D walk and a planar
     robot."""
     if which == "3d":
-        robot, motion, _ = gd.gait.human_walk_3d()
+        robot, motion, _ = shared.walk_3d()
     else:
-        human, walk = gd.gait.human_walk()
-        robot = gd.Robot.from_library("hoap2")
+        human, walk = shared.walk_sagittal()
+        robot = shared.library_robot("hoap2")
         motion = gd.adapt(walk, human, robot, "analytic").motion
     sig = body_signals(robot, motion)
     q = _compose(robot, sig, motion.t, sig.X)
@@ -35,8 +36,8 @@ def test_body_signals_reconstruct_the_motion(which):
 
 
 def test_replay_keeps_joint_order_and_rhythm():
-    human, walk = gd.gait.human_walk()
-    robot = gd.Robot.from_library("hoap2")
+    human, walk = shared.walk_sagittal()
+    robot = shared.library_robot("hoap2")
     taught = gd.adapt(walk, human, robot, "analytic").motion
     cpg = gd.entrain(robot, taught, duration=4.0)
     assert cpg.replay.joint_names == robot.joint_names

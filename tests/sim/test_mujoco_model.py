@@ -20,6 +20,7 @@ from gdimitate.model.contact import SoleContact
 from gdimitate.model.robot import SIDES
 from gdimitate.sim import ModelOptions, build_model
 from gdimitate.sim.reference import Plan, check_plan
+from tests.helpers import shared
 
 ROBOTS = ["hoap2", "talos", "g1", "icub", "romeo"]
 
@@ -31,7 +32,7 @@ def robots():
 
 def _robot(cache, name):
     if name not in cache:
-        cache[name] = gd.Robot.from_library(name)
+        cache[name] = shared.library_robot(name)
     return cache[name]
 
 

@@ -14,7 +14,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-import gdimitate as gd
 from gdimitate.apps.scenarios import kinematic_walk_plan, standing_plan, sway_plan
 from gdimitate.model.contact import ContactForces, FootForces, cone_margin
 from gdimitate.model.robot import SIDES
@@ -25,8 +24,8 @@ PUSH = 20.0  # [N], the issue's push
 
 
 @pytest.fixture(scope="module")
-def robots():
-    return {n: gd.Robot.from_library(n) for n in ("talos", "g1", "hoap2", "romeo")}
+def robots(robot):
+    return {n: robot(n) for n in ("talos", "g1", "hoap2", "romeo")}
 
 
 def _tipping_force(robot) -> float:

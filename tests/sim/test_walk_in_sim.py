@@ -10,12 +10,13 @@ from __future__ import annotations
 import pytest
 
 import gdimitate as gd
+from tests.helpers import shared
 
 
 @pytest.mark.slow
 def test_whole_3d_walk_on_hoap2_walks_in_mujoco():
-    human, walk, forces = gd.gait.human_walk_3d()
-    robot = gd.Robot.from_library("hoap2")
+    human, walk, forces = shared.walk_3d()
+    robot = shared.library_robot("hoap2")
     adapted = gd.adapt(walk, human, robot, "optimal", force="measured", forces=forces,
                        verbose=False)
     assert adapted.feasible, adapted.audit.binding

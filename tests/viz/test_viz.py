@@ -35,6 +35,7 @@ from gdimitate.viz import (
 )
 from gdimitate.viz.animate import arrow_pose, frame_indices, push_vectors
 from gdimitate.viz.scene import shapes
+from tests.helpers import shared
 
 GAIT = GaitSpec(cycles=1, rate=50.0)
 # the wall-clock limit is generous: a render takes ~8 s on an idle 2-core machine, but one
@@ -45,7 +46,7 @@ SHOT = dict(size=(640, 480), virtual_time_ms=1500, timeout_s=120.0)
 # ---------------------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
 def talos():
-    robot = Robot.from_library("talos")
+    robot = shared.library_robot("talos")
     motion = walking_motion(robot, GAIT)
     return robot, motion, force_direction(robot, motion)
 
@@ -53,7 +54,7 @@ def talos():
 @pytest.fixture(scope="module")
 def planar():
     """One of our mesh-less planar URDFs (box/cylinder visuals, base_x/z/pitch), 1 m legs."""
-    robot = Robot.from_library("case1_demonstrator")
+    robot = shared.library_robot("case1_demonstrator")
     motion = walking_motion(robot, GAIT)
     return robot, motion, force_direction(robot, motion)
 

@@ -2,8 +2,8 @@
 
 ``retarget.parts.force`` divides the imitator's shank vector (ankle → knee) by the shank's
 3-D length, so that it is a unit vector for any leg axes. The robot is
-``tests/test_any_leg_axes.py``'s biped with knees tilted 30° from the lateral axis, its ankles
-moved 6 cm outwards below the knees (the shank splayed: 3-D length √(0.3² + 0.06²) m, x–z
+``tests/adaptation/test_any_leg_axes.py``'s biped with knees tilted 30° from the lateral axis, its
+ankles moved 6 cm outwards below the knees (the shank splayed: 3-D length √(0.3² + 0.06²) m, x–z
 extent 0.3 m at the neutral pose). Reference: Pinocchio's forward kinematics of the same model
 at random configurations; with ``d`` the unit vector from ankle to knee, the rows
 ``e1·c, e2·c, d·c`` are exactly ``0, 0, 1`` (``d·c`` was 1.0198 with the x–z length).

@@ -21,8 +21,8 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def walk():
-    h, m, f = gd.gait.human_walk_3d()
+def walk(walk_3d):
+    h, m, f = walk_3d
     demo, fs = gd.gait.one_stride(m, f, "left")
     return h, demo, fs
 

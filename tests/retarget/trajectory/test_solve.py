@@ -13,14 +13,15 @@ import gdimitate as gd
 from gdimitate.assess.solver import Unmet
 from gdimitate.retarget.trajectory import problem as pb
 from gdimitate.retarget.trajectory import solve
+from tests.helpers import shared
 
 
 @pytest.fixture(scope="module")
 def sagittal():
     """The shipped sagittal walk → HOAP-2 (segment model): its shank-direction goal cannot be
     met (the issue's case: 545 iterations and an elastic re-solve before, then 111)."""
-    h, demo = gd.gait.human_walk()
-    robot = gd.Robot.from_library("hoap2")
+    h, demo = shared.walk_sagittal()
+    robot = shared.library_robot("hoap2")
     return h, demo, robot, gd.adapt(demo, h, robot, "optimal", force="segment", verbose=False)
 
 

@@ -20,8 +20,9 @@ import pytest
 import gdimitate as gd
 from gdimitate.assess.audit import AuditTolerances
 from gdimitate.io.gait import one_stride
-from gdimitate.model.robot import SIDES, Robot
+from gdimitate.model.robot import SIDES
 from gdimitate.retarget import UnmappedJointsWarning
+from tests.helpers import shared
 
 pytestmark = pytest.mark.slow
 
@@ -30,8 +31,8 @@ RATE = {"g1": 30, "hoap2": None}
 
 
 @pytest.fixture(scope="module")
-def stride():
-    demo_robot, walk, walk_forces = gd.gait.human_walk_3d()
+def stride(walk_3d):
+    demo_robot, walk, walk_forces = walk_3d
     demo, forces = one_stride(walk, walk_forces)
     return demo_robot, demo, forces
 
@@ -39,7 +40,7 @@ def stride():
 @pytest.fixture(scope="module", params=["g1", "hoap2"])
 def adapted(request, stride):
     demo_robot, demo, forces = stride
-    robot = Robot.from_library(request.param)
+    robot = shared.library_robot(request.param)
     opts = {"rate": RATE[request.param]} if RATE[request.param] else {}
     with warnings.catch_warnings():  # G1's arms have no demonstrator joint (held near neutral)
         warnings.simplefilter("ignore", UnmappedJointsWarning)

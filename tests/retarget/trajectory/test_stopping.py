@@ -9,6 +9,7 @@ import pytest
 
 import gdimitate as gd
 from gdimitate.retarget.trajectory.stopping import PLATEAU, Plateau
+from tests.helpers import shared
 
 
 def _rule(**kw) -> Plateau:
@@ -40,9 +41,9 @@ def test_never_stops_without_a_feasible_iterate():
 def test_settled_and_converged_give_motions_the_audit_accepts():
     # 30 knots/s: at 20 the body-over-feet cost carries G1's body far enough that the one-step
     # scheme's stance-foot velocity exceeds the audit's 1e-3 m/s (docs/design.md §13)
-    h, m, f = gd.gait.human_walk_3d()
+    h, m, f = shared.walk_3d()
     demo, fs = gd.gait.one_stride(m, f, "left")
-    robot = gd.Robot.from_library("g1")
+    robot = shared.library_robot("g1")
     out = {stop: gd.adapt(demo, h, robot, "optimal", force="measured", forces=fs, rate=30,
                           verbose=False, stop=stop) for stop in ("settled", "converged")}
     for r in out.values():
