@@ -27,7 +27,7 @@ from gdimitate.apps.baselines import (
 from gdimitate.assess.audit import audit
 from gdimitate.errors import InvalidInputError, LegMatchError
 from gdimitate.model.sagittal import leg_angles, sagittal_leg
-from tests.helpers import ROOT
+from tests.helpers import ROOT, shared
 
 SIDES = ("left", "right")
 
@@ -174,7 +174,7 @@ def test_diff_ik_keeps_limits_and_holds_the_feet(g1, ik_g1):
 
 def test_errors(walk, g1):
     robot_m, motion, _ = walk
-    hoap2 = gd.Robot.from_library("hoap2")
+    hoap2 = shared.library_robot("hoap2")
     with pytest.raises(LegMatchError, match="planar"):
         joint_copy(motion, robot_m, hoap2)
     with pytest.raises(InvalidInputError, match="demonstrator"):

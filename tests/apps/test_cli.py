@@ -9,6 +9,7 @@ import pytest
 
 from gdimitate.apps.cli import main
 from gdimitate.planar import eq1
+from tests.helpers import shared
 from tests.helpers.printed import flat, numbers
 
 
@@ -20,7 +21,6 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     from gdimitate.assess.audit import audit
     from gdimitate.export.writers import read_wrenches
     from gdimitate.model.motion import Motion
-    from gdimitate.model.robot import Robot
 
     assert main(["demo", "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
@@ -30,7 +30,7 @@ def test_demo_writes_its_outputs(tmp_path, capsys):
     for f in ("imitator_motion.npz", "imitator_motion.csv", "force_directions.png",
               "gait.png", "simulation.png", "cpg_replay_joints.csv", "oscillator_params.json"):
         assert (tmp_path / f).stat().st_size > 0
-    g1 = Robot.from_library("g1")
+    g1 = shared.library_robot("g1")
     motion = Motion.from_npz(tmp_path / "imitator_motion.npz")
     again = audit(g1, motion, read_wrenches(tmp_path / "imitator_motion.npz"))
     assert again.feasible == s["feasible"] is True, again.binding
@@ -152,7 +152,7 @@ def test_entrain_command(tmp_path, capsys):
     # Eq. (1) input: fast (the command's default is the optimal adaptor on G1); written as a
     # file since the default demonstration is the 3-D walk now
     human, walk = gd.gait.human_walk()
-    hoap2 = gd.Robot.from_library("hoap2")
+    hoap2 = shared.library_robot("hoap2")
     gd.adapt(walk, human, hoap2, "analytic").motion.to_npz(tmp_path / "in.npz", robot=hoap2)
     assert main(["entrain", str(tmp_path / "in.npz"), "--out", str(tmp_path), "--duration", "3"]
                 ) == 0
@@ -251,7 +251,7 @@ def test_view_prints_the_numbers_adapt_reports(tmp_path, capsys):
         f"position:{j} exceeded by {v:.3g} rad" for j, v in excess), "exit status 3"]
     assert numbers(printed.replace(str(tmp_path), "OUT")) == numbers("\n".join(expected))
     assert expected[0] in printed
-    hoap2 = gd.Robot.from_library("hoap2")
+    hoap2 = shared.library_robot("hoap2")
     motion = gd.Motion.from_npz(tmp_path / "a" / "imitator_motion.npz")
     m = hoap2.model
     for j, v in excess:
@@ -268,7 +268,7 @@ def test_simulate_command(tmp_path, capsys):
     from gdimitate.apps.scenarios import standing_plan
     from gdimitate.export.writers import export_motion
 
-    robot = gd.Robot.from_library("g1")
+    robot = shared.library_robot("g1")
     plan = standing_plan(robot, 1.0)
     path = tmp_path / "stand.npz"
     export_motion(robot, plan.motion, path, "npz", wrenches=plan.wrenches)

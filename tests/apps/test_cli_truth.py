@@ -17,6 +17,7 @@ import pytest
 import gdimitate as gd
 from gdimitate.apps.cli import EXIT_STATUS, build_parser, main
 from gdimitate.io.gait import human_walk_path
+from tests.helpers import shared
 from tests.helpers.printed import numbers
 
 SAG = human_walk_path()
@@ -28,7 +29,7 @@ def _stride_from_forces(path=SAG_GRF) -> float:
     successive heel strikes (vertical force rising through 20 N) of the same foot."""
     from gdimitate.io.opensim import read_grf
 
-    cf = read_grf(path, gd.Robot.from_library("hoap2"))
+    cf = read_grf(path, shared.library_robot("hoap2"))
     gaps = []
     for s in ("left", "right"):
         c = cf[s].contact
@@ -59,7 +60,7 @@ def test_adapt_of_the_sagittal_walk_to_hoap2_says_which_goal_is_unmet(tmp_path, 
     assert rep["audit"]["feasible"] == verdict["feasible"]
     assert {"binding", "checks"} <= set(rep["audit"])
     assert [u["name"] for u in verdict["unmet"]] == [u["name"] for u in solver["unmet"]]
-    hoap2 = gd.Robot.from_library("hoap2")
+    hoap2 = shared.library_robot("hoap2")
     motion = gd.Motion.from_npz(out / "imitator_motion.npz")
     again = audit(hoap2, motion, read_wrenches(out / "imitator_motion.npz"))
     assert again.feasible == verdict["feasible"]
@@ -408,7 +409,7 @@ def test_adapt_prints_the_gait_the_report_holds(tmp_path, capsys):
     assert (f"stride ratio {g['stride_ratio']:.2f}, step ratio {g['step_ratio']:.2f}"
             in printed)
     human, walk = human_walk()
-    hoap2 = gd.Robot.from_library("hoap2")
+    hoap2 = shared.library_robot("hoap2")
     q = gd.Motion.from_npz(out / "imitator_motion.npz").q
     ix, dx = hoap2.idx_q("base_x"), human.idx_q("base_x")
     own = abs(q[-1, ix] - q[0, ix])

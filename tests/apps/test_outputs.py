@@ -26,6 +26,7 @@ from gdimitate.apps.cli import main
 from gdimitate.errors import OutputError
 from gdimitate.io.gait import human_walk_path
 from gdimitate.safety import LOCK_NAME, atomic_write, output_job
+from tests.helpers import shared
 
 SAG = human_walk_path()
 SAG_GRF = SAG.parent / "walk_gait1018_subject01_grf.mot"
@@ -234,7 +235,7 @@ def test_an_npz_whose_header_promises_more_than_it_holds_is_refused(tmp_path):
     from gdimitate.errors import FileFormatError
     from gdimitate.model.motion import Motion
 
-    robot = gd.Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     good = tmp_path / "good.npz"
     gd.adapt(*_sagittal(robot), "analytic").motion.to_npz(good, robot=robot)
     with zipfile.ZipFile(good) as zf:

@@ -29,6 +29,7 @@ from gdimitate.model.robot import Robot
 from gdimitate.model.urdfgen import PLANAR_MODELS, planar_biped_urdf
 from gdimitate.viz import Viewer
 from gdimitate.viz.server import MeshcatServer
+from tests.helpers import shared
 
 HOAP2 = planar_biped_urdf(PLANAR_MODELS["hoap2"])
 
@@ -291,7 +292,7 @@ def test_grf_unloaded_rows_with_arbitrary_cop_load_loaded_mm_refused(tmp_path, u
     from gdimitate.errors import UnitError
     from gdimitate.io.opensim import read_grf
 
-    robot = Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     t = np.linspace(0, 1.2, 241)
     truth = _grf_table(tmp_path / "grf.mot", t, garbage, up=up)
     cf = read_grf(tmp_path / "grf.mot", robot)
@@ -312,7 +313,7 @@ def test_every_shipped_grf_file_loads():
     from gdimitate.io.gait import human_walk, human_walk_3d_folder
     from gdimitate.io.opensim import read_grf
 
-    robot = Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     files = sorted(Path(human_walk_path()).parent.glob("*grf*.mot")) + sorted(
         human_walk_3d_folder().glob("*grf*.mot"))
     assert len(files) == 2
@@ -332,7 +333,7 @@ def test_adapt_of_read_coordinates_motion_says_how_to_get_contacts():
     folder = human_walk_3d_folder()
     human = Robot.from_osim(folder / "subject01.osim")
     motion = read_coordinates(folder / "subject01_walk1_ik.mot", human)
-    g1 = Robot.from_library("g1")
+    g1 = shared.library_robot("g1")
     for method in ("optimal", "analytic", "copy"):
         with pytest.raises(InvalidInputError, match=r"load_demonstration\(path, grf=") as e:
             gd.adapt(motion, human, g1, method)

@@ -40,6 +40,7 @@ from gdimitate.safety import (
     atomic_write,
 )
 from gdimitate.viz.server import MeshcatServer
+from tests.helpers import shared
 
 
 # ------------------------------------------------------------------------- URDF helpers
@@ -360,7 +361,7 @@ def test_urdf_size_and_depth_are_bounded_before_parsing(tmp_path):
 
 
 def _hoap2_walk(t: np.ndarray) -> tuple[Robot, gd.Motion]:
-    robot = Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     q = np.tile(robot.neutral, (t.size, 1))
     w = 2 * np.pi * 0.8 * (t - t[0]) / (t[-1] - t[0]) * 2.0
     for side, phase in (("left", 0.0), ("right", np.pi)):
@@ -515,7 +516,7 @@ def test_a_long_motion_at_a_legal_rate_is_bounded_by_its_knot_array():
     from gdimitate.safety import MAX_ARRAY_BYTES
 
     robot, motion = _walk_with_contacts(np.arange(0, 3500, 0.5))
-    g1 = Robot.from_library("g1")
+    g1 = shared.library_robot("g1")
     knots_fit = MAX_ARRAY_BYTES / 8 / (g1.model.nq + 2 * g1.model.nv)
     assert 3500 * 1000 > knots_fit  # the grid below is beyond the bound
     with _bounded(), pytest.raises(ResourceLimitError, match="knot grid"):
@@ -527,7 +528,7 @@ def test_export_frame_rate_is_bounded(tmp_path):
     from gdimitate.errors import ExportError
     from gdimitate.export.writers import export_motion
 
-    g1 = Robot.from_library("g1")
+    g1 = shared.library_robot("g1")
     t = np.arange(30) / 30.0
     motion = gd.Motion(t, g1.joint_names, np.tile(g1.neutral, (t.size, 1)), base_nq=7,
                        joint_nq=tuple(g1.model.joints[j].nq for j in range(1, g1.model.njoints)))
@@ -563,7 +564,7 @@ def test_a_diverging_simulation_writes_no_mujoco_log(tmp_path, monkeypatch):
     from gdimitate.sim.simulate import Push
 
     monkeypatch.chdir(tmp_path)
-    robot = Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     T = 30
     motion = gd.Motion(np.arange(T) / 60, robot.joint_names, np.tile(robot.neutral, (T, 1)),
                        contact={s: np.ones(T, bool) for s in ("left", "right")}, base_nq=3)

@@ -15,6 +15,7 @@ from gdimitate.io.gait import human_walk_path, read_mot, read_opensim
 from gdimitate.model.contact import ContactForces, FootForces
 from gdimitate.model.kinematics import joint_paths
 from gdimitate.model.sagittal import leg_angles
+from tests.helpers import shared
 
 GRF = human_walk_path().parent / "walk_gait1018_subject01_grf.mot"
 
@@ -53,7 +54,7 @@ def test_measured_is_the_reverse_grf_resampled():
     feet = {s: FootForces(f * (1 if s == "left" else 0.5), np.zeros((101, 3)),
                           np.zeros((101, 3)), np.ones(101, bool)) for s in ("left", "right")}
     forces = ContactForces(tf, feet, "synthetic")
-    robot = gd.Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     motion = gd.Motion(t=t, joint_names=robot.joint_names, q=np.tile(robot.neutral, (11, 1)),
                        contact={"left": np.ones(11, bool), "right": t < 0.5})
     fd = force_direction(robot, motion, "measured", forces=forces)
@@ -187,7 +188,7 @@ def test_filtered_derivatives_are_right_at_the_edges():
     acceleration is 0 at the edges)."""
     from gdimitate.model.motion import differentiate
 
-    robot = gd.Robot.from_library("hoap2")
+    robot = shared.library_robot("hoap2")
     t = np.arange(0, 1.3, 1 / 60)
     w = np.pi
     q = np.tile(robot.neutral, (t.size, 1))

@@ -27,7 +27,7 @@ from gdimitate.errors import (
     UnknownNameError,
     UnknownRobotError,
 )
-from tests.helpers import ROOT
+from tests.helpers import ROOT, shared
 
 ANALYTIC = BatchOptions("hoap2", method="analytic")
 
@@ -56,8 +56,8 @@ def inputs(tmp_path_factory) -> Path:
 
 def _direct(path: Path, method: str = "analytic"):
     robot, motion = gd.gait.read_opensim(path)
-    return gd.adapt(motion, robot, gd.Robot.from_library("hoap2"), method, verbose=False) \
-        if method == "optimal" else gd.adapt(motion, robot, gd.Robot.from_library("hoap2"),
+    return gd.adapt(motion, robot, shared.library_robot("hoap2"), method, verbose=False) \
+        if method == "optimal" else gd.adapt(motion, robot, shared.library_robot("hoap2"),
                                              method)
 
 
@@ -334,7 +334,7 @@ def test_measured_forces_beside_a_demonstration_are_used(tmp_path):
     assert row.status == "done", row.error
     d = load_demonstration(demos / "walk.mot", grf=demos / "walk_grf.mot")
     assert "measured vertical GRF" in d.note  # the sagittal reader: stance from the GRF
-    ref = gd.adapt(d.motion, d.robot, gd.Robot.from_library("hoap2"), "analytic")
+    ref = gd.adapt(d.motion, d.robot, shared.library_robot("hoap2"), "analytic")
     got = gd.Motion.from_npz(tmp_path / "out" / row.output)
     np.testing.assert_allclose(got.q, ref.motion.q, rtol=0, atol=1e-12)
     for s in ("left", "right"):  # the measured stance, not the kinematic one
@@ -369,7 +369,7 @@ def test_bvh_batch_optimal_matches_direct_adaptation(tmp_path):
     opts = BatchOptions("hoap2", method="optimal")
     res = run_batch(demos, tmp_path / "out", opts, workers=2, progress=False)
     assert [r.status for r in res.rows] == ["done"] * 3, [r.error for r in res.rows]
-    hoap2 = gd.Robot.from_library("hoap2")
+    hoap2 = shared.library_robot("hoap2")
     for r in res.rows:
         d = load_demonstration(demos / r.file)
         ref = gd.adapt(d.motion, d.robot, hoap2, "optimal", verbose=False)

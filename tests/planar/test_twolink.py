@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from gdimitate import InvalidInputError
 from gdimitate.planar import ROUNDOFF, eq1, fk2, ik2
+from tests.helpers import shared
 
 angle = st.floats(-1.2, 1.2, allow_nan=False)
 knee = st.floats(-2.0, 0.0, allow_nan=False)
@@ -105,10 +106,9 @@ def test_planar_signs_and_offsets_are_sagittal_leg_s():
     """The planar signs and offsets are :func:`gdimitate.planar.sagittal_leg`'s (a ``Leg`` has
     none), which for our planar model follow from its URDF: joints about −y (a positive angle
     moves the distal end forward: sign +1) and legs hanging straight down (offsets 0)."""
-    import gdimitate as gd
     from gdimitate.planar import sagittal_leg
 
-    r = gd.Robot.from_library("hoap2")
+    r = shared.library_robot("hoap2")
     for s in ("left", "right"):
         sag = sagittal_leg(r, s)
         assert sag.signs == (1.0, 1.0, 1.0) and sag.offsets == (0.0, 0.0, 0.0)

@@ -20,7 +20,6 @@ import umsgpack
 
 from gdimitate.assess.metrics import force_direction
 from gdimitate.errors import InvalidInputError, ViewerError
-from gdimitate.model.robot import Robot
 from gdimitate.planar.walking import GaitSpec, walking_motion
 from gdimitate.viz import (
     BrowserNotFoundError,
@@ -358,7 +357,7 @@ def test_meshes_are_decimated_but_keep_their_shape():
     from gdimitate.viz.decimate import decimated_stl
     from gdimitate.viz.scene import MAX_MESH_FACES
 
-    g1 = Robot.from_library("g1")
+    g1 = shared.library_robot("g1")
     paths = sorted({o.meshPath for o in g1.visual_model.geometryObjects})
     big = 0
     for p in paths:
@@ -378,10 +377,10 @@ def test_meshes_are_decimated_but_keep_their_shape():
 def test_a_page_with_two_g1s_is_under_5_mb(tmp_path):
     """The demo's page shows G1 twice (plan and simulation) and the demonstrator; the same
     load here (two animated G1s and a planar robot) must stay under 5 MB."""
-    g1 = Robot.from_library("g1")
+    g1 = shared.library_robot("g1")
     T = 60
     m = walking_motion(g1, GAIT)
-    planar = Robot.from_library("case1_demonstrator")
+    planar = shared.library_robot("case1_demonstrator")
     v = Viewer.start(quiet=True, timeout_s=60.0)
     try:
         v.show(g1, m, name="plan")

@@ -16,6 +16,7 @@ import gdimitate as gd
 from gdimitate.assess.metrics import force_direction
 from gdimitate.model.robot import SIDES
 from gdimitate.retarget import resample
+from tests.helpers import shared
 
 pytestmark = pytest.mark.slow
 
@@ -73,7 +74,7 @@ def _check(robot, r, target):
 @pytest.mark.parametrize("name", ["g1"])
 def test_real_walk_to_humanoid(walk, name):
     h, demo, fs = walk
-    robot = gd.Robot.from_library(name)
+    robot = shared.library_robot(name)
     r = gd.adapt(demo, h, robot, method="optimal", force="measured", forces=fs, rate=30,
                  verbose=False)
     target = {s: d.vector for s, d in force_direction(
@@ -104,7 +105,7 @@ def test_screening_keeps_the_legs_apart_row(walk):
     from gdimitate.retarget.trajectory import solve as S
 
     h, demo, fs = walk
-    robot = gd.Robot.from_library("g1")  # its measured-push problem the demo compiles too
+    robot = shared.library_robot("g1")  # its measured-push problem the demo compiles too
     copts = Contact()
     act = limits.resolve(robot, actuated_v_indices(robot), Limits()).names
     bmap = body_map(h, robot, None)
