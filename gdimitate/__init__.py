@@ -29,6 +29,7 @@ import importlib.util
 from typing import TYPE_CHECKING, Any
 
 from .errors import (
+    BodyMapError,
     ContactError,
     GdimitateError,
     InvalidInputError,
@@ -148,6 +149,7 @@ def __dir__() -> list[str]:
 __all__ = [
     "AdaptationReport",
     "AdaptedMotion",
+    "BodyMapError",
     "ContactError",
     "ContactForces",
     "CPGReplay",

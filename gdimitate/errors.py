@@ -50,6 +50,13 @@ class InvalidInputError(GdimitateError, ValueError):
     """An array with the wrong shape, NaN/inf values, or a value out of its valid range."""
 
 
+class BodyMapError(InvalidInputError):
+    """A body map or a body-map family file (``gdimitate/data/bodymaps/*.json``, or a user's
+    passed as ``body_map=``) that is malformed: a missing or unknown key, an unknown role or
+    joint name, a scale or offset that is not a finite number, a duplicate entry. The message
+    names the file and the entry and lists the valid choices."""
+
+
 class TimeGridError(InvalidInputError):
     """A time vector that is not one-dimensional, finite and strictly increasing."""
 

@@ -74,9 +74,11 @@ def _depth(text: str) -> int:
 
 
 def loads_json(text: str | bytes, where: str,
-               error: type[GdimitateError] = InvalidInputError) -> Any:
+               error: type[GdimitateError] = InvalidInputError, unique_keys: bool = False
+               ) -> Any:
     """The JSON value of ``text`` (from ``where``, for messages), within the bounds of the
-    module docstring; else ``error`` naming ``where`` and what is wrong."""
+    module docstring; else ``error`` naming ``where`` and what is wrong (with ``unique_keys``,
+    an object that repeats a key too: plain JSON keeps the last silently)."""
     if isinstance(text, bytes):
         try:
             text = text.decode("utf-8")
@@ -113,9 +115,18 @@ def loads_json(text: str | bytes, where: str,
     def constant(s: str) -> float:
         raise ValueError(f"{s} is not a number JSON allows (give a finite number)")
 
+    def unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+        seen: dict[str, Any] = {}
+        for k, v in pairs:
+            if k in seen:
+                raise ValueError(f"the key {k!r:.80} appears twice in one object (give it once)")
+            seen[k] = v
+        return seen
+
     try:
         return json.loads(text, parse_float=number, parse_int=integer,
-                          parse_constant=constant)
+                          parse_constant=constant, object_pairs_hook=unique if unique_keys
+                          else None)
     except json.JSONDecodeError as e:
         raise error(f"{where}: not valid JSON ({e})") from None
     except (ValueError, RecursionError) as e:
@@ -123,7 +134,8 @@ def loads_json(text: str | bytes, where: str,
 
 
 def read_json(path: str | os.PathLike, what: str,
-              error: type[GdimitateError] = InvalidInputError) -> Any:
+              error: type[GdimitateError] = InvalidInputError, unique_keys: bool = False
+              ) -> Any:
     """The JSON value in file ``path`` (``what`` names it in messages, e.g. ``"--legs"``):
     at most :data:`MAX_JSON_BYTES` (checked before reading), then :func:`loads_json`."""
     p = path_arg(what, path)
@@ -135,7 +147,7 @@ def read_json(path: str | os.PathLike, what: str,
         data = p.read_bytes()
     except OSError as e:
         raise error(f"{what} {p}: cannot read it ({e.strerror or e})") from None
-    return loads_json(data, f"{what} {p}", error)
+    return loads_json(data, f"{what} {p}", error, unique_keys)
 
 
 def _per_side(value: object, where: str, shape: str) -> list[tuple[object, object]]:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from os import PathLike
 from typing import NamedTuple
 
 import numpy as np
@@ -108,7 +109,8 @@ class StreamingAdaptor:
     :data:`STREAMING_FORCE_MODELS`; ``weights``: accepted for the trajectory mode's signature
     (the per-frame QP has its own task weights, :class:`~.receding.Gains`); ``limits``,
     ``contact``: as for :func:`~.solve.adapt_optimal` (the ``"all"`` contact rule only);
-    ``contacts``: sole overrides; ``body_map``; ``dt`` [s]: default frame period; ``ipopt``:
+    ``contacts``: sole overrides; ``body_map``: a map, a naming family or a JSON file of either
+    (:func:`~gdimitate.retarget.bodymap.body_map`); ``dt`` [s]: default frame period; ``ipopt``:
     unused (no NLP runs; a non-default ``weights`` or any ``ipopt`` warns); ``audit``: who
     judges each frame (:data:`AUDIT_MODES`) — ``True``/``"worker"``: a worker process forked
     at construction (:class:`~.verdict_worker.VerdictWorker`; ``"inline"`` where the platform
@@ -131,7 +133,7 @@ class StreamingAdaptor:
     def __init__(self, demonstrator: Robot, imitator: Robot, force: str = "segment", *,
                  weights: Weights | None = None, limits: Limits | None = None,
                  contact: Contact | None = None, contacts: dict | None = None,
-                 body_map: BodyMap | dict | str | None = None, dt: float = 1 / 60,
+                 body_map: BodyMap | dict | str | PathLike | None = None, dt: float = 1 / 60,
                  ipopt: dict | None = None, audit: bool | str = True,
                  start: str = "estimate"):
         if force not in STREAMING_FORCE_MODELS:
