@@ -21,7 +21,8 @@ from gdimitate.errors import BodyMapError, GdimitateError, InvalidInputError, Un
 from gdimitate.retarget import BodyMap, body_map
 from gdimitate.retarget import bodymap as bm
 
-HERE = Path(__file__).parent
+#: the tests' root (the folder with data/ and opensim_ref/), wherever this file sits below it
+HERE = next(d for d in Path(__file__).parents if (d / "opensim_ref").is_dir())
 FROZEN = json.loads((HERE / "data" / "bodymap_presets.json").read_text())
 
 
