@@ -20,9 +20,9 @@ import gdimitate as gd
 from gdimitate.errors import BodyMapError, GdimitateError, InvalidInputError, UnknownNameError
 from gdimitate.retarget import BodyMap, body_map
 from gdimitate.retarget import bodymap as bm
+from tests.helpers import TESTS
 
-#: the tests' root (the folder with data/ and opensim_ref/), wherever this file sits below it
-HERE = next(d for d in Path(__file__).parents if (d / "opensim_ref").is_dir())
+HERE = TESTS  # the tests' root: its data/ and opensim_ref/
 FROZEN = json.loads((HERE / "data" / "bodymap_presets.json").read_text())
 
 
