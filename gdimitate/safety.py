@@ -383,6 +383,20 @@ def atomic_write(path: str | os.PathLike) -> Iterator[Path]:
         raise
 
 
+def save_figure(fig, path: str | os.PathLike | None):
+    """``fig`` (a matplotlib figure) laid out tight and, where ``path`` is given, written there
+    atomically (:func:`atomic_write`; PNG at 110 dpi for a ``.png``) and closed; returns
+    ``fig``."""
+    fig.tight_layout()
+    if path is not None:
+        import matplotlib.pyplot as plt
+
+        with atomic_write(path) as tmp:
+            fig.savefig(tmp, dpi=110)
+        plt.close(fig)
+    return fig
+
+
 Stamp = tuple[int, int, int]
 LOCK_NAME = ".gdimitate.lock"
 """The lock file an :func:`output_job` holds in its folder (``flock``; it names the run's

@@ -18,7 +18,7 @@ from ..model.contact import SoleContact, centre_of_pressure
 from ..model.motion import Motion
 from ..model.robot import Robot
 from ..model.sagittal import leg_angles
-from ..safety import atomic_write
+from ..safety import save_figure
 
 __all__ = ["Track", "plot_heights", "plot_angles", "plot_paths", "plot_com", "plot_eq1_argument",
            "plot_force_directions", "plot_sole_cop"]
@@ -30,14 +30,6 @@ STYLES = ["-", "--", ":", "-."]
 def _L(robot: Robot) -> float:
     return robot.legs["left"].length
 
-
-def _save(fig, path: Path | None):
-    fig.tight_layout()
-    if path is not None:
-        with atomic_write(path) as tmp:
-            fig.savefig(tmp, dpi=110)
-        plt.close(fig)
-    return fig
 
 
 def plot_heights(tracks: list[Track], title: str = "", path: Path | None = None):
@@ -57,7 +49,7 @@ def plot_heights(tracks: list[Track], title: str = "", path: Path | None = None)
     ax[2].set_xlabel("time [s]")
     ax[0].legend(fontsize=8)
     ax[0].set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_gait(demonstrator: Robot, demo: Motion, adapted, path: Path | None = None):
@@ -88,7 +80,7 @@ def plot_angles(tracks: list[Track], title: str = "", path: Path | None = None):
     ax[2].set_xlabel("time [s]")
     ax[0].legend(fontsize=8)
     ax[0].set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_paths(tracks: list[Track], title: str = "", path: Path | None = None):
@@ -107,7 +99,7 @@ def plot_paths(tracks: list[Track], title: str = "", path: Path | None = None):
     ax[-1, 0].set_xlabel("x / L")
     ax[0, 0].legend(fontsize=8, ncol=3)
     ax[0, 0].set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_com(tracks: list[Track], title: str = "", path: Path | None = None):
@@ -123,7 +115,7 @@ def plot_com(tracks: list[Track], title: str = "", path: Path | None = None):
     ax[1].set_ylabel("CoM z / L")
     ax[1].legend(fontsize=8)
     ax[0].set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_eq1_argument(t: np.ndarray, arguments: dict[str, np.ndarray], title: str = "",
@@ -137,7 +129,7 @@ def plot_eq1_argument(t: np.ndarray, arguments: dict[str, np.ndarray], title: st
     ax.set_ylabel("Eq. (1) argument")
     ax.legend(fontsize=8)
     ax.set_title(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_force_directions(t: np.ndarray, directions: Mapping[str, Mapping[str, ForceDirection]],
@@ -171,7 +163,7 @@ def plot_force_directions(t: np.ndarray, directions: Mapping[str, Mapping[str, F
     ax[0, 0].legend(fontsize=8)
     if title:
         fig.suptitle(title)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_sole_cop(wrenches: Mapping[str, np.ndarray], contacts: Mapping[str, SoleContact],
@@ -200,4 +192,4 @@ def plot_sole_cop(wrenches: Mapping[str, np.ndarray], contacts: Mapping[str, Sol
     ax[0].legend(fontsize=8, loc="lower left")
     if title:
         fig.suptitle(title)
-    return _save(fig, path)
+    return save_figure(fig, path)

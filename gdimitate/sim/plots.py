@@ -13,20 +13,12 @@ import numpy as np
 
 from ..assess.metrics import angle_down
 from ..model.robot import SIDES
-from ..safety import atomic_write
+from ..safety import save_figure
 from .metrics import frontal_angle, stance_intervals
 from .simulate import SimResult
 
 __all__ = ["plot_forces", "plot_force_directions", "plot_cop", "plot_tracking", "plot_summary"]
 
-
-def _save(fig, path: str | Path | None):
-    fig.tight_layout()
-    if path is not None:
-        with atomic_write(path) as tmp:
-            fig.savefig(tmp, dpi=110)
-        plt.close(fig)
-    return fig
 
 
 def _shade_single(ax, res: SimResult, side: str) -> None:
@@ -58,7 +50,7 @@ def plot_forces(res: SimResult, path: str | Path | None = None):
     ax[0, 0].legend(fontsize=8)
     for a in ax[-1]:
         a.set_xlabel("t [s]")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_force_directions(res: SimResult, path: str | Path | None = None):
@@ -85,7 +77,7 @@ def plot_force_directions(res: SimResult, path: str | Path | None = None):
     ax[0, 0].legend(fontsize=8)
     for a in ax[-1]:
         a.set_xlabel("t [s]")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_cop(res: SimResult, path: str | Path | None = None):
@@ -103,7 +95,7 @@ def plot_cop(res: SimResult, path: str | Path | None = None):
         a.axhline(0.0, color="k", lw=0.8)
         a.set_ylabel(f"{s} margin [mm]")
         a.set_xlabel("t [s]")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_tracking(res: SimResult, path: str | Path | None = None):
@@ -119,7 +111,7 @@ def plot_tracking(res: SimResult, path: str | Path | None = None):
     ax[1].axhline(1.0, color="k", lw=0.8)
     ax[1].set_ylabel("max |τ| / limit")
     ax[1].set_xticks(range(len(names)), names, rotation=90, fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_summary(res: SimResult, path: str | Path | None = None):
@@ -153,4 +145,4 @@ def plot_summary(res: SimResult, path: str | Path | None = None):
                     f"{100 * mt.torque_saturation:.1f} %")
     for a in ax:
         _mark_fall(a, res)
-    return _save(fig, path)
+    return save_figure(fig, path)

@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..model.robot import SIDES  # noqa: E402
-from ..safety import atomic_write  # noqa: E402
+from ..safety import save_figure  # noqa: E402
 
 __all__ = ["plot_walk"]
 
@@ -40,10 +40,7 @@ def _portraits(res, out: Path) -> str:
         ax.set_xlabel("y")
         ax.set_ylabel("dy/dt [1/s]")
     fig.suptitle(f"oscillator phase portraits (feedback gain {res.feedback_gain:g})")
-    fig.tight_layout()
-    with atomic_write(out / "walk_phase_portraits.png") as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+    save_figure(fig, out / "walk_phase_portraits.png")
     return "walk_phase_portraits.png"
 
 
@@ -65,10 +62,7 @@ def _frequency(res, out: Path) -> str:
     ax.set_xlabel("t [s]")
     ax.set_ylabel("stride frequency [Hz]")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_write(out / "walk_frequency.png") as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+    save_figure(fig, out / "walk_frequency.png")
     return "walk_frequency.png"
 
 
@@ -97,8 +91,5 @@ def _forces(res, out: Path) -> str:
     ax[1].set_xlabel("step")
     ax[1].set_ylabel("RMS angle vs measured [deg]")
     ax[1].legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_write(out / "walk_force_directions.png") as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+    save_figure(fig, out / "walk_force_directions.png")
     return "walk_force_directions.png"
