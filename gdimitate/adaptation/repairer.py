@@ -58,13 +58,29 @@ __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_sc
 
 #: Cost weights of the repair (:class:`gdimitate.retarget.Weights` fields changed from the
 #: adaptor's defaults): the horizontal ankle-to-hip placement and the thigh direction weighed
-#: as the hip height and shank (3), the feet's places in double support 3 × the default (300).
-#: Measured on the joint copy of the shipped walk onto G1 (30 knots/s), keypoints' RMS from
-#: the input: one stride 7.6 cm with the defaults, 4.4 cm with placement and thigh 3, 4.0 cm
-#: with steps 300 too (500 and 1000 left a stance velocity over the audit's 1e-3 m/s); the
-#: whole walk (3.5 s) 11.9 cm without steps 300 (it travelled 0.74 of the input's distance),
-#: 6.1 cm with it (0.93), 4.9 cm with 1000.
-REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0, "steps": 300.0}
+#: as the hip height and shank (3), the feet's places in double support 3 × the default (300),
+#: every squared acceleration at a tenth of the default (1e-5 s⁴). Measured on the joint
+#: copy of the shipped walk onto G1, keypoints' RMS from the input: one stride 7.6 cm with the
+#: defaults, 4.4 cm with placement and thigh 3, 4.0 cm with steps 300 too. The smoothness is
+#: what kept the whole walk (3.5 s) at 6.1 cm: its pull on every acceleration shortens every
+#: step — a repair of that repair (an input already feasible, feet flat and still) came back
+#: with each step 1 cm short (travel 0.97) — and the copy's steps came out 2–3 cm short
+#: (travel 0.92), the keypoints 8 cm ahead at the start and 16 cm behind at the end (5.0 of
+#: the 6.1 cm RMS along the walk); no joint, velocity or torque limit bound; the hip height,
+#: placement, over-feet and wrench weights and a 0.1 rad cone around the push instead of its
+#: direction moved it by 0.7 cm at most (steps 1000 and 3000: 4.9 and 4.8 cm, but the stride
+#: then failed the audit's stance velocity). Smoothness 3e-5 / 1e-5 / 5e-6 / 3e-6 at the
+#: knot rate of :func:`repair_rate`, placed by a shift alone: the whole walk 4.3 / 3.2 / 2.8
+#: / 2.6 cm, the stride 3.3 / 2.5 / – / 2.0 cm, GMR's G1 output of the CMU walk 6.8 / 5.6 /
+#: 5.1 / 4.8 cm (before 8.8); each audited feasible but the whole walk at 3e-6 (one knot's
+#: ankle torque 0.8 % over its limit with the audit's own wrench estimate). With
+#: :func:`placed`'s turn too: at 1e-5 3.2 cm on the whole walk (MuJoCo walks it) and 5.0 cm on
+#: GMR's; at 8e-6 / 5e-6 the whole walk's 3.0 / 2.8 cm fell in MuJoCo at 3.0 / 2.0 s, and a
+#: differential-IK output's repair stopped short (16 % of knots feasible at 5e-6, 95 % at
+#: 1e-4). At 30 knots/s the stride's stance foot moved 1.3–1.6 mm/s at one knot (the audit
+#: allows 1).
+REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0, "steps": 300.0,
+                                    "smoothness": 1e-5}
 
 #: A stance frame of the audit's schedule stays stance for the repair only while the sole's
 #: highest corner is within this height above the floor [hip heights] (G1: 5.8 cm): the
@@ -158,12 +174,16 @@ class RepairResult:
             "push_error_rms_rad": dict(self.push_error_rms), "seconds": self.seconds})
 
 
-def repair_rate(t: np.ndarray, limit: float = 50.0) -> float:
-    """The knot rate [knots/s] of a repair of a motion on times ``t`` ``(T,)`` [s]: the input's
-    frame rate divided by the smallest whole number that brings it to ``limit`` or below
-    (60 Hz → 30, 120 Hz → 40, 50 Hz → 50), so that every knot is an input frame."""
+def repair_rate(t: np.ndarray, least: float = 40.0) -> float:
+    """The knot rate [knots/s] of a repair of a motion on times ``t`` ``(T,)`` [s]: the
+    coarsest grid of at least ``least`` knots/s whose knots are input frames — the input's
+    frame rate divided by the largest whole number that keeps it at ``least`` or above (60 Hz
+    → 60, 120 Hz → 40, 50 Hz → 50, 200 Hz → 40; an input slower than ``least``: its own
+    rate). At 30 knots/s the repaired stride's stance foot moved 1.3–1.6 mm/s at one knot
+    (a one-step scheme's error, second order in the knot spacing; the audit allows 1 mm/s)
+    with :data:`REPAIR_WEIGHTS`' light smoothing; at 40 and 60 it did not."""
     fps = round(1.0 / float(np.median(np.diff(t))), 6)  # 60, not 59.99999999
-    return fps / math.ceil(fps / limit - 1e-9)
+    return fps / max(1, math.floor(fps / least + 1e-9))
 
 
 def repair_schedule(robot: Robot, motion: Motion, flat: float = FLAT_HEIGHT
@@ -264,15 +284,30 @@ def _keypoints(robot: Robot, q: np.ndarray) -> np.ndarray:
 
 
 def placed(robot: Robot, reference: Motion, motion: Motion) -> Motion:
-    """``motion`` moved along the floor (its base's x, y) by the mean horizontal offset of its
-    keypoints from ``reference``'s at its times: the adaptor writes a motion from the origin
-    of the demonstration's heading frame; on a flat floor a horizontal shift changes no force,
-    torque, contact or collision (the audit and MuJoCo give the same numbers), and it puts the
-    repaired motion where the input was."""
-    d = (_keypoints(robot, configurations_at(robot, reference, motion.t))
-         - _keypoints(robot, motion.q))[..., :2].reshape(-1, 2).mean(axis=0)
+    """``motion`` moved on the floor — turned about the vertical and shifted along it — to
+    where ``reference`` is: the turn and shift that bring its keypoints closest to
+    ``reference``'s at its times (least squares over every knot and keypoint, horizontal
+    coordinates: the 2-D Kabsch fit). The adaptor writes a motion in the demonstration's
+    heading frame turned back by its heading estimate; on a flat floor such a turn and shift
+    change no force, torque, contact or collision (the audit gives the same numbers), and
+    they put the repaired motion where the input was. ``q``'s base position and yaw change;
+    ``v`` and ``a`` (a free base's twist in its own frame) do not."""
+    import pinocchio as pin
+
+    ref = _keypoints(robot, configurations_at(robot, reference, motion.t))[..., :2]
+    own = _keypoints(robot, motion.q)[..., :2]
+    ref, own = ref.reshape(-1, 2), own.reshape(-1, 2)
+    cr, co = ref.mean(axis=0), own.mean(axis=0)
+    h = (own - co).T @ (ref - cr)  # Σ own ⊗ ref, centred
+    yaw = math.atan2(h[0, 1] - h[1, 0], h[0, 0] + h[1, 1])
+    c, s = math.cos(yaw), math.sin(yaw)
+    R2 = np.array([[c, -s], [s, c]])
     q = motion.q.copy()
-    q[:, :2] += d
+    q[:, :2] = (q[:, :2] - co) @ R2.T + cr
+    turn = pin.Quaternion(pin.rpy.rpyToMatrix(0.0, 0.0, yaw))
+    for k in range(len(q)):  # the base quaternion (x, y, z, w) turned about the world's z
+        b = turn * pin.Quaternion(q[k, 6], q[k, 3], q[k, 4], q[k, 5])
+        q[k, 3:7] = (b.x, b.y, b.z, b.w)
     return motion.replace(q=q)
 
 
