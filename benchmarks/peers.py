@@ -2,10 +2,14 @@
 audited (``gdimitate.audit.audit``) and simulated (``gdimitate.sim.simulate``) alike.
 
 Run: ``python benchmarks/peers.py [--robots talos g1 hoap2] [--no-optimal] [--out FILE]
-[--save-plans DIR | --plans DIR] [--holosoma-python PYTHON] [--repair]`` (``--plans``: audit and
-simulate the optimal plans a ``--save-plans`` run wrote, with the adaptation time it
-measured, instead of adapting anew).
-Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``).
+[--save-plans DIR | --plans DIR] [--holosoma-python PYTHON] [--gmr-python PYTHON --gmr-repo
+DIR] [--repair | --repair-only] [--save-motions DIR]`` (``--plans``: audit and simulate the
+optimal plans a ``--save-plans`` run wrote, with the adaptation time it measured, instead of
+adapting anew).
+Prints one markdown table and writes it to ``benchmarks/peers.md`` (or ``--out``); the repair
+table (``--repair``) goes into its own block of that file (``<!-- results: repair -->``), which
+``--repair-only`` (the repair rows alone, G1's peers) replaces leaving the rest of the file as
+it is.
 
 The demonstration is the shipped 3-D walk (OpenSim subject01, 211 frames at 60 Hz, measured
 ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
@@ -23,14 +27,23 @@ ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
   layout (:func:`smplx_joints`) and run with its defaults in its own Python
   (``--holosoma-python``, ``benchmarks/holosoma_run.py``); its G1 motion is put on our G1 by
   joint name. G1 only (its model);
+- ``GMR`` — General Motion Retargeting (github.com/YanjieZe/GMR, not on PyPI: a checkout at
+  ``--gmr-repo``, its dependencies in the Python ``--gmr-python``; ``benchmarks/gmr_run.py``),
+  the most-used kinematic retargeter: mink IK on its own G1 model with its BVH → G1 config,
+  run on the shipped BVH walk (CMU 02_01, 343 frames at 120 Hz: GMR reads BVH, not the
+  OpenSim walk), its G1 motion put on our G1 by joint name (the same kinematics: body
+  positions equal within 1e-5 m). Repair table only (no measured forces for the main table's
+  push columns). G1 only;
 - ``optimal`` — gdimitate's whole-body adaptor (``adapt(method="optimal", force="measured")``).
 
 ``--repair`` adds a second table: each kinematic output (free-flyer robots: the 3-D copy,
-diff IK, holosoma's) handed over as its q alone — what a retargeter writes — to
+diff IK, holosoma's, GMR's) handed over as its q alone — what a retargeter writes — to
 ``gdimitate.repair`` (the whole-body adaptor from the robot to itself, :mod:`gdimitate.repair`)
 and audited before and after by ``gdimitate.audit_motion`` (share of knots feasible, verdict),
 both run in MuJoCo (``gdimitate.apps.repair.simulate_both``: fell [s] or "no"), the keypoints
-kept (RMS distance of hips, knees, ankles, soles from the input's) and the repair's wall time.
+kept (RMS distance of hips, knees, ankles, soles from the input's), the retargeter's own wall
+time per clip and the repair's. ``--save-motions DIR`` writes each kinematic output as GMR's
+pickle (``DIR/<robot>_<method>.pkl``, q alone) for ``gdimitate audit DIR --robot g1``.
 
 Kinematic methods get the wrenches their motion implicitly asks of the floor
 (``estimate_wrenches(method="lstsq")``: no cone). Columns:
@@ -54,6 +67,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import sys
 import time
 import warnings
@@ -62,6 +77,7 @@ from pathlib import Path
 
 import numpy as np
 from results import add_flag, recording
+from results import replace as replace_block
 
 import gdimitate as gd
 from gdimitate.apps.baselines import diff_ik, joint_copy, kinematic_plan
@@ -269,10 +285,12 @@ def smplx_joints(robot, motion) -> tuple[np.ndarray, float]:
     return J, height
 
 
-def holosoma_motion(robot, demo, qpos: np.ndarray, names: list[str]):
-    """Holosoma's G1 ``qpos`` ``(T, 7 + n)`` (MuJoCo order, quaternion w x y z; joints
-    ``names``) as a Motion of ``robot`` on ``demo``'s times and contacts, joints by name; and
-    the joints ``robot`` lacks."""
+def qpos_motion(robot, t: np.ndarray, qpos: np.ndarray, names: list[str],
+                contact: dict | None = None):
+    """A MuJoCo G1 ``qpos`` ``(T, 7 + n)`` (free joint x y z, quaternion w x y z; joints
+    ``names``) as a Motion of ``robot`` on times ``t`` ``(T,)`` [s] (``contact``: its stance,
+    or none), joints by name (the others at ``robot``'s neutral pose); and the joints
+    ``robot`` lacks."""
     m = robot.model
     q = np.tile(robot.neutral, (len(qpos), 1))
     q[:, :3] = qpos[:, :3]
@@ -282,10 +300,17 @@ def holosoma_motion(robot, demo, qpos: np.ndarray, names: list[str]):
     for k, n in enumerate(names):
         if m.existJointName(n):
             q[:, m.joints[m.getJointId(n)].idx_q] = qpos[:, 7 + k]
-    motion = gd.Motion(demo.t.copy(), robot.joint_names, q,
-                       {s: np.asarray(demo.contact[s], bool).copy() for s in SIDES}, 7,
+    motion = gd.Motion(np.asarray(t, float).copy(), robot.joint_names, q,
+                       {s: np.asarray(contact[s], bool).copy() for s in SIDES}
+                       if contact else {}, 7,
                        tuple(m.joints[j].nq for j in range(1, m.njoints)))
     return motion, missing
+
+
+def holosoma_motion(robot, demo, qpos: np.ndarray, names: list[str]):
+    """Holosoma's G1 ``qpos`` as a Motion of ``robot`` on ``demo``'s times and contacts
+    (:func:`qpos_motion`); and the joints ``robot`` lacks."""
+    return qpos_motion(robot, demo.t, qpos, names, demo.contact)
 
 
 def holosoma_plan(demo, demonstrator, robot, python: str):
@@ -318,16 +343,47 @@ def holosoma_plan(demo, demonstrator, robot, python: str):
     return kinematic_plan(robot, motion, "holosoma", sec), note
 
 
+#: The shipped BVH walk GMR is run on (CMU 02_01; frame 0 is its calibration pose).
+CMU_BVH = Path(gd.__file__).parent / "data" / "gait" / "cmu_02_01" / "cmu_02_01.bvh"
+
+
+def gmr_motion(robot, python: str, repo: str, bvh: Path = CMU_BVH):
+    """GMR (``benchmarks/gmr_run.py`` run by ``python`` with its checkout ``repo``) on the BVH
+    walk ``bvh`` → its G1, put on ``robot``'s joints by name → ``(motion, seconds, note)``:
+    the motion (q alone, on its BVH's clock from 0), GMR's wall time and a note."""
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out.npz"
+        run = subprocess.run([python, str(Path(__file__).parent / "gmr_run.py"), str(repo),
+                              str(bvh), str(out)], capture_output=True, text=True,
+                             timeout=3600)
+        if run.returncode != 0:
+            raise RuntimeError(f"GMR failed: {run.stderr[-400:]}")
+        res = np.load(out)
+        qpos, names = res["qpos"], [str(n) for n in res["joint_names"]]
+        fps, sec, height = float(res["fps"]), float(res["seconds"]), float(res["height"])
+    motion, missing = qpos_motion(robot, np.arange(len(qpos)) / fps, qpos, names)
+    note = (f"GMR's G1 (bvh_to_g1.json) on {bvh.stem}: {len(qpos)} frames at {fps:.0f} Hz in "
+            f"{sec:.1f} s, human height {height:.2f} m"
+            + (f"; joints not on {robot.name}: {missing}" if missing else ""))
+    return motion, sec, note
+
+
 @dataclass(frozen=True)
 class RepairRow:
-    """One kinematic output repaired on its own robot (``gdimitate.repair``): the share of
-    knots the audit finds feasible and its verdict before/after, MuJoCo's fall time [s from
-    the start] before/after (None: walked), the keypoints' RMS distance from the input [m],
-    the push kept (RMS angle from the input's estimate, worse foot) [deg] and the repair's
-    wall time [s]."""
+    """One kinematic output repaired on its own robot (``gdimitate.repair``): the clip it was
+    made from, the retargeter's wall time for it [s], the share of knots the audit finds
+    feasible and its verdict before/after, MuJoCo's fall time [s from the start]
+    before/after (None: walked), the keypoints' RMS distance from the input [m], the push
+    kept (RMS angle from the input's estimate, worse foot) [deg] and the repair's wall time
+    [s]."""
 
     robot: str
     method: str
+    clip: str
+    retarget_seconds: float
     frames: int
     share_before: float
     share_after: float
@@ -341,11 +397,19 @@ class RepairRow:
     note: str = ""
 
 
-def repair_row(robot, plan, method: str) -> RepairRow:
-    """``plan``'s motion as its q alone repaired on ``robot`` and both run in MuJoCo."""
+def repair_row(robot, motion, method: str, clip: str, retarget_seconds: float,
+               save: Path | None = None) -> RepairRow:
+    """``motion`` (a kinematic output of ``method`` made from ``clip`` in
+    ``retarget_seconds``) as its q alone repaired on ``robot`` and both run in MuJoCo;
+    ``save``: a folder to write the input to as GMR's pickle first."""
     from gdimitate.apps.repair import simulate_both
 
-    motion = plan.motion.replace(contact={}, v=None, a=None)
+    motion = motion.replace(contact={}, v=None, a=None)
+    if save is not None:
+        save.mkdir(parents=True, exist_ok=True)
+        slug = "".join(c if c.isalnum() else "_" for c in method.lower()).strip("_")
+        gd.export_motion(robot, motion, save / f"{robot.name}_{slug}.pkl", "gmr",
+                         fps=round(1.0 / float(np.median(np.diff(motion.t))), 6))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -353,10 +417,12 @@ def repair_row(robot, plan, method: str) -> RepairRow:
     except gd.InvalidInputError as e:  # refused, with what to fix: a row that says it
         before = gd.audit_motion(robot, motion)
         nan = float("nan")
-        return RepairRow(robot.name, method, motion.T, before.share_feasible, nan,
-                         before.feasible, False, None, None, nan, nan, nan, str(e))
+        return RepairRow(robot.name, method, clip, retarget_seconds, motion.T,
+                         before.share_feasible, nan, before.feasible, False, None, None, nan,
+                         nan, nan, str(e))
     sim = simulate_both(robot, motion, r)
-    return RepairRow(robot.name, method, motion.T, r.before.share_feasible,
+    return RepairRow(robot.name, method, clip, retarget_seconds, motion.T,
+                     r.before.share_feasible,
                      r.after.share_feasible, r.before.feasible, r.after.feasible,
                      sim["before"]["fall_time"], sim["after"]["fall_time"], r.keypoint_rms,
                      float(np.degrees(np.nanmax(list(r.push_error_rms.values())))), sec)
@@ -364,9 +430,9 @@ def repair_row(robot, plan, method: str) -> RepairRow:
 
 def repair_table(rows: list[RepairRow]) -> str:
     """The repair rows as a markdown table."""
-    lines = ["| robot | input | frames | knots feasible before → after [%] | audit before → "
-             "after | MuJoCo fell before → after [s] | keypoints kept RMS [cm] | push kept "
-             "[deg RMS] | repair [s] |", "|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| robot | input | clip, frames | retarget [s] | knots feasible before → after [%] "
+             "| audit before → after | MuJoCo fell before → after [s] | keypoints kept RMS [cm] "
+             "| push kept [deg RMS] | repair [s] |", "|---|---|---|---|---|---|---|---|---|---|"]
     refused = [r for r in rows if r.note]
 
     def fell(x: float | None) -> str:
@@ -375,31 +441,46 @@ def repair_table(rows: list[RepairRow]) -> str:
     def ok(x: bool) -> str:
         return "feasible" if x else "infeasible"
 
+    def sec(x: float) -> str:
+        return f"{x:.2g}" if x < 10 else f"{x:.0f}"
+
     for r in rows:
-        lines.append(f"| {r.robot} | {r.method} | {r.frames} | {100 * r.share_before:.0f} → "
+        head = f"| {r.robot} | {r.method} | {r.clip}, {r.frames} | {sec(r.retarget_seconds)} "
+        lines.append(f"{head}| {100 * r.share_before:.0f} → "
                      f"{100 * r.share_after:.0f} | {ok(r.feasible_before)} → "
                      f"{ok(r.feasible_after)} | {fell(r.fell_before)} → {fell(r.fell_after)} "
                      f"| {100 * r.keypoint_rms:.1f} | {r.push_deg:.1f} | {r.seconds:.0f} |"
                      if not r.note else
-                     f"| {r.robot} | {r.method} | {r.frames} | {100 * r.share_before:.0f} → — | "
+                     f"{head}| {100 * r.share_before:.0f} → — | "
                      f"{ok(r.feasible_before)} → refused | — | — | — | — |")
     return "\n".join(lines + [f"\nRefused: {r.method} on {r.robot}: {r.note}" for r in refused])
 
 
 def run(robots: list[str], optimal: bool = True, save: Path | None = None,
         plans: Path | None = None, holosoma: str | None = None,
-        repaired: list[RepairRow] | None = None) -> list[Row]:
+        repaired: list[RepairRow] | None = None, gmr: tuple[str, str] | None = None,
+        repair_only: bool = False, motions: Path | None = None) -> list[Row]:
     """Every method on every robot in ``robots`` (library names); ``save``: a folder for the
     optimal plans (``<robot>_optimal.npz`` and the adaptation's seconds in ``.json``);
     ``plans``: such a folder to take the optimal plans from instead of adapting anew;
     ``holosoma``: the Python that has ``holosoma-retargeting`` (its G1 row, G1 only);
     ``repaired``: a list to append each kinematic output's :func:`repair_row` to (None: no
-    repair)."""
+    repair); ``gmr``: ``(python, repo)`` for GMR's repair row (G1, with ``repaired``);
+    ``repair_only``: the repair rows alone (no main-table rows, no optimal adaptation);
+    ``motions``: a folder to write each repaired input to (GMR's pickle)."""
     demonstrator, demo, forces = gd.gait.human_walk_3d()
+    walk = "OpenSim walk"
     rows: list[Row] = []
+
+    def ev(robot, plan, fps, label, note=""):
+        if not repair_only:
+            rows.append(evaluate(robot, plan, fps, forces, label, note))
+
     for name in robots:
         robot = gd.Robot.from_library(name)
         if robot.base == "planar":
+            if repair_only:
+                continue
             for method, label in (("copy", "copy (planar)"), ("analytic", "Eq. (1)")):
                 a, sec = _timed(lambda m=method, r=robot: gd.adapt(demo, demonstrator, r,
                                                                     method=m))
@@ -409,22 +490,29 @@ def run(robots: list[str], optimal: bool = True, save: Path | None = None,
                                      f"{bad} leg-frames unreachable" if bad else ""))
         else:
             plan = joint_copy(demo, demonstrator, robot)
-            rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "copy (3-D)"))
+            ev(robot, plan, plan.frames_per_s, "copy (3-D)")
             if repaired is not None:
-                repaired.append(repair_row(robot, plan, "copy (3-D)"))
+                repaired.append(repair_row(robot, plan.motion, "copy (3-D)", walk,
+                                           plan.seconds, motions))
             plan = diff_ik(demo, demonstrator, robot)
             note = (f"keypoint error median {100 * np.median(plan.residual):.1f} cm; "
                     f"{int(plan.relaxed.sum())} frames feet held by cost")
-            rows.append(evaluate(robot, plan, plan.frames_per_s, forces, "diff IK (Pink)",
-                                 note))
+            ev(robot, plan, plan.frames_per_s, "diff IK (Pink)", note)
             if repaired is not None:
-                repaired.append(repair_row(robot, plan, "diff IK (Pink)"))
+                repaired.append(repair_row(robot, plan.motion, "diff IK (Pink)", walk,
+                                           plan.seconds, motions))
             if holosoma and name.startswith("g1"):
                 plan, note = holosoma_plan(demo, demonstrator, robot, holosoma)
-                rows.append(evaluate(robot, plan, plan.frames_per_s, forces,
-                                     "OmniRetarget (holosoma)", note))
+                ev(robot, plan, plan.frames_per_s, "OmniRetarget (holosoma)", note)
                 if repaired is not None:
-                    repaired.append(repair_row(robot, plan, "OmniRetarget (holosoma)"))
+                    repaired.append(repair_row(robot, plan.motion, "OmniRetarget (holosoma)",
+                                               walk, plan.seconds, motions))
+            if gmr and name.startswith("g1") and repaired is not None:
+                motion, sec, note = gmr_motion(robot, *gmr)
+                print(note, file=sys.stderr)
+                repaired.append(repair_row(robot, motion, "GMR", "CMU BVH walk", sec, motions))
+        if repair_only:
+            continue
         if optimal and plans is not None:
             _saved_optimal(plans, robot, demo, forces, rows)
         elif optimal:
@@ -498,23 +586,64 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--repair", action="store_true",
                    help="also repair each kinematic output on its own robot (gdimitate.repair) "
                         "and print the before/after table")
+    p.add_argument("--repair-only", action="store_true",
+                   help="the repair table alone (G1's kinematic outputs and peers), written "
+                        "into its block of --out, the rest of the file kept")
+    p.add_argument("--gmr-python", default=None, metavar="PYTHON",
+                   help="a Python with GMR's dependencies (mink, mujoco, qpsolvers[proxqp], "
+                        "loop_rate_limiters, rich, tqdm, natsort): adds GMR's repair row on G1")
+    p.add_argument("--gmr-repo", default=None, metavar="DIR",
+                   help="a checkout of github.com/YanjieZe/GMR (with --gmr-python)")
+    p.add_argument("--save-motions", type=Path, default=None, metavar="DIR",
+                   help="write each repaired input to DIR as GMR's pickle (for gdimitate audit)")
     add_flag(p)
     a = p.parse_args(argv)
+    if bool(a.gmr_python) != bool(a.gmr_repo):
+        p.error("--gmr-python and --gmr-repo go together")
     t0 = time.perf_counter()
-    repaired: list[RepairRow] | None = [] if a.repair else None
-    rows = run(a.robots, optimal=not a.no_optimal, save=a.save_plans, plans=a.plans,
-               holosoma=a.holosoma_python, repaired=repaired)
+    repaired: list[RepairRow] | None = [] if (a.repair or a.repair_only) else None
+    rows = run(["g1"] if a.repair_only else a.robots, optimal=not a.no_optimal,
+               save=a.save_plans, plans=a.plans, holosoma=a.holosoma_python, repaired=repaired,
+               gmr=(a.gmr_python, a.gmr_repo) if a.gmr_python else None,
+               repair_only=a.repair_only, motions=a.save_motions)
+    out = Path(a.out)
+    if repaired is not None:
+        cmd = " ".join(sys.argv[1:] if argv is None else argv)
+        for flag, what in (("--holosoma-python", "PYTHON"), ("--gmr-python", "PYTHON"),
+                           ("--gmr-repo", "DIR"), ("--save-motions", "DIR"), ("--out", "FILE")):
+            cmd = re.sub(rf"{flag} \S+", f"{flag} {what}", cmd)
+        block = (f"Written by `python benchmarks/peers.py {cmd}`"
+                 f" ({time.perf_counter() - t0:.0f} s, {os.cpu_count()} CPUs, load "
+                 f"{os.getloadavg()[0]:.1f}):\n\n" + repair_table(repaired))
+        print(block)
+    old = out.read_text() if out.exists() else ""
+    if a.repair_only:
+        out.write_text(with_repair(old or "# Baselines in the physics-check harness\n", block))
+        return
     text = (table(rows)
-            + ("" if repaired is None else "\n\nRepaired on the same robot (gdimitate repair; "
-               "the input as its q alone):\n\n" + repair_table(repaired))
             + "\n\nNegative control (physics check):\n" + negative_control(rows)
             + f"\n\nDemonstration: OpenSim subject01 walk (3-D, measured GRF), 211 frames, 3.5 s; "
             f"simulation: MuJoCo, 1 kHz QP tracking controller; run took "
             f"{time.perf_counter() - t0:.0f} s.\n")
     print(text)
-    Path(a.out).write_text("# Baselines in the physics-check harness\n\n"
-                           "Written by `python benchmarks/peers.py`; columns explained in its "
-                           "docstring.\n\n" + text)
+    text = ("# Baselines in the physics-check harness\n\nWritten by `python benchmarks/peers.py`; "
+            "columns explained in its docstring.\n\n" + text)
+    if REPAIR_HEAD in old:  # the repair section of an earlier run stays
+        text = text.rstrip("\n") + "\n\n" + old[old.index(REPAIR_HEAD):]
+    out.write_text(text if repaired is None else with_repair(text, block))
+
+
+#: The heading of peers.md's repair section (its table in the block ``repair``).
+REPAIR_HEAD = "## Repaired on the same robot"
+
+
+def with_repair(text: str, block: str) -> str:
+    """``text`` (peers.md) with its repair block holding ``block``; the section (heading and
+    block) appended if absent."""
+    if REPAIR_HEAD not in text:
+        text = (text.rstrip("\n") + f"\n\n{REPAIR_HEAD} (issue 36)\n\n<!-- results: repair -->\n"
+                "<!-- /results: repair -->\n")
+    return replace_block(text, "repair", block)
 
 
 if __name__ == "__main__":
