@@ -112,7 +112,7 @@ def test_repair_of_the_g1_joint_copy_walks_feasibly_near_its_keypoints(g1_copy_s
     assert "keypoints from the input: RMS" in out and "MuJoCo, before" in out
 
 
-@pytest.mark.slow  # the repair ~35 s and MuJoCo's 3.5 s ~15 s quiet; 167 s on 2 busy cores
+@pytest.mark.slow  # 33 s to 167 s on the 2 shared cores, with the load
 def test_repair_of_the_whole_walk_copy_keeps_its_keypoints_within_5_cm():
     """Issue 36's Done-when on the whole shipped walk (211 frames, 3.5 s; the stride above is
     one of its 2.5 strides): the joint copy onto G1 repaired by ``gd.repair`` is (1) feasible
