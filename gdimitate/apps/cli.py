@@ -43,6 +43,7 @@ from .commands import (
     walk,
 )
 from .commands.common import EXIT_STATUS
+from .signals import handling_signals
 
 __all__ = ["EXIT_STATUS", "build_parser", "main"]
 
@@ -102,14 +103,9 @@ def main(argv: list[str] | None = None) -> int:
     (0 done, 1 ``batch`` with failed files, 2 an error, 3 written but not feasible or a goal
     unmet, 130 Ctrl-C, 143 SIGTERM)."""
     args = build_parser().parse_args(argv)
-    previous = {}
     try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            previous[sig] = signal.signal(sig, _on_signal)
-    except ValueError:  # not the main thread: leave signals alone
-        pass
-    try:
-        status = args.func(args)  # batch: 1 when some files failed; 3: not feasible
+        with handling_signals(_on_signal):
+            status = args.func(args)  # batch: 1 when some files failed; 3: not feasible
     except GdimitateError as e:
         print(f"gdimitate {args.command}: error: {_for_the_command_line(e)}", file=sys.stderr)
         return 2
@@ -119,9 +115,6 @@ def main(argv: list[str] | None = None) -> int:
     except _Terminated:
         print(f"gdimitate {args.command}: terminated", file=sys.stderr)
         return 143
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
     return int(status or 0)
 
 

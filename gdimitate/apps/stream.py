@@ -38,6 +38,7 @@ from ..model.kinematics import robot_motion
 from ..model.legs import hip_height
 from ..model.motion import Motion
 from ..model.robot import SIDES, Robot
+from .signals import handling_signals
 
 __all__ = ["LiveView", "StreamLog", "open_source", "run_stream", "stream_command",
            "stream_lines"]
@@ -149,17 +150,8 @@ def _stop_on_signals() -> Iterator[dict[str, str | None]]:
     def on(signum: int, frame: object) -> None:
         state["reason"] = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
 
-    previous = {}
-    try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            previous[sig] = signal.signal(sig, on)
-    except ValueError:  # not the main thread: no signals here
-        pass
-    try:
+    with handling_signals(on):
         yield state
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
 
 
 def _stream_loop(source: LiveSource, sa: Any, log: StreamLog, stop: dict, *,

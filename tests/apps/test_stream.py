@@ -303,6 +303,7 @@ def test_an_lsl_outlet_that_goes_away_ends_the_stream():
         if frame is not None:
             got.append(frame)
             dropped += skipped
+    outlet.join(5.0)  # its counter goes up after the push: the frame can arrive first
     assert len(got) + dropped == 30 == outlet.sent
     assert np.array_equal(got[-1].sample, outlet.samples[29])
     outlet.stop()
