@@ -36,14 +36,15 @@ ground reaction forces; ``gdimitate.gait.human_walk_3d()``). Methods:
   push columns). G1 only;
 - ``optimal`` — gdimitate's whole-body adaptor (``adapt(method="optimal", force="measured")``).
 
-``--repair`` adds a second table: each kinematic output (free-flyer robots: the 3-D copy,
-diff IK, holosoma's, GMR's) handed over as its q alone — what a retargeter writes — to
-``gdimitate.repair`` (the whole-body adaptor from the robot to itself, :mod:`gdimitate.repair`)
-and audited before and after by ``gdimitate.audit_motion`` (share of knots feasible, verdict),
-both run in MuJoCo (``gdimitate.apps.repair.simulate_both``: fell [s] or "no"), the keypoints
-kept (RMS distance of hips, knees, ankles, soles from the input's), the retargeter's own wall
-time per clip and the repair's. ``--save-motions DIR`` writes each kinematic output as GMR's
-pickle (``DIR/<robot>_<method>.pkl``, q alone) for ``gdimitate audit DIR --robot g1``.
+``--repair`` adds a second table: each kinematic output (free-flyer robots: the 3-D copy, diff
+IK, holosoma's, GMR's) handed over as its q alone — what a retargeter writes — to
+``gdimitate.repair`` (the whole-body adaptor from the robot to itself,
+:mod:`gdimitate.adaptation.repairer`) and audited before and after by
+``gdimitate.audit_motion`` (share of knots feasible, verdict), both run in MuJoCo
+(``gdimitate.apps.repair.simulate_both``: fell [s] or "no"), the keypoints kept (RMS distance
+of hips, knees, ankles, soles from the input's), the retargeter's own wall time per clip and
+the repair's. ``--save-motions DIR`` writes each kinematic output as GMR's pickle
+(``DIR/<robot>_<method>.pkl``, q alone) for ``gdimitate audit DIR --robot g1``.
 
 Kinematic methods get the wrenches their motion implicitly asks of the floor
 (``estimate_wrenches(method="lstsq")``: no cone). Columns:

@@ -16,7 +16,7 @@ feasible by the stream's own verdicts (``FrameResult.verdicts`` and, after ``fin
 ``sa.verdicts()``), whether they are the audit of the assembled motion frame for frame, the
 delay of each verdict (frames between a frame's step and the step that delivered its verdict:
 median and largest) and how long ``sa.verdicts()`` waited after the last frame for the ones
-still on their way. Every frame is also judged by :func:`gdimitate.audit.audit` on the
+still on their way. Every frame is also judged by :func:`gdimitate.assess.audit.audit` on the
 assembled motion (knot by knot, the verdict ``adapt(..., mode="per_frame").frame_feasible``
 reports), and the checks that fail most often are listed with the number of frames each fails.
 Where the adaptor's ``step`` takes ``v_demo`` (the demonstrator's velocity at the first frame),
@@ -59,8 +59,12 @@ _CHILD = textwrap.dedent("""
     import numpy as np
     warnings.simplefilter("ignore")
     import gdimitate as gd
-    from gdimitate.audit import audit
-    from gdimitate.kinematics import robot_motion
+    try:  # this tree's module paths, then a baseline revision's (before the layers)
+        from gdimitate.assess.audit import audit
+        from gdimitate.model.kinematics import robot_motion
+    except ImportError:
+        from gdimitate.audit import audit
+        from gdimitate.kinematics import robot_motion
     name, frames, force, mode, start, use_v = sys.argv[1:7]
     frames, start, use_v, warm = int(frames), float(start), use_v == "1", 5
     h, m, f = gd.gait.human_walk_3d()
