@@ -274,7 +274,7 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
 # codegen (how they are generated), the parts, the knot, the context the parts read, the
 # symbolic model and the contact wrench cone the cone part evaluates
 # (contact.wrench_cone_rows); every module these import from gdimitate is listed
-# (tests/test_retarget_codegen.py checks it)
+# (tests/retarget/trajectory/test_codegen.py checks it)
 SOURCE_MODULES = (parts_module, knot_module, context_module, symbolic, codegen, contact,
                   robot_module, selfcollision, bodymap, kinematics, footsteps,
                   sys.modules[__name__])
