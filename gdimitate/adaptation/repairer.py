@@ -58,28 +58,25 @@ __all__ = ["REPAIR_WEIGHTS", "FLAT_HEIGHT", "RepairResult", "repair", "repair_sc
 
 #: Cost weights of the repair (:class:`gdimitate.retarget.Weights` fields changed from the
 #: adaptor's defaults): the horizontal ankle-to-hip placement and the thigh direction weighed
-#: as the hip height and shank (3), the feet's places in double support 3 × the default (300),
+#: as the hip height and shank (3), the feet's places in double support 5 × the default (500),
 #: every squared acceleration at a tenth of the default (1e-5 s⁴). Measured on the joint
 #: copy of the shipped walk onto G1, keypoints' RMS from the input: one stride 7.6 cm with the
 #: defaults, 4.4 cm with placement and thigh 3, 4.0 cm with steps 300 too. The smoothness is
 #: what kept the whole walk (3.5 s) at 6.1 cm: its pull on every acceleration shortens every
 #: step — a repair of that repair (an input already feasible, feet flat and still) came back
 #: with each step 1 cm short (travel 0.97) — and the copy's steps came out 2–3 cm short
-#: (travel 0.92), the keypoints 8 cm ahead at the start and 16 cm behind at the end (5.0 of
-#: the 6.1 cm RMS along the walk); no joint, velocity or torque limit bound; the hip height,
-#: placement, over-feet and wrench weights and a 0.1 rad cone around the push instead of its
-#: direction moved it by 0.7 cm at most (steps 1000 and 3000: 4.9 and 4.8 cm, but the stride
-#: then failed the audit's stance velocity). Smoothness 3e-5 / 1e-5 / 5e-6 / 3e-6 at the
-#: knot rate of :func:`repair_rate`, placed by a shift alone: the whole walk 4.3 / 3.2 / 2.8
-#: / 2.6 cm, the stride 3.3 / 2.5 / – / 2.0 cm, GMR's G1 output of the CMU walk 6.8 / 5.6 /
-#: 5.1 / 4.8 cm (before 8.8); each audited feasible but the whole walk at 3e-6 (one knot's
-#: ankle torque 0.8 % over its limit with the audit's own wrench estimate). With
-#: :func:`placed`'s turn too: at 1e-5 3.2 cm on the whole walk (MuJoCo walks it) and 5.0 cm on
-#: GMR's; at 8e-6 / 5e-6 the whole walk's 3.0 / 2.8 cm fell in MuJoCo at 3.0 / 2.0 s, and a
+#: (travel 0.92), the keypoints 8 cm ahead at the start and 16 cm behind at the end; no
+#: joint, velocity or torque limit bound. Smoothness 3e-5 / 1e-5 / 5e-6 / 3e-6 at the knot
+#: rate of :func:`repair_rate`, placed by a shift alone: the whole walk 4.3 / 3.2 / 2.8 / 2.6
+#: cm, GMR's G1 output of the CMU walk 6.8 / 5.6 / 5.1 / 4.8 cm (before 8.8). With
+#: :func:`placed`'s turn too, at 1e-5 and steps 300 / 500 / 700 / 1000 (benchmarks/peers.md):
+#: the whole walk 3.2 / 3.1 / 3.0 / 3.0 cm, the stride 2.4 cm, GMR's 5.0 / 4.9 / 4.8 / 4.8
+#: cm, every one audited feasible and walked by MuJoCo but the whole walk at 1000 (fell at
+#: 2.9 s); smoothness 8e-6 / 5e-6 (steps 300): the whole walk fell at 3.0 / 2.0 s, and a
 #: differential-IK output's repair stopped short (16 % of knots feasible at 5e-6, 95 % at
 #: 1e-4). At 30 knots/s the stride's stance foot moved 1.3–1.6 mm/s at one knot (the audit
 #: allows 1).
-REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0, "steps": 300.0,
+REPAIR_WEIGHTS: dict[str, float] = {"placement": 3.0, "thigh": 3.0, "steps": 500.0,
                                     "smoothness": 1e-5}
 
 #: A stance frame of the audit's schedule stays stance for the repair only while the sole's
