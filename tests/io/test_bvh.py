@@ -20,6 +20,7 @@ import pytest
 import gdimitate as gd
 from gdimitate.errors import BVHError
 from gdimitate.io.bvh import read_bvh
+from tests.helpers.bvh import write_bvh
 
 CMU = Path(gd.__file__).parent / "data" / "gait" / "cmu_02_01" / "cmu_02_01.bvh"
 # x_ours = C x_bvh
@@ -190,42 +191,6 @@ def synthetic_values(joints, T, dt, root_channels, scale, seed=0, up="y"):
                     v = (v + 180.0) % 360.0 - 180.0
                 cols.append(v)
     return np.column_stack(cols)
-
-
-def write_bvh(path, joints, root_channels, values, dt, tpose=False):
-    lines = ["HIERARCHY"]
-    depth = {}
-    order = []
-    kids = {}
-    for j in joints:
-        kids.setdefault(j[1], []).append(j)
-
-    def emit(j, d):
-        name, parent, off, ch, ends = j
-        ch = root_channels if parent is None else ch
-        ind = "\t" * d
-        lines.append(f"{ind}{'ROOT' if parent is None else 'JOINT'} {name}")
-        lines.append(f"{ind}{{")
-        lines.append(f"{ind}\tOFFSET {' '.join(repr(float(x)) for x in off)}")
-        lines.append(f"{ind}\tCHANNELS {len(ch)} {' '.join(ch)}")
-        order.append(name)
-        depth[name] = d
-        for k in kids.get(name, []):
-            emit(k, d + 1)
-        for e in ends:
-            lines.extend([f"{ind}\tEnd Site", f"{ind}\t{{",
-                          f"{ind}\t\tOFFSET {' '.join(repr(float(x)) for x in e)}", f"{ind}\t}}"])
-        lines.append(f"{ind}}}")
-
-    emit(joints[0], 0)
-    assert order == [j[0] for j in joints], "joints must be listed depth-first"
-    rows = values
-    if tpose:
-        rows = np.vstack([np.where(np.arange(values.shape[1]) < 3, values[0], 0.0), values])
-    lines += ["MOTION", f"Frames: {rows.shape[0]}", f"Frame Time: {dt!r}"]
-    lines += [" ".join(repr(float(x)) for x in r) for r in rows]
-    Path(path).write_text("\n".join(lines) + "\n")
-    return rows
 
 
 ROOT_6 = ["Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation"]
