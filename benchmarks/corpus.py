@@ -1,30 +1,44 @@
 """The gait kept on a corpus (issue 32, docs/design.md §13): every shipped walk and synthetic
 variants of it, onto several robots, judged by the audit and the gait's travel ratio.
 
-Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu]
+Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu,sfu]
 [--variants asis,turn90,turn180,turn-137,rate30,rate60,rate240,trim,mirror,noise]
 [--scaling geometric|froude] [--simulate] [--baseline-rev REV] [--baseline-robots g1]``.
 
 Clips: ``stride`` — one right stride of the shipped 3-D OpenSim walk (measured forces, the
 push goal ``measured``); ``whole`` — the whole 3.5-s clip; ``cmu`` — the shipped CMU BVH walk
-(kinematic contacts, ``force="segment"``, the command line's default). Variants, made from the
-clip's motion (and forces) before the adaptor sees it: ``asis``; ``turnD`` — turned by D
-degrees about the vertical through its first base position; ``rateR`` — resampled to R Hz
-(linear interpolation, quaternions renormalised, contacts of the nearest frame); ``trim`` —
-0.3 s cut from each end (it starts and ends mid-stride); ``mirror`` — mirrored left to
-right (``gdimitate.model.mirror``: the walk led by the other foot); ``noise`` — 5 mm on the base
-position and 0.01 rad on every joint angle, white, seed 0 (mocap noise; the contacts as
+(kinematic contacts, ``force="segment"``, the command line's default); ``sfu`` — issue 32's
+unseen walk's conventions without SFU's data: the CMU walk rewritten as a file with every
+rotation channel in XYZ order, in inches, turned to walk along −y, the 2.2 s around its
+middle at its own 120 Hz, 6 decimals (``tests.helpers.bvh.write_sfu_style``: each joint's
+rotation re-expressed, its joints where the CMU walk's are), adapted by the command line as
+a new user runs it, ``gdimitate adapt FILE --imitator ROBOT`` with its defaults (geometric
+scaling only). The ``stride``, ``whole`` and ``cmu`` cases call ``gd.adapt`` in their
+process; the ``sfu`` case runs the command in a process of its own and reads what it wrote:
+the audit's verdict and the iterations from ``report.json``, the travel ratio computed from
+``imitator_motion.npz`` by the rule below, and the CPU seconds of the whole command
+(start-up, reading, adaptation, audit, files and figure: a few seconds more than the
+adaptation alone).
+
+Variants, made from the clip's motion (and forces) before the adaptor sees it (for ``sfu``,
+by rewriting its file: ``asis``, ``turnD`` and ``trim`` only): ``asis``; ``turnD`` — turned
+by D degrees about the vertical through its first base position; ``rateR`` — resampled to R
+Hz (linear interpolation, quaternions renormalised, contacts of the nearest frame); ``trim``
+— 0.3 s cut from each end (it starts and ends mid-stride); ``mirror`` — mirrored left to
+right (``gdimitate.model.mirror``: the walk led by the other foot); ``noise`` — 5 mm on the
+base position and 0.01 rad on every joint angle, white, seed 0 (mocap noise; the contacts as
 recorded). Each case runs in its own Python process with its own timer (CPU seconds of the
-adaptation, derivatives already compiled). The travel ratio is computed here from the
-output alone, by docs/design.md §13's definition (the imitator's base travel over the clip
-over the demonstrator's × the legs' ratio), so the baseline revision — extracted with ``git
-archive`` and run the same way — is measured by the same rule.
+adaptation, derivatives already compiled). The travel ratio is computed here from the output
+alone, by docs/design.md §13's definition (the imitator's base travel over the clip over the
+demonstrator's × the legs' ratio), so the baseline revision — extracted with ``git archive``
+and run the same way — is measured by the same rule.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -139,13 +153,94 @@ _CHILD = textwrap.dedent("""
         "unmet": [[u.name, round(float(u.violation), 4)] for u in r.solver.unmet[:2]]}))
 """)
 
+#: the sfu clip: ``gdimitate adapt FILE --imitator ROBOT`` in a process of its own, then the
+#: same numbers as _CHILD's from what it wrote
+_CLI_CHILD = textwrap.dedent("""
+    import json, resource, subprocess, sys, warnings
+    from pathlib import Path
+    import numpy as np
+    warnings.simplefilter("ignore")
+    path, name, out, simulate = sys.argv[1:5]
+    p = subprocess.run([sys.executable, "-m", "gdimitate.apps.cli", "adapt", path,
+                        "--imitator", name, "--out", out], capture_output=True, text=True)
+    use = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = use.ru_utime + use.ru_stime
+    if not (Path(out) / "report.json").is_file():
+        print("RESULT " + json.dumps({"error": f"exit {p.returncode}: " + (
+            p.stderr.strip().splitlines() or ["no output"])[-1][:70]}))
+        sys.exit()
+    import gdimitate as gd
+    from gdimitate.io.demonstration import load_demonstration
+    from gdimitate.model.motion import Motion
+    rep = json.loads((Path(out) / "report.json").read_text())
+    d = load_demonstration(path)
+    robot = gd.Robot.from_library(name)
+    motion = Motion.from_npz(Path(out) / "imitator_motion.npz")
+    L = lambda rb: np.mean([rb.legs[s].length for s in ("left", "right")])
+    trav = lambda q: float(np.hypot(*(q[-1, :2] - q[0, :2])))
+    travel = trav(motion.q) / (trav(d.motion.q) * L(robot) / L(d.robot))
+    dur = (motion.t[-1] - motion.t[0]) / (d.motion.t[-1] - d.motion.t[0])
+    sim = {}
+    if simulate == "1":
+        from gdimitate.export.writers import read_wrenches
+        from gdimitate.sim.reference import Plan
+        npz = Path(out) / "imitator_motion.npz"
+        plan = load_demonstration(npz)
+        m = gd.sim.simulate(plan.robot, Plan(plan.motion, read_wrenches(npz),
+                                             dict(plan.robot.require_contacts()))).metrics
+        sim = {"fell": bool(m.fell), "slip_cm": 100 * float(m.slip_max)}
+    aud, sol = rep.get("audit") or {}, rep.get("solver") or {}
+    print("RESULT " + json.dumps({**sim,
+        "feasible": bool(aud.get("feasible")), "binding": list(aud.get("binding", [])[:3]),
+        "iterations": int(sol.get("iterations", -1)), "cpu_s": cpu, "travel": travel,
+        "speed": travel / dur, "exit": p.returncode,
+        "unmet": [[u["name"], round(float(u["violation"]), 4)]
+                  for u in sol.get("unmet", [])[:2]]}))
+""")
+
+
+def sfu_file(folder: Path, variant: str) -> Path | None:
+    """The sfu clip's file for ``variant`` (asis, turnD, trim) written into ``folder`` by this
+    tree's writer; None for a variant it is not made for."""
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from gdimitate.io.bvh import parse_bvh
+    from tests.helpers.bvh import SFU_STYLE, rewrite_bvh, write_sfu_style
+
+    base = write_sfu_style(folder / "sfu_style.bvh")
+    if variant == "asis":
+        return base
+    keep = {**SFU_STYLE, "heading": None, "scale": 0.0254}
+    if variant.startswith("turn"):
+        return rewrite_bvh(parse_bvh(base), folder / f"sfu_{variant}.bvh",
+                           yaw=math.radians(float(variant[4:])), **keep)
+    if variant == "trim":
+        return rewrite_bvh(parse_bvh(base), folder / "sfu_trim.bvh", start=0.3,
+                           **{**keep, "duration": SFU_STYLE["duration"] - 0.6})
+    return None
+
 
 def run(tree: Path, clip: str, variant: str, robot: str, scaling: str, simulate: bool
         ) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1"}
+    if clip == "sfu":
+        if scaling != "geometric":
+            return {"error": "the sfu clip runs the command line's defaults (geometric)"}
+        with tempfile.TemporaryDirectory() as tmp:
+            path = sfu_file(Path(tmp), variant)
+            if path is None:
+                return {"error": f"{variant}: not made for the sfu file (asis, turnD, trim)"}
+            p = subprocess.run([sys.executable, "-c", _CLI_CHILD, str(path), robot,
+                                str(Path(tmp) / "out"), "1" if simulate else "0"], cwd=tree,
+                               env=env, capture_output=True, text=True, timeout=1800)
+        return _result(p)
     p = subprocess.run([sys.executable, "-c", _CHILD, clip, variant, robot, scaling,
                         "1" if simulate else "0"], cwd=tree,
                        env=env, capture_output=True, text=True, timeout=1800)
+    return _result(p)
+
+
+def _result(p: subprocess.CompletedProcess) -> dict:
     for line in p.stdout.splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[7:])
@@ -156,6 +251,8 @@ def row(tag: str, clip: str, variant: str, robot: str, r: dict) -> str:
     if "error" in r:
         return f"| {tag} | {clip} | {variant} | {robot} | error: {r['error']} |||||"
     feas = "yes" if r["feasible"] else "NO " + ",".join(r["binding"])
+    if r.get("exit"):  # the command's exit status (sfu), where not 0
+        feas += f" (exit {r['exit']})"
     kept = 0.8 <= r["travel"] <= 1.25
     sim = ("" if "fell" not in r else
            f" {'FELL' if r['fell'] else 'walked'}, slip {r['slip_cm']:.2f} cm |")

@@ -1,0 +1,39 @@
+"""Issue 32's first case, an unseen BVH walk, as a new user runs it: ``gdimitate adapt FILE
+--imitator g1`` with the command line's defaults, on an SFU-style file (``LeftUpLeg``…
+names, XYZ rotation channels, inches, 120 Hz, 2.2 s, the subject walking along −y) made from
+the shipped CMU walk (``tests.helpers.bvh.write_sfu_style``; that the file is the CMU walk
+turned is ``tests/io/test_bvh_conventions.py``'s check). The SFU clip itself stalled at 149
+iterations, audit-infeasible (exit 3); the goal: exit 0, audited feasible, and the robot's
+travel over the clip within 0.8–1.25 of the demonstrator's scaled by the legs' ratio
+(report.json's ``gait.travel_ratio``, docs/design.md §13)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from gdimitate.model.footsteps import KEPT
+from tests.helpers import ROOT
+from tests.helpers.bvh import write_sfu_style
+
+
+@pytest.mark.slow
+def test_sfu_style_walk_onto_g1_through_the_command_line(tmp_path):
+    path = write_sfu_style(tmp_path / "sfu_style.bvh")
+    out = tmp_path / "out"
+    p = subprocess.run([sys.executable, "-m", "gdimitate.apps.cli", "adapt", str(path),
+                        "--imitator", "g1", "--out", str(out)], cwd=ROOT,
+                       capture_output=True, text=True, timeout=1800)
+    assert (out / "report.json").is_file(), p.stdout[-2000:] + p.stderr[-2000:]
+    rep = json.loads((out / "report.json").read_text())
+    solver, audit, gait = rep["solver"], rep["audit"], rep["gait"]
+    said = (f"exit {p.returncode}; solver {solver['status']}, {solver['iterations']} "
+            f"iterations, {solver.get('time')} s; audit failed: {audit['binding']}; travel "
+            f"ratio {gait['travel_ratio']:.3f}\n" + p.stdout[-1500:])
+    assert p.returncode == 0, said
+    assert audit["feasible"] is True, said
+    assert KEPT == (0.8, 1.25)
+    assert KEPT[0] <= gait["travel_ratio"] <= KEPT[1], said
