@@ -194,8 +194,8 @@ _CLI_CHILD = textwrap.dedent("""
         "feasible": bool(aud.get("feasible")), "binding": list(aud.get("binding", [])[:3]),
         "iterations": int(sol.get("iterations", -1)), "cpu_s": cpu, "travel": travel,
         "speed": travel / dur, "exit": p.returncode,
-        "unmet": [[u["name"], round(float(u["violation"]), 4)]
-                  for u in sol.get("unmet", [])[:2]]}))
+        "unmet": [[u["name"], round(float(u["violation"]), 4)] for u in (
+            (rep.get("verdict") or {}).get("unmet") or sol.get("unmet", []))[:2]]}))
 """)
 
 
@@ -251,8 +251,8 @@ def row(tag: str, clip: str, variant: str, robot: str, r: dict) -> str:
     if "error" in r:
         return f"| {tag} | {clip} | {variant} | {robot} | error: {r['error']} |||||"
     feas = "yes" if r["feasible"] else "NO " + ",".join(r["binding"])
-    if r.get("exit"):  # the command's exit status (sfu), where not 0
-        feas += f" (exit {r['exit']})"
+    if r.get("exit"):  # the command's exit status (sfu), where not 0, and the goals unmet
+        feas += f" (exit {r['exit']}" + "".join(f"; {n} {v:.3g}" for n, v in r["unmet"]) + ")"
     kept = 0.8 <= r["travel"] <= 1.25
     sim = ("" if "fell" not in r else
            f" {'FELL' if r['fell'] else 'walked'}, slip {r['slip_cm']:.2f} cm |")
