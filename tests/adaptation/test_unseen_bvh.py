@@ -31,8 +31,9 @@ def test_sfu_style_walk_onto_g1_through_the_command_line(tmp_path):
     rep = json.loads((out / "report.json").read_text())
     solver, audit, gait = rep["solver"], rep["audit"], rep["gait"]
     said = (f"exit {p.returncode}; solver {solver['status']}, {solver['iterations']} "
-            f"iterations, {solver.get('time')} s; audit failed: {audit['binding']}; travel "
-            f"ratio {gait['travel_ratio']:.3f}\n" + p.stdout[-1500:])
+            f"iterations, {solver['time_s']:.1f} s; audit failed: {audit['binding']}; goals "
+            f"unmet: {rep['verdict']['unmet']}; travel ratio {gait['travel_ratio']:.3f}\n"
+            + p.stdout[-1500:])
     assert p.returncode == 0, said
     assert audit["feasible"] is True, said
     assert KEPT == (0.8, 1.25)
