@@ -3,7 +3,8 @@ variants of it, onto several robots, judged by the audit and the gait's travel r
 
 Run: ``python benchmarks/corpus.py [--robots g1,talos,icub,romeo] [--clips stride,whole,cmu,sfu]
 [--variants asis,turn90,turn180,turn-137,rate30,rate60,rate240,trim,mirror,noise]
-[--scaling geometric|froude] [--simulate] [--baseline-rev REV] [--baseline-robots g1]``.
+[--scaling geometric|froude] [--lift position,velocity,effort] [--simulate] [--baseline-rev REV]
+[--baseline-robots g1]``.
 
 Clips: ``stride`` — one right stride of the shipped 3-D OpenSim walk (measured forces, the
 push goal ``measured``); ``whole`` — the whole 3.5-s clip; ``cmu`` — the shipped CMU BVH walk
@@ -20,6 +21,10 @@ the audit's verdict and the iterations from ``report.json``, the travel ratio co
 (start-up, reading, adaptation, audit, files and figure: a few seconds more than the
 adaptation alone; a command that compiled the robot's derivatives is run again and the
 second run reported).
+
+``--lift KINDS`` adapts with the robot's own limits of those kinds lifted (``Limits``: every
+1-dof joint's position to ±3 rad, velocity and effort to infinity): which limits shorten a
+gait that is not kept (docs/design.md §13). The audit then judges against the lifted limits.
 
 Variants, made from the clip's motion (and forces) before the adaptor sees it (for ``sfu``,
 by rewriting its file: ``asis``, ``turnD`` and ``trim`` only): ``asis``; ``turnD`` — turned
@@ -59,7 +64,7 @@ _CHILD = textwrap.dedent("""
     warnings.simplefilter("ignore")
     import gdimitate as gd
     from gdimitate.model.contact import ContactForces, FootForces
-    clip, variant, name, scaling, simulate = sys.argv[1:6]
+    clip, variant, name, scaling, simulate, lift = sys.argv[1:7]
     if clip == "cmu":
         from gdimitate.io.demonstration import load_demonstration
         d = load_demonstration("gdimitate/data/gait/cmu_02_01/cmu_02_01.bvh")
@@ -130,6 +135,15 @@ _CHILD = textwrap.dedent("""
     kw = dict(force=force, verbose=False, **({"forces": fs} if fs is not None else {}))
     if scaling != "geometric":
         kw["gait_scaling"] = scaling
+    if lift:  # the robot's own limits lifted, kind by kind (every 1-dof joint)
+        import math
+        from gdimitate.retarget import Limits
+        kinds, m = lift.split(","), robot.model
+        one = [n for n in m.names[1:] if m.joints[m.getJointId(n)].nq == 1]
+        kw["limits"] = Limits(
+            position={n: (-3.0, 3.0) for n in one} if "position" in kinds else None,
+            velocity=math.inf if "velocity" in kinds else None,
+            effort=math.inf if "effort" in kinds else None)
     t0 = time.process_time()
     r = gd.adapt(demo, h, robot, method="optimal", **kw)
     cpu = time.process_time() - t0
@@ -227,12 +241,12 @@ def sfu_file(folder: Path, variant: str) -> Path | None:
     return None
 
 
-def run(tree: Path, clip: str, variant: str, robot: str, scaling: str, simulate: bool
-        ) -> dict:
+def run(tree: Path, clip: str, variant: str, robot: str, scaling: str, simulate: bool,
+        lift: str = "") -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1"}
     if clip == "sfu":
-        if scaling != "geometric":
-            return {"error": "the sfu clip runs the command line's defaults (geometric)"}
+        if scaling != "geometric" or lift:
+            return {"error": "the sfu clip runs the command line's defaults"}
         with tempfile.TemporaryDirectory() as tmp:
             path = sfu_file(Path(tmp), variant)
             if path is None:
@@ -242,7 +256,7 @@ def run(tree: Path, clip: str, variant: str, robot: str, scaling: str, simulate:
                                env=env, capture_output=True, text=True, timeout=1800)
         return _result(p)
     p = subprocess.run([sys.executable, "-c", _CHILD, clip, variant, robot, scaling,
-                        "1" if simulate else "0"], cwd=tree,
+                        "1" if simulate else "0", lift], cwd=tree,
                        env=env, capture_output=True, text=True, timeout=1800)
     return _result(p)
 
@@ -280,11 +294,17 @@ def main() -> None:
     ap.add_argument("--scaling", default="geometric", choices=["geometric", "froude"],
                     help="gait_scaling= of every case (a baseline before it had none: "
                          "geometric only)")
+    ap.add_argument("--lift", default="", help="the robots' limits lifted, kinds of "
+                    "position (to ±3 rad), velocity, effort (to infinity), comma-separated: "
+                    "which limits shorten a gait (not for sfu or a baseline revision)")
     ap.add_argument("--simulate", action="store_true",
                     help="also run each result in MuJoCo under the tracking controller")
     add_flag(ap)
     a = ap.parse_args()
-    print(f"gait scaling: {a.scaling}")
+    lift = ",".join(k for k in a.lift.split(",") if k)
+    if set(lift.split(",")) - {"", "position", "velocity", "effort"}:
+        ap.error(f"--lift takes position, velocity, effort; got {a.lift!r}")
+    print(f"gait scaling: {a.scaling}" + (f"; limits lifted: {lift}" if lift else ""))
     print("| tree | clip | variant | robot | audit feasible | travel ratio | speed ratio | "
           "iterations | CPU s |" + (" MuJoCo |" if a.simulate else ""))
     print("|---|---|---|---|---|---|---|---|---|" + ("---|" if a.simulate else ""))
@@ -298,7 +318,8 @@ def main() -> None:
         for variant in a.variants.split(","):
             for tag, tree, robots in trees:
                 for robot in robots:
-                    r = run(tree, clip, variant, robot, a.scaling, a.simulate)
+                    r = run(tree, clip, variant, robot, a.scaling, a.simulate,
+                            lift if tag == "now" else "")
                     print(row(tag, clip, variant, robot, r), flush=True)
     if tmp is not None:
         tmp.cleanup()
