@@ -2,7 +2,7 @@
 ``benchmarks/RESULTS.md``, so that the measured tables the docs cite come from the scripts,
 not from copies. Shared by the benchmark scripts (``adaptor.py``, ``corpus.py``,
 ``oscillator_bank.py``, ``batch.py``, ``import_time.py``, ``streaming.py``, ``peers.py``,
-``walk_push.py``, ``walk_frequency.py``).
+``walk_push.py``, ``walk_frequency.py``, ``compile.py``).
 
 A block lies between ``<!-- results: NAME -->`` and ``<!-- /results: NAME -->`` (NAME the
 script's stem); a run with ``--results`` replaces it with the command line, the date, the
