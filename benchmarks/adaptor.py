@@ -1,7 +1,7 @@
 """Whole-body optimal adaptor: speed, iterations, memory and the audit (issues 9, 17).
 
 Run: ``python benchmarks/adaptor.py [--knots 100] [--robots talos,g1,icub,romeo]
-[--baseline-rev 7b16d65] [--baseline talos] [--cases hoap2,cmu,clip]``.
+[--baseline-rev 7b16d65] [--baseline talos] [--cases hoap2,cmu,clip] [--structured]``.
 
 Each row runs in its own Python process (so that "fresh process" includes loading the compiled
 derivatives and peak memory is that process's). Humanoid rows: one gait cycle of the shipped
@@ -16,6 +16,11 @@ run the same way) on the ``--baseline`` robots. Further cases: the sagittal walk
 CLI's ``gdimitate adapt`` of the shipped sagittal walk), the CMU BVH clip → G1 (``gdimitate
 adapt gdimitate/data/gait/cmu_02_01/cmu_02_01.bvh --imitator g1``: ``force="segment"``, the
 default rate), the whole 3.5-s clip → G1 (the README's API snippet), the planar Case II.
+
+``--structured`` adds a table: for each robot row, IPOPT's hard solve and CasADi's fatrop
+(:mod:`gdimitate.retarget.trajectory.structured`, the same problem stage by stage) in one
+process — CPU time, iterations, time per iteration and where it goes, the cost, the audit of
+each result (docs/design.md §6, "what was tried for speed").
 """
 
 from __future__ import annotations
@@ -79,6 +84,85 @@ _CHILD = textwrap.dedent("""
     out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print("RESULT " + json.dumps(out))
 """)
+
+
+_STRUCTURED = textwrap.dedent("""
+    import copy, json, sys, time, warnings
+    import numpy as np
+    warnings.simplefilter("ignore")
+    import gdimitate as gd
+    from gdimitate.retarget.trajectory import solve as S, structured as SS
+    case, N = sys.argv[1], int(sys.argv[2])
+    got = {}
+    budgeted, package = S.solve_budgeted, S.package
+    def spy(c, num, *a, **k):  # the hard solve's problem, as IPOPT gets it
+        got["c"], got["num"] = c, copy.deepcopy(num)
+        out = budgeted(c, num, *a, **k)
+        got["z"] = out[1]
+        return out
+    def spy_package(*a, **k):
+        got["package"] = a
+        return package(*a, **k)
+    S.solve_budgeted, S.package = spy, spy_package
+    h, m, f = gd.gait.human_walk_3d()
+    demo, fs = gd.gait.one_stride(m, f, "left")
+    rate = (N - 1) / (demo.t[-1] - demo.t[0]) * (1 + 1e-9)
+    robot = gd.Robot.from_library(case)
+    for _ in range(2):  # the second call: IPOPT's problem built and its derivatives loaded
+        c0 = time.process_time()
+        r = gd.adapt(demo, h, robot, method="optimal", verbose=False, force="measured",
+                     forces=fs, rate=rate)
+        ipopt_cpu = time.process_time() - c0
+    c, num = got["c"], got["num"]
+    SS.stage_functions(c.form)  # compiled once per robot (kept on disk), not timed
+    opts = {"max_iter": S.MAX_ITERATIONS}
+    c0 = time.process_time()
+    SS.stages(c.form, c.T, np.not_equal(*SS.hard_problem(c, num)[2:]), num.keep, opts)
+    build = time.process_time() - c0
+    c0 = time.process_time()
+    z, st, stages = SS.hard_solve(c, num, opts)  # the solver just built
+    fatrop_cpu = time.process_time() - c0
+    T, P = c.T, num.P.copy()
+    P[c.knot.par["elastic"]] = S.GOAL_WEIGHT
+    kf = c.form.fun["kf"].map(T)
+    cost = lambda zz: float(np.sum(kf(zz.reshape(T, -1).T, P))) / T
+    out = S.package(c, num, z, *got["package"][3:9], r.solver)
+    fs_ = st["fatrop"]
+    print("RESULT " + json.dumps({
+        "knots": T, "ipopt_cpu": ipopt_cpu, "ipopt_it": r.solver.iterations,
+        "ipopt_feasible": bool(r.audit.feasible), "ipopt_cost": cost(got["z"]),
+        "fatrop_cpu": fatrop_cpu, "fatrop_build": build,
+        "fatrop_it": int(st["iter_count"]), "fatrop_status": int(st["return_status"]),
+        "linear_algebra": fs_["compute_sd_time"],
+        "derivatives": fs_["eval_hess_time"] + fs_["eval_jac_time"],
+        "stage": [int(np.mean(stages.nx)), int(np.mean(stages.nu)), int(np.mean(stages.ng))],
+        "fatrop_cost": cost(z), "fatrop_feasible": bool(out.audit.feasible),
+        "fatrop_binding": list(out.audit.binding[:3]),
+        "fatrop_unmet": [u.name for u in S.unmet(c, num, z, 1e-6)[:3]]}))
+""")
+
+
+def structured_row(name: str, knots: int) -> str:
+    """One row of the ``--structured`` table (IPOPT and fatrop on one problem)."""
+    p = subprocess.run([sys.executable, "-c", _STRUCTURED, name, str(knots)],
+                       capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                       cwd=str(ROOT))
+    r = next((json.loads(ln[7:]) for ln in p.stdout.splitlines() if ln.startswith("RESULT ")),
+             None)
+    if r is None:
+        return f"| {name} | error: {(p.stderr or p.stdout)[-300:]!r} | |"
+    ok = {True: "feasible", False: "infeasible"}
+    fat = (f"{r['fatrop_cpu']:.1f} s, {r['fatrop_it']} it. (status {r['fatrop_status']}), "
+           f"{r['fatrop_cpu'] / max(r['fatrop_it'], 1):.2f} s/it. (linear algebra "
+           f"{r['linear_algebra'] / max(r['fatrop_it'], 1):.3f}, derivatives "
+           f"{r['derivatives'] / max(r['fatrop_it'], 1):.3f}); stages nx/nu/ng ≈ "
+           f"{'/'.join(map(str, r['stage']))}; built in {r['fatrop_build']:.0f} s; cost "
+           f"{r['fatrop_cost'] / r['ipopt_cost']:.4f}× IPOPT's; audit "
+           f"{ok[r['fatrop_feasible']]}"
+           + (f"; unmet rows: {', '.join(r['fatrop_unmet'])}" if r["fatrop_unmet"] else ""))
+    return (f"| 3-D walk → {name}, {r['knots']} knots | {r['ipopt_cpu']:.1f} s, "
+            f"{r['ipopt_it']} it., {r['ipopt_cpu'] / r['ipopt_it']:.3f} s/it.; audit "
+            f"{ok[r['ipopt_feasible']]} | {fat} |")
 
 
 def child(root: Path, case: str, knots: int, calls: int = 2, cache: str | None = None
@@ -145,6 +229,9 @@ def main() -> None:
     ap.add_argument("--cases", default="hoap2,cmu,clip")
     ap.add_argument("--no-first", action="store_true",
                     help="skip Talos's first-time-ever run (an empty cache: its compilation)")
+    ap.add_argument("--structured", action="store_true",
+                    help="also solve each robot row's problem with CasADi's fatrop, stage by "
+                         "stage, beside IPOPT in one process (a table of its own)")
     add_flag(ap)
     a = ap.parse_args()
     rows = _Rows(["| case | goal | first time ever | fresh process | second call | iterations "
@@ -201,6 +288,12 @@ def main() -> None:
                 f"| {p['first']:.2f} s | {p['cached']:.2f} s | | | "
                 f"{'feasible' if p['feasible'] else 'infeasible'} | |")
     tmp.cleanup()
+    if a.structured:
+        print("\n| case | IPOPT (second call: CPU, iterations, per iteration; audit) | fatrop, "
+              "same problem (CPU, iterations, per iteration; result) |\n|---|---|---|",
+              flush=True)
+        for name in [n for n in a.robots.split(",") if n]:
+            print(structured_row(name, a.knots), flush=True)
     print("\nstreaming: python benchmarks/streaming.py")
 
 

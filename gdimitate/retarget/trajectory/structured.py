@@ -37,12 +37,13 @@ import casadi as ca
 import numpy as np
 
 from ..knot import Knot
-from ..parts.integration import Integration
 from ..params import IPOPT_DEFAULTS
+from ..parts.integration import Integration
 from . import codegen
 from . import problem as pb
 
-__all__ = ["Stages", "stage_functions", "stages", "supported", "run_fatrop", "FATROP_DEFAULTS"]
+__all__ = ["Stages", "stage_functions", "stages", "supported", "run_fatrop", "hard_problem",
+           "hard_solve", "FATROP_DEFAULTS"]
 
 FATROP_DEFAULTS = {"print_level": 0, "tolerance": 1e-6, "tol_acceptable": 1e-5,
                    "acceptable_iter": 5, "constr_viol_tol": 1e-6, "mu_init": 0.1}
@@ -285,21 +286,29 @@ def run_fatrop(form: pb.Formulation, T: int, P: np.ndarray, x0: np.ndarray, lbx:
     return z, stats, st
 
 
-def hard_solve(c: pb.Compiled, num, opts: dict | None = None
-               ) -> tuple[np.ndarray, dict, Stages]:
-    """fatrop on the hard solve :func:`.solve.run_solver` hands IPOPT for ``c`` (an IPOPT
-    :class:`~.problem.Compiled`) and ``num`` (:class:`~.solve.Numbers`): the same start,
-    bounds, kept rows, free goal slacks started at their rows' violations and the goal's L1
-    price :data:`~.solve.GOAL_WEIGHT`. Returns :func:`run_fatrop`'s ``(z, stats, stages)``
-    with the elastic slacks of ``z`` at 0 (the motion's own row values)."""
+def hard_problem(c: pb.Compiled, num) -> tuple[np.ndarray, ...]:
+    """``(P, x0, lbx, ubx)`` ``(·, T)`` of the hard solve :func:`.solve.run_solver` hands IPOPT
+    for ``c`` (an IPOPT :class:`~.problem.Compiled`) and ``num`` (:class:`~.solve.Numbers`):
+    the free goal slacks started at their rows' violations, the goal's L1 price
+    :data:`~.solve.GOAL_WEIGHT`."""
     from . import solve as S
 
     free = S._free_slacks(c, num, goal_only=True)
     lbx, ubx = num.lbx.copy(), num.ubx.copy()
     for name, fr in zip(("s_plus", "s_minus"), free):
         ubx[c.knot.var[name]] = fr
-    x0 = S._slack_start(c, num, num.x0, free)
     P = num.P.copy()
     P[c.knot.par["elastic"]] = S.GOAL_WEIGHT
+    return P, S._slack_start(c, num, num.x0, free), lbx, ubx
+
+
+def hard_solve(c: pb.Compiled, num, opts: dict | None = None
+               ) -> tuple[np.ndarray, dict, Stages]:
+    """fatrop on the hard solve IPOPT gets (:func:`hard_problem`: the same start, bounds,
+    kept rows and cost). Returns :func:`run_fatrop`'s ``(z, stats, stages)`` with the elastic
+    slacks of ``z`` at 0 (the motion's own row values)."""
+    from . import solve as S
+
+    P, x0, lbx, ubx = hard_problem(c, num)
     z, stats, st = run_fatrop(c.form, c.T, P, x0, lbx, ubx, num.lbg, num.ubg, num.keep, opts)
     return S._zero_slacks(c, z, c.T), stats, st
