@@ -20,9 +20,18 @@ control problem of ``T`` stages, as fatrop's Riccati recursion needs it:
   cannot be written so: :func:`supported` says no.
 - **cost**: the knot's cost over ``T``, times IPOPT's ``obj_scaling_factor``.
 
-The per-knot functions are CasADi SX evaluated in its virtual machine: fatrop's CasADi plugin
-differentiates its oracle itself and takes no custom derivative functions (no ``jac_g``/
-``hess_lag`` options), so the compiled C functions of :mod:`.codegen` cannot serve it.
+fatrop's CasADi plugin differentiates its oracle itself and takes no derivative functions
+(no ``jac_g``/``hess_lag`` options, unlike IPOPT's), and CasADi's virtual machine running
+those derivatives did not finish one G1 solve in 18 minutes. So the stage functions are
+compiled to C with the derivatives CasADi's AD of ``f.map(T)`` looks up by name in an
+external library (``jac_f``, ``adj1_f``, ``jac_adj1_f``: :func:`_with_derivatives`), kept on
+disk as :mod:`.codegen` keeps the knot's (G1: 0.89 M instructions, 223 s the first time).
+
+Measured (``python benchmarks/adaptor.py --robots g1,talos --structured``; docs/design.md §6):
+13–27× IPOPT's CPU time — fatrop's monotone barrier crawls to the 150-iteration budget
+after reaching feasibility, its Riccati step on these wide stages costs what IPOPT's MUMPS
+iteration does, and CasADi's AD of the oracle costs 25–40× the knot's own compiled
+derivatives. Not used by :func:`gdimitate.adapt`; kept to reproduce the measurement.
 """
 
 from __future__ import annotations
@@ -58,7 +67,17 @@ def supported(form: pb.Formulation) -> bool:
     the first (a periodic cycle couples them) and pair rows that the next knot's controls do
     not enter once its state is substituted."""
     return form.seam is None and any(isinstance(p, Integration) for p in form.pairs) and \
-        stage_functions(form) is not None
+        _sx_cached(form) is not None
+
+
+def _sx_cached(form: pb.Formulation) -> list[ca.Function] | None:
+    """:func:`_sx_functions` of a formulation, built once per formulation."""
+    key = id(form)
+    if not (key in _FUN and _FUN[key]["form"] is form):
+        _FUN[key] = {"form": form, "sx": _sx_functions(form)}
+        while len(_FUN) > pb.CACHE_SIZE:
+            _FUN.popitem(last=False)
+    return _FUN[key]["sx"]
 
 
 def _fresh_knot(form: pb.Formulation) -> tuple[Knot, tuple]:
@@ -134,10 +153,10 @@ def stage_functions(form: pb.Formulation) -> dict[str, ca.Function] | None:
     cost (``kf``), ``dyn (x, p₁) -> [q₁; v₁]`` and ``pair (x, p₁)`` the other pair parts'
     rows with the next state substituted (``p₁``: the next knot's parameters); ``None``
     when a pair part needs the next knot's controls."""
-    key = id(form)
-    if key in _FUN and _FUN[key]["form"] is form:
-        return _FUN[key]["fun"]
-    sx = _sx_functions(form)
+    sx = _sx_cached(form)
+    memo = _FUN[id(form)]
+    if "fun" in memo:
+        return memo["fun"]
     fun = None
     if sx is not None:
         k = form.knot
@@ -149,9 +168,7 @@ def stage_functions(form: pb.Formulation) -> dict[str, ca.Function] | None:
             "stages-" + digest, lambda: [d for f in sx for d in _with_derivatives(f)],
             f"{k.robot.name}'s stage-wise")
         fun = {f.name(): every[f.name()] for f in sx}
-    _FUN[key] = {"form": form, "fun": fun}
-    while len(_FUN) > pb.CACHE_SIZE:
-        _FUN.popitem(last=False)
+    memo["fun"] = fun
     return fun
 
 
@@ -217,33 +234,36 @@ def stages(form: pb.Formulation, T: int, free: np.ndarray, keep: np.ndarray,
     kept = np.zeros(ngk * T + form.ns * (T - 1), bool)
     kept[np.asarray(keep, int)] = True
     prow = _pair_rows(form, T)
-    rows, kind, src, nxk, nuk, ngs = [], [], [], [], [], []
+    rows: list[int] = []
+    kind: list[int] = []
+    src: list[int] = []
+    nxk, nuk, ngs = [], [], []
+
+    def add(r: int, what: int, origin: int) -> None:
+        rows.append(r)
+        kind.append(what)
+        src.append(origin)
+
     nD, nG = nxs * (T - 1), ngk * T
     for k in range(T):
-        fk = free[:, k]
-        nxk.append(int(fk[:nxs].sum()))
-        nuk.append(int(fk[nxs:].sum()))
-        path: list[int] = []
+        nxk.append(int(free[:nxs, k].sum()))
+        nuk.append(int(free[nxs:, k].sum()))
+        n0 = len(rows)
         if k < T - 1:
-            for i in range(nxs):  # gap-closing rows of the next knot's free states
-                r = i + nxs * k
-                if free[i, k + 1]:
-                    rows.append(r), kind.append(0), src.append(-1)
-                elif touches[r]:  # a fixed next state: an equality row of this stage
-                    path.append(r)
-        for r in path:
-            rows.append(r), kind.append(0), src.append(-1)
-        n = len(path)
-        for i in range(ngk):
-            if kept[k * ngk + i]:
-                rows.append(nD + i + ngk * k), kind.append(1), src.append(k * ngk + i)
-                n += 1
+            nxt = np.arange(nxs) + nxs * k
+            for r in nxt[free[:nxs, k + 1]]:  # the next knot's free states: gap-closing rows
+                add(int(r), 0, -1)
+            n0 = len(rows)
+            # a fixed next state: its row an equality of this stage where free variables
+            # enter it, else left out (its fixed values integrate: a frozen joint at rest)
+            for r in nxt[~free[:nxs, k + 1] & touches[nxt]]:
+                add(int(r), 0, -1)
+        for i in np.flatnonzero(kept[k * ngk:(k + 1) * ngk]):
+            add(nD + int(i) + ngk * k, 1, k * ngk + int(i))
         if k < T - 1:
-            for i in range(npair):
-                if kept[prow[i, k]]:
-                    rows.append(nD + nG + i + npair * k), kind.append(2), src.append(prow[i, k])
-                    n += 1
-        ngs.append(n)
+            for i in np.flatnonzero(kept[prow[:, k]]):
+                add(nD + nG + int(i) + npair * k, 2, int(prow[i, k]))
+        ngs.append(len(rows) - n0)
     rows_a = np.asarray(rows, int)
     S = ca.DM(ca.Sparsity.triplet(rows_a.size, int(stacked.shape[0]), list(range(rows_a.size)),
                                   rows_a.tolist()), 1.0)
