@@ -41,6 +41,7 @@ import inspect
 import time
 from collections import OrderedDict
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -268,11 +269,12 @@ def stages(form: pb.Formulation, T: int, free: np.ndarray, keep: np.ndarray,
     S = ca.DM(ca.Sparsity.triplet(rows_a.size, int(stacked.shape[0]), list(range(rows_a.size)),
                                   rows_a.tolist()), 1.0)
     g = ca.mtimes(S, stacked)
-    scale = float(IPOPT_DEFAULTS["obj_scaling_factor"])
+    scale = float(IPOPT_DEFAULTS["obj_scaling_factor"])  # type: ignore[arg-type]
     f = scale * ca.sum2(fun["f"].map(T)(X, P)) / T
-    nlp = {"x": z, "p": ca.vertcat(ca.vec(P), fixed), "f": f, "g": g}
-    o = {"print_time": False, "structure_detection": "manual", "N": T - 1, "nx": nxk,
-         "nu": nuk, "ng": ngs, "fatrop": {**FATROP_DEFAULTS, **(opts or {})}}
+    nlp: dict[str, Any] = {"x": z, "p": ca.vertcat(ca.vec(P), fixed), "f": f, "g": g}
+    o: dict[str, Any] = {"print_time": False, "structure_detection": "manual", "N": T - 1,
+                         "nx": nxk, "nu": nuk, "ng": ngs,
+                         "fatrop": {**FATROP_DEFAULTS, **(opts or {})}}
     solver = ca.nlpsol("structured", "fatrop", nlp, o)
     st = Stages(solver, free.copy(), rows_a, np.asarray(kind), np.asarray(src), nxk, nuk, ngs,
                 time.perf_counter() - t0)
