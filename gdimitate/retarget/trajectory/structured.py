@@ -28,8 +28,9 @@ external library (``jac_f``, ``adj1_f``, ``jac_adj1_f``: :func:`_with_derivative
 disk as :mod:`.codegen` keeps the knot's (G1: 0.89 M instructions, 223 s the first time).
 
 Measured (``python benchmarks/adaptor.py --robots g1,talos --structured``; docs/design.md §6):
-13–27× IPOPT's CPU time — fatrop's monotone barrier crawls to the 150-iteration budget
-after reaching feasibility, its Riccati step on these wide stages costs what IPOPT's MUMPS
+13–27× IPOPT's CPU time — fatrop crawls to the 150-iteration budget after reaching
+feasibility (every step's Hessian regularised by 0.03–0.16 for inertia, its monotone barrier
+parameter stuck at 2·10⁻⁶), its Riccati step on these wide stages costs what IPOPT's MUMPS
 iteration does, and CasADi's AD of the oracle costs 25–40× the knot's own compiled
 derivatives. Not used by :func:`gdimitate.adapt`; kept to reproduce the measurement.
 """
