@@ -37,3 +37,29 @@ def walk_sagittal():
     from gdimitate.io.gait import human_walk
 
     return human_walk()
+
+
+def g1_measured_problem(walk, rate: float = 20.0):
+    """G1's trajectory problem for ``walk`` ``(human, motion, forces)`` (e.g. :func:`walk_3d`
+    or a stride of it) resampled to ``rate`` knots/s (the default parts, measured push,
+    default weights, limits and contact), before any solve:
+    ``(robot, targets, formulation, numbers)`` as ``solve.problem_for`` and ``solve.setup``
+    make them (``numbers.x0`` the warm start, ``numbers.P`` the parameters)."""
+    from gdimitate.model.kinematics import actuated_v_indices
+    from gdimitate.retarget import Contact, Limits, Weights, limits, resample
+    from gdimitate.retarget.bodymap import body_map
+    from gdimitate.retarget.info import resolve_contacts
+    from gdimitate.retarget.targets import demonstration_targets
+    from gdimitate.retarget.trajectory import solve as S
+
+    h, demo, fs = walk
+    robot = library_robot("g1")
+    copts = Contact()
+    act = limits.resolve(robot, actuated_v_indices(robot), Limits()).names
+    bmap = body_map(h, robot, None)
+    tg = demonstration_targets(h, resample(h, demo, rate), robot, bmap, act, "measured", fs,
+                               copts.rule)
+    form = S.problem_for(robot, "measured", copts, bmap, act)
+    num = S.setup(form, tg, robot, h, Weights(), Limits(), copts,
+                  resolve_contacts(robot, copts, None))
+    return robot, tg, form, num

@@ -96,24 +96,11 @@ def test_screening_keeps_the_legs_apart_row(walk):
     back violated on iCub's result (0.075 leg lengths) and cost a second solve. Checked on G1
     (iCub's start: 0.06 leg lengths; its derivatives alone take ~280 s to compile on 2
     cores)."""
-    from gdimitate.model.kinematics import actuated_v_indices
-    from gdimitate.retarget import Contact, Limits, Weights, limits
-    from gdimitate.retarget.bodymap import body_map
-    from gdimitate.retarget.info import resolve_contacts
-    from gdimitate.retarget.targets import demonstration_targets
     from gdimitate.retarget.trajectory import problem as pb
     from gdimitate.retarget.trajectory import solve as S
 
-    h, demo, fs = walk
-    robot = shared.library_robot("g1")  # its measured-push problem the demo compiles too
-    copts = Contact()
-    act = limits.resolve(robot, actuated_v_indices(robot), Limits()).names
-    bmap = body_map(h, robot, None)
-    tg = demonstration_targets(h, resample(h, demo, 20), robot, bmap, act, "measured", fs,
-                               copts.rule)
-    form = S.problem_for(robot, "measured", copts, bmap, act)
-    num = S.setup(form, tg, robot, h, Weights(), Limits(), copts,
-                  resolve_contacts(robot, copts, None))
+    # G1: its measured-push problem the demo compiles too
+    _, tg, form, num = shared.g1_measured_problem(walk, 20)
     c, _ = pb.compiled(form, tg.T, num.keep, None)
     T, n = tg.T, form.ngk
     g = np.asarray(c.g_fun(num.x0.T.ravel(), num.P.T.ravel())).ravel()[:n * T]

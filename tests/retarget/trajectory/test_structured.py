@@ -21,23 +21,7 @@ RNG = np.random.default_rng(37)
 def g1_problem(walk_3d):
     """G1's formulation of the shipped 3-D walk at 20 knots/s (the default parts, measured
     push) with a demonstration's parameters and warm start."""
-    from gdimitate.model.kinematics import actuated_v_indices
-    from gdimitate.retarget import Contact, Limits, Weights, limits
-    from gdimitate.retarget.bodymap import body_map
-    from gdimitate.retarget.info import resolve_contacts
-    from gdimitate.retarget.targets import demonstration_targets, resample
-    from gdimitate.retarget.trajectory import solve as S
-
-    h, demo, fs = walk_3d
-    robot = shared.library_robot("g1")
-    copts = Contact()
-    act = limits.resolve(robot, actuated_v_indices(robot), Limits()).names
-    bmap = body_map(h, robot, None)
-    tg = demonstration_targets(h, resample(h, demo, 20), robot, bmap, act, "measured", fs,
-                               copts.rule)
-    form = S.problem_for(robot, "measured", copts, bmap, act)
-    num = S.setup(form, tg, robot, h, Weights(), Limits(), copts,
-                  resolve_contacts(robot, copts, None))
+    _, _, form, num = shared.g1_measured_problem(walk_3d, 20)
     return form, num
 
 
