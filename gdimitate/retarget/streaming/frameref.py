@@ -22,8 +22,9 @@ demonstration's contact flag says it is in stance — so that it touches down st
 A sole the demonstration puts down before it has landed (a swing shorter than expected, a
 robot catching up with a walk it joined) goes straight to its landing pose, resting; its
 stance begins when it is there (:class:`~.streaming.StreamingAdaptor`'s own touch-down).
-The landing point keeps at least :data:`SEPARATION` times the neutral stance's lateral
-distance from the other sole and at most :data:`MAX_STEP` legs ahead of or behind it.
+The landing point keeps at least :data:`SEPARATION` times the narrowest stance's lateral
+distance (:func:`least_stance_width`) from the other sole and at most :data:`MAX_STEP` legs
+ahead of or behind it.
 
 Joints no demonstrator joint drives rest at the robot's rest pose
 (:func:`.parts.self_collision.rest_pose`, the trajectory mode's, with a wider clearance:
@@ -66,6 +67,9 @@ DIVERGENCE = 1.7
 #: the landing point is fixed from this fraction of the swing on (moved later, a sole low over
 #: the floor chased it sideways: iCub's lagged 4 cm, touched the floor and was dragged)
 FREEZE = 0.75
+#: the least lateral gap [m] between the soles' edges, and the least distance [m] between
+#: the two legs' collision geometries, of the narrowest stance (:func:`least_stance_width`)
+SOLE_GAP, LEG_CLEARANCE = 0.02, 0.01
 
 
 class FrameReference:
@@ -99,14 +103,16 @@ class FrameReference:
         self.step = max_step(imitator)
         self.k = min(self.s, self.s * self.step / STEP_RATIO)
         self.clearance = CLEARANCE * self.leg
-        im, idt = imitator.model, imitator.model.createData()
-        pin.framesForwardKinematics(im, idt, imitator.neutral)
-        # the least lateral distance of the soles: the hips' (legs straight down; G1's neutral
-        # legs splay its soles 24 cm apart, 0.37 leg: a sway that wide needs a lateral centre
-        # of pressure its 6-cm soles do not have), and the soles side by side
-        ys = [idt.oMi[im.getJointId(imitator.legs[x].hip)].translation[1] for x in SIDES]
-        widths = [self_contact.half_width for self_contact in imitator.require_contacts().values()]
-        self.sep = max(abs(ys[0] - ys[1]), 2 * max(widths) + 0.02)
+        # the least lateral distance of the soles' centres: side by side, SOLE_GAP apart. Not
+        # the hips' distance (legs straight down): a person's soles pass within a few cm of
+        # each other (the CMU walk's are 5-10 cm apart), and the weight shifts from one to the
+        # other within a double support of 0.15 s; at the hips' 13 cm, G1's centre of mass,
+        # over one sole when the other landed, could move 2 cm of the 6.5 cm it needed by
+        # lift-off (its 3-cm-wide centre-of-pressure margin), fell sideways and lost the
+        # stream from its first touch-down (69 of 343 frames feasible; 342 of 343 at 8 cm)
+        # (Talos's thighs, 1.2 cm apart at its neutral pose, keep its soles 16 cm apart:
+        # :func:`least_stance_width`)
+        self.sep = least_stance_width(imitator)
         self.frames: list[dict] = []
         self.heading: np.ndarray | None = None
         self.swing: dict = {x: None for x in SIDES}
@@ -296,7 +302,7 @@ class FrameReference:
         return v * (vmax / n) if n > vmax else v
 
     def _apart(self, x: str, goal: np.ndarray, feet: dict) -> np.ndarray:
-        """``goal`` kept at least :data:`SEPARATION` times the neutral stance's lateral
+        """``goal`` kept at least :data:`SEPARATION` times the narrowest stance's lateral
         distance to its side of the other sole, and at most :data:`MAX_STEP` leg lengths ahead
         or behind it, along the demonstrator's pelvis heading (the soles' own yaw follows its
         toe-out)."""
@@ -319,6 +325,71 @@ class FrameReference:
             if self._t_down is not None and t > self._t_down:
                 self.t_step = float(t - self._t_down)
             self._t_down = float(t)
+
+
+def least_stance_width(robot, step: float = 0.005) -> float:
+    """The least lateral distance [m] of the soles' centres that ``robot`` can stand at: from
+    its neutral pose both legs turn inwards about their hip roll joints (the ankle roll joints
+    turning back, the soles flat) in steps of ``step`` [rad] until the soles' edges come within
+    :data:`SOLE_GAP` of each other, the two legs' collision geometries
+    (:func:`gdimitate.model.selfcollision.self_collision`) within :data:`LEG_CLEARANCE`, or a
+    joint to its position limit. A robot without roll joints in its legs, or without collision
+    geometry, takes the soles' rule alone."""
+    from ...model.selfcollision import self_collision
+
+    m, d = robot.model, robot.model.createData()
+    contacts = robot.require_contacts()
+    soles = 2 * max(c.half_width for c in contacts.values()) + SOLE_GAP
+    fid = {x: m.getFrameId(contacts[x].frame) for x in SIDES}
+    from ...model.kinematics import base_joint_id
+
+    above = set(m.supports[base_joint_id(robot)])  # the base joint and the joints above it
+    chain = {x: [j for j in m.supports[m.frames[fid[x]].parentJoint] if j not in above]
+             for x in SIDES}
+    q0 = robot.neutral.copy()
+    pin.computeJointJacobians(m, d, q0)
+    pin.framesForwardKinematics(m, d, q0)
+    moves: dict[int, float] = {}
+    for x, sign in (("left", -1.0), ("right", 1.0)):  # the sole's lateral move, inwards
+        roll = [j for j in chain[x] if m.joints[j].nv == 1 and abs(pin.getJointJacobian(
+            m, d, j, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[3, m.joints[j].idx_v]) > 0.9]
+        if len(roll) < 2:
+            return soles
+        dy = pin.getFrameJacobian(m, d, fid[x], pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[
+            1, m.joints[roll[0]].idx_v]
+        if abs(dy) < 1e-6:
+            return soles
+        s = sign * np.sign(dy)
+        moves[m.joints[roll[0]].idx_q], moves[m.joints[roll[-1]].idx_q] = s, -s
+    sc = self_collision(robot)
+    legs = {j: x for x in SIDES for j in chain[x]}
+    pairs = [] if sc is None else [
+        k for k, p in enumerate(sc.geometry.collisionPairs)
+        if {legs.get(sc.geometry.geometryObjects[p.first].parentJoint),
+            legs.get(sc.geometry.geometryObjects[p.second].parentJoint)} == set(SIDES)]
+    idx = np.array(list(moves), int)
+    sgn = np.array(list(moves.values()))
+
+    def width(theta: float) -> float | None:
+        q = q0.copy()
+        q[idx] += theta * sgn
+        if np.any(q[idx] < m.lowerPositionLimit[idx]) or np.any(
+                q[idx] > m.upperPositionLimit[idx]):
+            return None
+        if pairs and np.min(sc.distances(q)[pairs]) < LEG_CLEARANCE:
+            return None
+        pin.framesForwardKinematics(m, d, q)
+        return abs(float(d.oMf[fid["left"]].translation[1] - d.oMf[fid["right"]].translation[1]))
+
+    best = width(0.0)
+    if best is None:  # the legs closer than the clearance already: the neutral stance
+        pin.framesForwardKinematics(m, d, q0)
+        return max(soles, abs(float(d.oMf[fid["left"]].translation[1]
+                                    - d.oMf[fid["right"]].translation[1])))
+    theta = step
+    while (w := width(theta)) is not None and w >= soles and w < best:
+        best, theta = w, theta + step
+    return max(soles, best)
 
 
 def max_step(robot) -> float:
