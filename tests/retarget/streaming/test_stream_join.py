@@ -45,18 +45,23 @@ def _join(walk, robot, start: float, n: int):
         dt = demo.t[k] - demo.t[k - 1] if k > k0 else None
         out.append(sa.step(demo.q[k], {s: bool(demo.contact[s][k]) for s in SIDES}, dt,
                            forces=f))
+    motion, W, verdicts = _assembled(sa, robot, out, demo.t[k0:k0 + n])
+    return sa, out, motion, W, verdicts
+
+
+def _assembled(sa, robot, out: list, t: np.ndarray):
+    """After the last step: ``(the motion from the first adapted frame, its wrenches, the
+    stream's verdicts)`` of the results ``out`` at times ``t`` [s] (one per step)."""
     a_last, w_last, _ = sa.final()
     verdicts = sa.verdicts(timeout=120)
     sa.close()
     kept = out[sa.first_frame:]
-    q = np.stack([r.q for r in kept])
-    v = np.stack([r.v for r in kept])
     a = np.stack([r.previous_a for r in kept[1:]] + [a_last])
     W = {s: np.stack([r.previous_wrenches[s] for r in kept[1:]] + [w_last[s]]) for s in SIDES}
     c = {s: np.array([r.contact[s] for r in kept], bool) for s in SIDES}
-    t = demo.t[k0 + sa.first_frame:k0 + n]
-    motion = robot_motion(robot, t, q, c).replace(v=v, a=a)
-    return sa, out, motion, W, verdicts
+    motion = robot_motion(robot, t[sa.first_frame:], np.stack([r.q for r in kept]),
+                          c).replace(v=np.stack([r.v for r in kept]), a=a)
+    return motion, W, verdicts
 
 
 @pytest.mark.parametrize("name", ["talos", "g1"])
@@ -148,3 +153,92 @@ def test_the_first_pose_keeps_the_robot_clear_of_itself(walk):
     kept = frameref.initial_pose(talos, sa._ref, f0, sa._act, None, collision=sa._qp.sc)
     assert closest(bare) < 0
     assert closest(kept) >= frameref.START_CLEARANCE - 1e-4
+
+
+def _legs_apart(robot, width: float) -> float:
+    """The least distance [m] between the two legs' collision geometries (Pinocchio/coal) at
+    the robot's neutral pose with the soles brought to ``width`` [m] apart by a Gauss–Newton
+    solve of the legs' joints (both soles flat, where they were along the walk; the base and
+    the other coordinates still): an independent construction of the stance that
+    :func:`frameref.least_stance_width` reports."""
+    from gdimitate.model.selfcollision import self_collision
+
+    m, d = robot.model, robot.model.createData()
+    fid = {s: m.getFrameId(robot.require_contacts()[s].frame) for s in SIDES}
+    q = robot.neutral.copy()
+    legs = {s: [j for j in m.supports[m.frames[fid[s]].parentJoint] if j > 1] for s in SIDES}
+    cols = sorted({m.joints[j].idx_v for s in SIDES for j in legs[s]})
+    pin.framesForwardKinematics(m, d, q)
+    goal = {}
+    for s, sign in (("left", 1.0), ("right", -1.0)):
+        g0 = d.oMf[fid[s]].copy()
+        mid = 0.5 * (d.oMf[fid["left"]].translation[1] + d.oMf[fid["right"]].translation[1])
+        g0.translation = np.r_[g0.translation[0], mid + sign * width / 2, g0.translation[2]]
+        goal[s] = g0
+    rows = [0, 1, 3, 4, 5]  # the height free: a straight leg turned in rises on its arc
+    for _ in range(100):  # both soles to their goals (sole frame)
+        pin.computeJointJacobians(m, d, q)
+        pin.updateFramePlacements(m, d)
+        J = np.vstack([pin.getFrameJacobian(m, d, fid[s], pin.ReferenceFrame.LOCAL)[rows][
+            :, cols] for s in SIDES])
+        e = np.concatenate([pin.log6(d.oMf[fid[s]].actInv(goal[s])).vector[rows]
+                            for s in SIDES])
+        dq = np.zeros(m.nv)
+        dq[cols] = np.linalg.lstsq(J, e, rcond=None)[0]
+        q = pin.integrate(m, q, dq)
+    pin.framesForwardKinematics(m, d, q)
+    got = abs(d.oMf[fid["left"]].translation[1] - d.oMf[fid["right"]].translation[1])
+    assert got == pytest.approx(width, abs=1e-6)
+    sc = self_collision(robot)
+    g = sc.geometry
+    pairs = [k for k, p in enumerate(g.collisionPairs)
+             if {g.geometryObjects[p.first].parentJoint in legs["left"],
+                 g.geometryObjects[p.second].parentJoint in legs["left"]} == {True, False}
+             and {g.geometryObjects[p.first].parentJoint in legs["right"],
+                  g.geometryObjects[p.second].parentJoint in legs["right"]} == {True, False}]
+    return float(np.min(sc.distances(q)[pairs]))
+
+
+@pytest.mark.parametrize("name", ["g1", "icub", "romeo", "talos"])
+def test_the_narrowest_stance_keeps_the_soles_and_legs_apart(name):
+    """:func:`frameref.least_stance_width`: the soles' edges at least ``SOLE_GAP`` apart (their
+    widths from the robot's contacts), the legs' collision geometries at least
+    ``LEG_CLEARANCE`` apart at that stance (rebuilt here by an independent solve; within
+    2 mm: the two constructions turn the legs differently), and no wider than the neutral
+    stance. G1, iCub and Romeo narrow below their hips' distance; Talos, whose thighs are
+    1.2 cm apart at its neutral pose, keeps it."""
+    robot = _library(name)
+    w = frameref.least_stance_width(robot)
+    m, d = robot.model, robot.model.createData()
+    pin.framesForwardKinematics(m, d, robot.neutral)
+    contacts = robot.require_contacts()
+    soles = {s: d.oMf[m.getFrameId(contacts[s].frame)].translation for s in SIDES}
+    hips = {s: d.oMi[m.getJointId(robot.legs[s].hip)].translation for s in SIDES}
+    neutral = abs(soles["left"][1] - soles["right"][1])
+    assert w >= 2 * max(c.half_width for c in contacts.values()) + frameref.SOLE_GAP - 1e-9
+    assert w <= max(neutral, abs(hips["left"][1] - hips["right"][1])) + 1e-9
+    if name == "talos":
+        assert w == pytest.approx(abs(hips["left"][1] - hips["right"][1]), abs=1e-9)
+    else:
+        assert w < abs(hips["left"][1] - hips["right"][1]) - 0.02
+        assert _legs_apart(robot, w) >= frameref.LEG_CLEARANCE - 2e-3
+
+
+def test_the_cmu_walk_streams_onto_g1_with_95_percent_feasible():
+    """The shipped CMU BVH walk (kinematic contacts, the segment push, 120 Hz, 343 frames)
+    streamed onto G1 with the defaults and no ``v_demo``: at least 95 % of the frames are
+    feasible by the stream's own verdicts, which are the audit of the assembled motion frame
+    for frame (measured: 332 of 343; 69 with the soles kept the hips' 13 cm apart, when G1
+    fell sideways at its first lift-off)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        demo = gd.load_demonstration(gd.gait.cmu_walk_path())
+    robot = _library("g1")
+    mo = demo.motion
+    sa = gd.retarget.StreamingAdaptor(demo.robot, robot, "segment", dt=mo.dt)
+    out = [sa.step(mo.q[k], {s: bool(mo.contact[s][k]) for s in SIDES}) for k in range(mo.T)]
+    motion, W, verdicts = _assembled(sa, robot, out, mo.t)
+    rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    assert verdicts.size == mo.T
+    np.testing.assert_array_equal(verdicts[sa.first_frame:], rep.knot_feasible)
+    assert verdicts.mean() >= 0.95, (int(verdicts.sum()), rep.binding)
