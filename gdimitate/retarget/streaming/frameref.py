@@ -381,7 +381,7 @@ def least_stance_width(robot, step: float = 0.005) -> float:
         if np.any(q[idx] < m.lowerPositionLimit[idx]) or np.any(
                 q[idx] > m.upperPositionLimit[idx]):
             return None
-        if pairs and np.min(sc.distances(q)[pairs]) < LEG_CLEARANCE:
+        if sc is not None and pairs and np.min(sc.distances(q)[pairs]) < LEG_CLEARANCE:
             return None
         pin.framesForwardKinematics(m, d, q)
         return abs(float(d.oMf[fid["left"]].translation[1] - d.oMf[fid["right"]].translation[1]))
