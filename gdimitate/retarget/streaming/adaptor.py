@@ -33,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from ...assess.audit import AuditTolerances
 from ...assess.result import AdaptedMotion, compare
 from ...assess.solver import SolverInfo, Unmet
 from ...errors import GdimitateWarning, InvalidInputError, UnknownNameError
@@ -72,6 +73,14 @@ STARTS = ("estimate", "rest")
 #: row). Stance taken at the demonstration's flag instead held a sole that had not landed
 #: where it was: Talos joining the shipped walk at rest hovered 3.7 mm up for 46 frames.
 LANDED_GAP, LANDED_SPEED = 9e-4, 0.05
+#: after RECOVER_AFTER frames in a row whose hard rows could not all hold (relaxed, failed or
+#: coasting) the stream starts again at the next frame, as a stream joined there does: the
+#: robot stood where it stands, in the demonstration's pose of that frame, moving with its
+#: velocity estimated from the last two frames (:meth:`StreamingAdaptor._recover`; the frame
+#: it jumps at fails the audit's integration and dynamics, and says ``"recovered"``). Without
+#: it a relaxed frame was never undone: G1 joined 1.0 s into the 3-D walk lost every frame
+#: from its 83rd on, its wrenches at 14 kN
+RECOVER_AFTER = 2
 
 
 class FrameResult(NamedTuple):
@@ -193,6 +202,9 @@ class StreamingAdaptor:
         #: forces)
         self._waiting: tuple[np.ndarray, dict, dict | None] | None = None
         self._skip = 0  # stream frames before the motion's first (the one that waited)
+        self._lost = 0  # frames in a row whose hard rows could not all hold
+        #: the last restart (:meth:`_recover`): its frame and the demonstration's flags there
+        self._restart: tuple[int, dict] = (-1, {})
         self._last_verdict: tuple[int, bool] | None = None  # final()'s, of the last frame
         if self._judge is not None:
             self._judge.reset()
@@ -253,6 +265,8 @@ class StreamingAdaptor:
         self._ref.frames.append(self._ref.features(t, q_demo, flags, forces))
         if not H["t"]:
             return self._first(t, flags, t0, v_demo)
+        if self._lost >= RECOVER_AFTER:
+            return self._recover(t, flags, t0)
         own = self._own_flags(flags)
         with single_thread():
             a, W, flag = self._solve(len(H["t"]) - 1, own)
@@ -261,6 +275,7 @@ class StreamingAdaptor:
                 and np.max(np.abs(v_next)) < MAX_SPEED):  # no usable step: coast
             a, W, flag = np.zeros_like(a), {s: np.zeros(6) for s in SIDES}, -99
         q, v = self._commit(t, flags, own, a, W)
+        self._lost = self._lost + 1 if flag != 1 or self._slipped(own) else 0
         elapsed = time.perf_counter() - t0
         new, ok = self._judged()
         self._n += 1
@@ -328,14 +343,34 @@ class StreamingAdaptor:
             if v_demo.shape != (self.demonstrator.model.nv,):
                 raise InvalidInputError(f"v_demo must have shape "
                                         f"({self.demonstrator.model.nv},); got {v_demo.shape}")
+        q, v0 = self._start_state(f0, f0, v_demo)
+        H = self._hist
+        for k, x in (("t", t), ("q", q), ("v", v0), ("c", flags)):
+            H[k].append(x)
+        self._demo_flags = dict(flags)
+        elapsed = time.perf_counter() - t0
+        new, _ = self._judged()
+        self._n += 1
+        return FrameResult(q.copy(), v0.copy(), None, None, None,
+                           "moving start" if moving else "rest pose", 0, elapsed, new,
+                           dict(flags))
+
+    def _start_state(self, f0: dict, at: dict, v_demo: np.ndarray | None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """``(q (nq,), v (nv,))`` of a start at the demonstration's frame ``f0`` (its
+        features), the soles placed where the demonstrator's of ``at`` are, scaled (``at``
+        is ``f0`` moved along the floor: a restart stands where the robot is); moving with
+        ``v_demo`` (scaled; None: at rest). The reference, the stance anchors and the
+        stance flags start there."""
+        moving = v_demo is not None
         cv = None
         if moving:
             dm, dd = self.demonstrator.model, self.demonstrator.model.createData()
             pin.centerOfMass(dm, dd, f0["q"], v_demo)
             cv = self._ref.k * dd.vcom[0]
-        q = initial_pose(self.imitator, self._ref, f0, self._act, cv, collision=self._qp.sc)
-        v0 = (initial_velocity(self.imitator, q, self._ref, f0, v_demo, self._act) if moving
-              else np.zeros(self.imitator.model.nv))
+        q = initial_pose(self.imitator, self._ref, at, self._act, cv, collision=self._qp.sc)
+        v0 = (initial_velocity(self.imitator, q, self._ref, f0, v_demo, self._act)
+              if v_demo is not None else np.zeros(self.imitator.model.nv))
         # scaled down, as a whole (the soles stay still), into the joints' velocity limits
         # (Romeo's hips: 2.1 rad/s, the demonstrator's swing hip moves faster)
         vel = np.asarray(self._audit_robot.model.velocityLimit)[self._act]
@@ -350,17 +385,46 @@ class StreamingAdaptor:
 
         self._ref.start(f0, pin.centerOfMass(m, data, q), feet,
                         data.oMi[base_joint_id(self.imitator)].rotation.copy(), moving)
-        self._anchor = {s: feet[s] for s in SIDES if flags[s]}
-        H = self._hist
-        for k, x in (("t", t), ("q", q), ("v", v0), ("c", flags)):
-            H[k].append(x)
+        self._anchor = {s: feet[s] for s in SIDES if f0["contact"][s]}
+        return q, v0
+
+    def _recover(self, t: float, flags: dict, t0: float) -> FrameResult:
+        """Start again at this frame (:data:`RECOVER_AFTER`): the last knot's ``a`` and
+        wrenches are its QP's, the new frame's state a start (:meth:`_start_state`) with the
+        demonstrator's velocity estimated from the last two frames, its soles where the
+        robot's stance soles are (the demonstration's moved along the floor by the
+        difference, unscaled)."""
+        H, F = self._hist, self._ref.frames
+        f0, f_prev = F[-1], F[-2]
+        dt = f0["t"] - f_prev["t"]
+        v_demo = pin.difference(self.demonstrator.model, f_prev["q"], f0["q"]) / max(dt, 1e-9)
+        m, data = self.imitator.model, self._qp.d1
+        pin.framesForwardKinematics(m, data, H["q"][-1])
+        down = [s for s in SIDES if H["c"][-1][s]] or list(SIDES)
+        here = np.mean([data.oMf[self._fid[s]].translation[:2] for s in down], axis=0)
+        there = np.mean([f0["soles"][s].translation[:2] for s in down], axis=0)
+        shift = np.r_[here / self._ref.s - there, 0.0]
+        at = {**f0, "soles": {s: pin.SE3(p.rotation, p.translation + shift)
+                              for s, p in f0["soles"].items()}, "com": f0["com"] + shift}
+        a, W, _ = self._solve(len(H["t"]) - 1, H["c"][-1])
+        self._ref.lift = {s: None for s in SIDES}
+        q, v = self._start_state(f0, at, v_demo)
+        H["a"].append(a)
+        H["w"].append(W)
+        self._a_prev = np.zeros_like(a)
         self._demo_flags = dict(flags)
-        elapsed = time.perf_counter() - t0
-        new, _ = self._judged()
+        # the robot's own flags at the jump: no stance, so that each stance after it begins
+        # at the next frame (the audit's slip is measured from a stance's first frame); its
+        # QP stands on the demonstration's (:meth:`_solve`)
+        lifted = {s: False for s in SIDES}
+        for k, x in (("t", t), ("q", q), ("v", v), ("c", lifted)):
+            H[k].append(x)
+        self._restart = (len(H["t"]) - 1, dict(flags))
+        self._lost = 0
+        new, ok = self._judged()
         self._n += 1
-        return FrameResult(q.copy(), v0.copy(), None, None, None,
-                           "moving start" if moving else "rest pose", 0, elapsed, new,
-                           dict(flags))
+        return FrameResult(q.copy(), v.copy(), a.copy(), {s: W[s].copy() for s in SIDES}, ok,
+                           "recovered", 1, time.perf_counter() - t0, new, lifted)
 
     def _solve(self, j: int, nxt: dict) -> tuple[np.ndarray, dict, int]:
         """Knot ``j``'s QP (the next knot's stance flags ``nxt``)."""
@@ -373,7 +437,8 @@ class StreamingAdaptor:
         feet = {s: data.oMf[self._fid[s]].copy() for s in SIDES}
         c = pin.centerOfMass(m, data, q, v)
         tk = self._ref.tasks(j, nxt, feet, self._anchor, (c.copy(), data.vcom[0].copy()))
-        a, W, flag = self._qp.solve(q, v, h, H["c"][j], nxt, tk, self._a_prev)
+        now = self._restart[1] if self._restart[0] == j else H["c"][j]
+        a, W, flag = self._qp.solve(q, v, h, now, nxt, tk, self._a_prev)
         self._h = h
         return a, W, flag
 
@@ -403,6 +468,21 @@ class StreamingAdaptor:
         for k, x in (("t", t), ("q", q), ("v", v), ("c", own)):
             H[k].append(x)
         return q, v
+
+    def _slipped(self, own: dict) -> bool:
+        """Whether a foot in stance since an earlier frame has moved, at the frame just
+        committed, further from where its stance began than the audit allows (its ``slip``
+        and ``slip_rotation`` tolerances): the frame is lost though its QP held."""
+        data, tol = self._qp.d1, AuditTolerances()  # _commit's kinematics of the new frame
+        for s, start in self._anchor.items():
+            if not own[s]:
+                continue
+            now = data.oMf[self._fid[s]]
+            if (np.linalg.norm(now.translation - start.translation) > tol.slip
+                    or np.linalg.norm(pin.log3(start.rotation.T @ now.rotation))
+                    > tol.slip_rotation):
+                return True
+        return False
 
     def final(self) -> tuple[np.ndarray, dict, bool | None]:
         """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
