@@ -64,7 +64,7 @@ def _assembled(sa, robot, out: list, t: np.ndarray):
     return motion, W, verdicts
 
 
-@pytest.mark.parametrize("name", ["talos", "g1"])
+@pytest.mark.parametrize("name", ["talos", "g1", "icub", "romeo"])
 def test_joining_the_walk_mid_stride_without_its_velocity_keeps_97_percent(walk, name):
     """Joined 1.0 s into the walk (mid-stride) with no ``v_demo``: the first frame waits (its
     result the rest pose, ``status="waiting"``, verdict False) and the stream starts at the
@@ -224,16 +224,18 @@ def test_the_narrowest_stance_keeps_the_soles_and_legs_apart(name):
         assert _legs_apart(robot, w) >= frameref.LEG_CLEARANCE - 2e-3
 
 
-def test_the_cmu_walk_streams_onto_g1_with_95_percent_feasible():
+@pytest.mark.parametrize("name", ["g1", "icub"])
+def test_the_cmu_walk_streams_with_95_percent_feasible(name):
     """The shipped CMU BVH walk (kinematic contacts, the segment push, 120 Hz, 343 frames)
-    streamed onto G1 with the defaults and no ``v_demo``: at least 95 % of the frames are
-    feasible by the stream's own verdicts, which are the audit of the assembled motion frame
-    for frame (measured: 332 of 343; 69 with the soles kept the hips' 13 cm apart, when G1
-    fell sideways at its first lift-off)."""
+    streamed with the defaults and no ``v_demo``: at least 95 % of the frames are feasible by
+    the stream's own verdicts, which are the audit of the assembled motion frame for frame
+    (measured: G1 338, iCub 332 of 343; G1 69 with the soles kept the hips' 13 cm apart, when
+    it fell sideways at its first lift-off; 332 before a lost stream restarted. Talos and
+    Romeo, 328 each, are not asserted here: two frames above the bound)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         demo = gd.load_demonstration(gd.gait.cmu_walk_path())
-    robot = _library("g1")
+    robot = _library(name)
     mo = demo.motion
     sa = gd.retarget.StreamingAdaptor(demo.robot, robot, "segment", dt=mo.dt)
     out = [sa.step(mo.q[k], {s: bool(mo.contact[s][k]) for s in SIDES}) for k in range(mo.T)]
