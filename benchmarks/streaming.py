@@ -2,7 +2,9 @@
 
 Run: ``python benchmarks/streaming.py [--robots talos,g1,icub,romeo] [--frames 200]
 [--force measured] [--start 0] [--no-v-demo] [--repeats 1] [--baseline-rev ff13e49]
-[--baseline-frames 200]`` (``--robot talos`` is ``--robots talos``).
+[--baseline-frames 200] [--clip 3d|cmu|sfu]`` (``--robot talos`` is ``--robots talos``;
+``--clip cmu``/``sfu``: the shipped CMU BVH walk or the SFU-style file made from it,
+streamed with the segment push and kinematic contacts).
 
 The shipped real 3-D walk (with its measured forces) is streamed frame by frame into
 ``gdimitate.retarget.StreamingAdaptor`` for each of ``--robots``, joining at ``--start``
@@ -65,9 +67,13 @@ _CHILD = textwrap.dedent("""
     except ImportError:
         from gdimitate.audit import audit
         from gdimitate.kinematics import robot_motion
-    name, frames, force, mode, start, use_v = sys.argv[1:7]
+    name, frames, force, mode, start, use_v, clip = sys.argv[1:8]
     frames, start, use_v, warm = int(frames), float(start), use_v == "1", 5
-    h, m, f = gd.gait.human_walk_3d()
+    if clip:  # a BVH file: its skeleton, kinematic contacts, no forces
+        demo = gd.load_demonstration(clip)
+        h, m, f = demo.robot, demo.motion, None
+    else:
+        h, m, f = gd.gait.human_walk_3d()
     robot = gd.Robot.from_library(name)
     kw = {"audit": False} if mode == "off" and "audit" in inspect.signature(
         gd.retarget.StreamingAdaptor).parameters else {}
@@ -132,11 +138,12 @@ _CHILD = textwrap.dedent("""
 
 
 def run(root: Path, robot: str, frames: int, force: str, mode: str = "off", start: float = 0.0,
-        v_demo: bool = True) -> dict:
+        v_demo: bool = True, clip: str = "") -> dict:
     """One case in its own process: ``mode`` "default" (the default constructor: verdict on)
-    or "off" (``audit=False``), joining ``start`` [s] into the walk."""
+    or "off" (``audit=False``), joining ``start`` [s] into the walk (``clip``: a BVH file's
+    path; "": the shipped 3-D walk)."""
     env = {**os.environ, "PYTHONPATH": str(root)}
-    args = [robot, str(frames), force, mode, str(start), "1" if v_demo else "0"]
+    args = [robot, str(frames), force, mode, str(start), "1" if v_demo else "0", clip]
     p = subprocess.run([sys.executable, "-c", _CHILD, *args], capture_output=True, text=True,
                        env=env, cwd=tempfile.gettempdir())
     for line in p.stdout.splitlines():
@@ -193,10 +200,29 @@ def main() -> None:
     ap.add_argument("--baseline-rev", default="ff13e49",
                     help="git revision streamed as the same-run baseline ('' for none)")
     ap.add_argument("--baseline-frames", type=int, default=200)
+    ap.add_argument("--clip", default="3d", choices=("3d", "cmu", "sfu"),
+                    help="the shipped 3-D walk (measured forces), the shipped CMU BVH walk, or "
+                         "issue 32's SFU-style file made from it (tests/helpers/bvh.py); the "
+                         "BVH clips stream with the segment push (no forces)")
     add_flag(ap)
     a = ap.parse_args()
     robots = [a.robot] if a.robot else [r.strip() for r in a.robots.split(",") if r.strip()]
-    rows = [f"streaming the shipped 3-D walk (force={a.force}), joining {a.start:g} s in, "
+    tmp_clip = tempfile.TemporaryDirectory()
+    clip = ""
+    if a.clip == "cmu":
+        import gdimitate as gd
+
+        clip = str(gd.gait.cmu_walk_path())
+    elif a.clip == "sfu":
+        sys.path.insert(0, str(ROOT))
+        from tests.helpers.bvh import write_sfu_style
+
+        clip = str(write_sfu_style(Path(tmp_clip.name) / "sfu_style.bvh"))
+    if clip and a.force == "measured":
+        a.force = "segment"
+    what = {"3d": "the shipped 3-D walk", "cmu": "the shipped CMU BVH walk",
+            "sfu": "the SFU-style BVH walk"}[a.clip]
+    rows = [f"streaming {what} (force={a.force}), joining {a.start:g} s in, "
             f"{'without' if a.no_v_demo else 'with'} the demonstrator's velocity; "
             f"{a.repeats} run(s) per case, medians", "",
             "| robot | streaming | frames/s wall (of CPU time) | feasible by its own verdict "
@@ -209,7 +235,7 @@ def main() -> None:
     for _ in range(max(a.repeats, 1)):
         for robot, mode in cases:
             got[robot, mode].append(run(ROOT, robot, a.frames, a.force, mode, a.start,
-                                        not a.no_v_demo))
+                                        not a.no_v_demo, clip))
     with tempfile.TemporaryDirectory() as tmp:
         base = checkout(a.baseline_rev, tmp) if a.baseline_rev else None
         for robot in robots:
@@ -219,9 +245,10 @@ def main() -> None:
             if base is not None:
                 rows.append(row(f"{robot} | baseline {a.baseline_rev}, audit=False",
                                 run(base, robot, a.baseline_frames, a.force, "off", a.start,
-                                    not a.no_v_demo)))
+                                    not a.no_v_demo, clip)))
     rows.append("")
     rows.append(f"load average (1, 5, 15 min): {os.getloadavg()}, {os.cpu_count()} CPUs")
+    tmp_clip.cleanup()
     print("\n".join(rows))
 
 
