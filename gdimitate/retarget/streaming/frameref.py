@@ -701,10 +701,10 @@ def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo
     Js = np.zeros((act_idx.size, m.nv))
     Js[np.arange(act_idx.size), act_idx] = 1.0
     vj = np.zeros(act_idx.size)
+    v_of_q = {dm.joints[j].idx_q + k: dm.joints[j].idx_v for j in range(1, dm.njoints)
+              for k in range(dm.joints[j].nq)}
     for qi, ai, sc, _ in ref.jmap:
-        vi = dm.joints[[j for j in range(1, dm.njoints) if dm.joints[j].idx_q <= qi
-                        < dm.joints[j].idx_q + dm.joints[j].nq][0]].idx_v
-        vj[ai] = sc * v_demo[vi]
+        vj[ai] = sc * v_demo[v_of_q[qi]]
     J.append(Js)
     r.append(vj)
     wts += [0.1] * act_idx.size

@@ -516,13 +516,12 @@ def _across(d: np.ndarray) -> np.ndarray:
 
 def q_of_v(m, vi: np.ndarray) -> np.ndarray:
     """``q`` index of each 1-dof velocity index in ``vi`` (joints with nq = nv = 1)."""
-    out = np.zeros(len(vi), int)
+    q_of = {}
     for j in range(1, m.njoints):
         jm = m.joints[j]
-        for i, k in enumerate(vi):
-            if jm.idx_v <= k < jm.idx_v + jm.nv:
-                out[i] = jm.idx_q + (k - jm.idx_v) if jm.nq == jm.nv else jm.idx_q
-    return out
+        for k in range(jm.nv):
+            q_of[jm.idx_v + k] = jm.idx_q + k if jm.nq == jm.nv else jm.idx_q
+    return np.array([q_of.get(int(k), 0) for k in vi], int)
 
 
 def _position_rows(m, act_idx: np.ndarray):
