@@ -222,7 +222,7 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
     from ..assess.audit import audit
     from ..assess.result import compare
     from ..model.footsteps import compare_gait
-    from ..retarget import SolverInfo, Unmet
+    from ..retarget.streaming.adaptor import streamed_info
 
     t = np.asarray(log.t) - log.t[0]
     contact = {s: np.array([c[s] for c in log.contact], bool) for s in SIDES}
@@ -237,11 +237,7 @@ def _assembled(sa: Any, log: StreamLog) -> tuple[Motion, AdaptedMotion]:
     ok = np.asarray(aud.knot_feasible, bool)
     report = compare(demonstrator, demo, imitator, motion, "optimal",
                      {s: ok.copy() for s in SIDES}, sa.force)
-    bad = tuple(Unmet(f"frame {k}", 1.0, int(k)) for k in np.flatnonzero(~ok))
-    T = len(t)
-    info = SolverInfo(status="streamed", success=bool(ok.all()), iterations=T - 1,
-                      time_s=float(np.sum(log.step)), build_s=0.0, cached=True,
-                      elastic=not ok.all(), knots=T, variables=0, constraints=0, unmet=bad)
+    info = streamed_info("streamed", ok, float(np.sum(log.step)))
     result = AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,
                            contacts=dict(sa.contacts), audit=aud, solver=info,
                            force_model=sa.force, frame_feasible=ok,

@@ -35,7 +35,7 @@ import pinocchio as pin
 
 from ...assess.audit import AuditTolerances
 from ...assess.result import AdaptedMotion, compare
-from ...assess.solver import SolverInfo, Unmet
+from ...assess.solver import SolverInfo
 from ...errors import GdimitateWarning, InvalidInputError, UnknownNameError
 from ...model.contact import ContactForces, SoleContact
 from ...model.heading import facing_yaw, turn_configurations, yaw_matrix
@@ -572,6 +572,18 @@ def _audit_mode(audit: bool | str) -> str:
     return str(audit)
 
 
+def streamed_info(status: str, ok: np.ndarray, time_s: float) -> SolverInfo:
+    """The solver record of a streamed motion of ``ok.size`` frames (``ok``: each frame's
+    verdict): ``status``, one QP per frame after the first (``iterations``), ``time_s`` [s].
+    No goal is listed unmet and nothing is elastic: a frame that fails is said by the audit,
+    check by check (the verdict's reasons), and counted by ``frame_feasible`` — not a
+    second time as a goal "off by 1"."""
+    T = int(ok.size)
+    return SolverInfo(status=status, success=bool(ok.all()), iterations=max(T - 1, 0),
+                      time_s=float(time_s), build_s=0.0, cached=True, elastic=False, knots=T,
+                      variables=0, constraints=0, unmet=())
+
+
 def stream_frame(demonstrator: Robot, q0: np.ndarray) -> tuple[float, np.ndarray]:
     """``(yaw [rad], about (2,) [m])``: the frame a stream is adapted in
     (:meth:`StreamingAdaptor.step`), from its first configuration ``q0``; ``(0, 0)`` for a
@@ -646,10 +658,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
     ok = np.asarray(aud.knot_feasible, bool)  # every frame's verdict, off the hot path
     report = compare(demonstrator, demo, imitator, motion, "optimal",
                      {s: ok.copy() for s in SIDES}, force if force != "measured" else "segment")
-    bad = tuple(Unmet(f"frame {k}", 1.0, int(k)) for k in np.flatnonzero(~ok))
-    info = SolverInfo(status=max(set(statuses), key=statuses.count), success=bool(ok.all()),
-                      iterations=T - 1, time_s=elapsed, build_s=0.0, cached=True,
-                      elastic=not ok.all(), knots=T, variables=0, constraints=0, unmet=bad)
+    info = streamed_info(max(set(statuses), key=statuses.count), ok, elapsed)
     return AdaptedMotion(motion=motion, report=report, robot=imitator, wrenches=W,
                          contacts=dict(ad.contacts), audit=aud, solver=info,
                          force_model=force, frame_feasible=ok)
