@@ -406,9 +406,10 @@ def trajectory_mode(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
         from .periodic import periodic_rate, periodic_stride
 
         demo, forces = periodic_stride(demo, forces)
-        rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
     own = demo
     psi, demo, forces = heading_frame(demonstrator, imitator, demo, forces, o["gait_scaling"])
+    if periodic:  # on the clock the problem runs on (Froude: × √r), a knot on the stride's end
+        rate = periodic_rate(demo, DEFAULT_RATE if rate is None else rate)
     demo_k = resample(demonstrator, demo, DEFAULT_RATE if rate is None else rate)
     act_names = limits.resolve(imitator, actuated_v_indices(imitator), o["limits"]).names
     tg = demonstration_targets(demonstrator, demo_k, imitator, bmap, act_names, force, forces,

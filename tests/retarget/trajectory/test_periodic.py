@@ -125,3 +125,24 @@ def test_periodic_needs_trajectory_mode(story):
     with pytest.raises(InvalidInputError, match="trajectory"):
         gd.adapt(demo, robot, gd.Robot.load("hoap2"), "optimal", periodic=True,
                  mode="per_frame", verbose=False)
+
+
+def test_froude_cycle_ends_on_a_knot(story):
+    """On the Froude clock (durations × √r) the cycle is one stride of that clock long, with a
+    knot on its end: the seam joins the two heel strikes (before the knot rate was taken on
+    the demonstrator's clock, so the last knot fell short of the stride's end and the
+    ``seam_contact`` check failed)."""
+    robot, demo, forces = story
+    hoap = gd.Robot.load("hoap2")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        per = gd.adapt(demo, robot, hoap, "optimal", periodic=True, force="measured",
+                       forces=forces, rate=30, verbose=False, gait_scaling="froude")
+    stride, _ = periodic_stride(demo, forces)
+    span = (stride.t[-1] - stride.t[0]) * np.sqrt(np.mean(
+        [hoap.legs[s].length for s in ("left", "right")])
+        / np.mean([robot.legs[s].length for s in ("left", "right")]))
+    m = per.motion
+    assert m.t[-1] - m.t[0] == pytest.approx(span, abs=1e-9)
+    assert m.contact["right"][0] and m.contact["right"][-1] and not m.contact["right"].all()
+    assert per.audit.check("seam_contact").passed, per.audit.summary(only_failed=True)
