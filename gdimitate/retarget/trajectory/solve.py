@@ -525,7 +525,8 @@ def problem_for(imitator: Robot, force: str, copts: Contact, bmap, act_names, pa
             # by one stride, so its steps fix how far it travels; the body-over-feet pull
             # (weights 10, 30, 100) left G1's 45-knots/s cycle audit-infeasible after 149
             # iterations (cop, force direction), where without it the cycle is feasible in
-            # 76 (docs/design.md §14)
+            # 76 (docs/design.md §14); nor did it lengthen Talos's (weight 3: 0.69 of the
+            # scaled stride, 10: 0.66; without it 0.70; docs/guide/limits.md)
             parts = parts + ((Steps(),) if periodic else (Steps(), OverFeet()))
     if periodic:
         from ..parts.periodic import PeriodicSeam
