@@ -203,7 +203,7 @@ class StreamingAdaptor:
         #: forces)
         self._waiting: tuple[np.ndarray, dict, dict | None] | None = None
         self._skip = 0  # stream frames before the motion's first (the one that waited)
-        self._lost = 0  # frames in a row whose hard rows could not all hold
+        self._lost = 0  # lost frames in a row (RECOVER_AFTER)
         #: the last restart (:meth:`_recover`): its frame and the demonstration's flags there
         self._restart: tuple[int, dict] = (-1, {})
         self._last_verdict: tuple[int, bool] | None = None  # final()'s, of the last frame
@@ -345,9 +345,7 @@ class StreamingAdaptor:
                 raise InvalidInputError(f"v_demo must have shape "
                                         f"({self.demonstrator.model.nv},); got {v_demo.shape}")
         q, v0 = self._start_state(f0, f0, v_demo)
-        H = self._hist
-        for k, x in (("t", t), ("q", q), ("v", v0), ("c", flags)):
-            H[k].append(x)
+        self._append(t, q, v0, flags)
         self._demo_flags = dict(flags)
         elapsed = time.perf_counter() - t0
         new, _ = self._judged()
@@ -418,8 +416,7 @@ class StreamingAdaptor:
         # at the next frame (the audit's slip is measured from a stance's first frame); its
         # QP stands on the demonstration's (:meth:`_solve`)
         lifted = {s: False for s in SIDES}
-        for k, x in (("t", t), ("q", q), ("v", v), ("c", lifted)):
-            H[k].append(x)
+        self._append(t, q, v, lifted)
         self._restart = (len(H["t"]) - 1, dict(flags))
         self._lost = 0
         new, ok = self._judged()
@@ -466,8 +463,7 @@ class StreamingAdaptor:
             elif not flags[s] and demo_prev[s]:
                 self._lift[s] = t
         self._demo_flags = dict(flags)
-        for k, x in (("t", t), ("q", q), ("v", v), ("c", own)):
-            H[k].append(x)
+        self._append(t, q, v, own)
         return q, v
 
     def _slipped(self, own: dict) -> bool:
@@ -484,6 +480,12 @@ class StreamingAdaptor:
                     > tol.slip_rotation):
                 return True
         return False
+
+    def _append(self, t: float, q: np.ndarray, v: np.ndarray, c: dict) -> None:
+        """Commit a new frame's time [s], ``q`` ``(nq,)``, ``v`` ``(nv,)`` and the robot's
+        own stance flags to the history."""
+        for k, x in (("t", t), ("q", q), ("v", v), ("c", c)):
+            self._hist[k].append(x)
 
     def final(self) -> tuple[np.ndarray, dict, bool | None]:
         """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
