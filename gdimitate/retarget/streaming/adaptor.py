@@ -88,7 +88,8 @@ class FrameResult(NamedTuple):
     """One :meth:`StreamingAdaptor.step`: the new frame's ``q`` ``(nq,)`` and ``v`` ``(nv,)``;
     the previous frame, now final (``None`` at the first step): its ``a`` ``(nv,)``,
     ``wrenches`` ``{side: (6,)}`` [N, N·m, sole frames] and ``feasible`` (its verdict if it
-    is known at this step: with ``audit="inline"``; ``None`` with the worker, which delivers
+    is known at this step: with ``audit="inline"``, except a frame before a restart, whose
+    verdict may wait for the next acceleration; ``None`` with the worker, which delivers
     it a few frames later in ``verdicts``, and with ``audit=False``); the step's ``status``
     (``"QP"``: every hard row held; ``"QP, relaxed"``: some could not; ``"rest pose"`` at
     the first frame), ``iterations`` and ``time_s`` [s] (the frame's solve, the verdict's
@@ -206,7 +207,8 @@ class StreamingAdaptor:
         self._lost = 0  # lost frames in a row (RECOVER_AFTER)
         #: the last restart (:meth:`_recover`): its frame and the demonstration's flags there
         self._restart: tuple[int, dict] = (-1, {})
-        self._last_verdict: tuple[int, bool] | None = None  # final()'s, of the last frame
+        #: final()'s verdicts: (first knot, [ok, ...]) of the last two frames
+        self._final_verdicts: tuple[int, list[bool]] | None = None
         if self._judge is not None:
             self._judge.reset()
 
@@ -491,7 +493,7 @@ class StreamingAdaptor:
         """``(a (nv,), wrenches {side: (6,)}, feasible)`` of the last frame, from its own
         QP (call after the last :meth:`step`); ``feasible``: its verdict (judged here, on the
         frames it reads: :func:`.verdict_worker.knot_verdicts`), None with ``audit=False``;
-        :meth:`verdicts` then includes it."""
+        :meth:`verdicts` then includes it and the frame before's."""
         H = self._hist
         if not H["t"] and self._waiting is not None:  # one frame in all: it starts at rest
             q_demo, flags, forces = self._waiting
@@ -504,10 +506,12 @@ class StreamingAdaptor:
         with single_thread():
             a, W, _ = self._solve(j, H["c"][j])
         ok = None
-        if self.audit:
-            ok = knot_verdicts(self._audit_robot, self.contacts, self.contact.cone_half_angle,
-                               H, j, j, tail=(a, W))[0]
-            self._last_verdict = (j, ok)
+        if self.audit:  # the frame before may have waited for this acceleration
+            first = max(j - 1, 0)
+            oks = knot_verdicts(self._audit_robot, self.contacts, self.contact.cone_half_angle,
+                                H, first, j, tail=(a, W))
+            self._final_verdicts = (first, [bool(x) for x in oks])
+            ok = bool(oks[-1])
         return a, W, ok
 
     # ------------------------------------------------------------------ the verdicts
@@ -530,8 +534,9 @@ class StreamingAdaptor:
     def verdicts(self, wait: bool = True, timeout: float | None = None) -> np.ndarray:
         """``(K,)`` bool: the verdicts of frames ``0..K−1`` delivered so far (each the
         audit's knot verdict; a first frame that waited, :attr:`first_frame`: False).
-        ``wait``: first wait for every frame's — all but the newest,
-        whose verdict needs the next frame (or :meth:`final`, after which it is included) —
+        ``wait``: first wait for every frame's — all but the newest, whose verdict needs the
+        next frame, and the one before where it waits for the newest's acceleration
+        (:func:`.verdict_worker.knot_verdicts`); :meth:`final` judges both —
         at most ``timeout`` [s] (None: no limit; :class:`~.verdict_worker.VerdictWorkerError`
         when it passes or the worker failed). After :meth:`close`: those delivered before.
         Raises :class:`~gdimitate.errors.InvalidInputError` with ``audit=False``."""
@@ -541,9 +546,10 @@ class StreamingAdaptor:
         if self._judge is not None:
             self._verdicts.extend(ok for _, ok in self._judge.collect(wait, timeout))
         out = list(self._verdicts)
-        last = self._last_verdict
-        if last is not None and last[0] == len(out) == len(self._hist["t"]) - 1:
-            out.append(last[1])
+        fin = self._final_verdicts
+        if fin is not None and fin[0] <= len(out) and fin[0] + len(fin[1]) == len(
+                self._hist["t"]):
+            out = out[:fin[0]] + fin[1]
         return np.array([False] * self._skip + out, bool)
 
     def close(self) -> None:

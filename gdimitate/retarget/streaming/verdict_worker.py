@@ -9,10 +9,13 @@ sole's drift since then) — nothing else: every other quantity of the audit is 
 knots ``first..last`` are audited on those frames only (:func:`verdict_frames`), whatever the
 stream's length, and each verdict equals the one the audit of the whole assembled motion gives
 that knot. Frame k + 1's acceleration is final one frame later (it comes with frame k + 2's
-step): where it is not known yet it is taken as frame k's (``velocity_consistency`` then
-grants no allowance for a change of acceleration — the stricter reading; on the streaming
-mode's exact integration the forward difference is ``v_{k+1}`` to round-off, far inside the
-check's tolerance, so the allowance never decides).
+step), and only knot k's ``velocity_consistency`` reads it: the allowance ``h·|a_{k+1} − a_k|
+/ 2`` for a change of acceleration. Until it is known, knot k is judged without the allowance
+(``a_{k+1}`` taken as ``a_k``, the strictest reading): a knot that passes so, or fails another
+check, has its verdict; one that fails ``velocity_consistency`` alone is undecided (None) until
+the acceleration comes, a frame later. On the streaming mode's exact integration the forward
+difference is ``v_{k+1}`` to round-off, so that happens only where the robot jumps (a restart,
+:meth:`~.adaptor.StreamingAdaptor._recover`).
 
 Who runs it: :class:`InlineVerdicts` in the caller's thread (on the hot path: one audit a
 frame, ~20 ms on Talos), or :class:`VerdictWorker`, a worker process forked from the caller
@@ -98,14 +101,16 @@ def verdict_frames(c: Sequence[Mapping[str, bool]], first: int, last: int) -> li
 
 def knot_verdicts(robot: Robot, contacts: Mapping[str, SoleContact], cone_half_angle: float,
                   H: Mapping[str, Sequence], first: int, last: int,
-                  tail: tuple[np.ndarray, dict] | None = None) -> list[bool]:
+                  tail: tuple[np.ndarray, dict] | None = None) -> list[bool | None]:
     """The audit's knot verdicts (``knot_feasible``) of frames ``first..last`` of a stream
     (module docstring): ``robot`` the limited imitator, ``contacts`` its soles,
     ``cone_half_angle`` [rad]; ``H`` the frames: ``t`` [s], ``q`` ``(nq,)``, ``v`` ``(nv,)``
     [rad/s, m/s] and ``c`` (``{side: bool}``) per frame; ``a`` ``(nv,)`` [rad/s², m/s²] and
-    ``w`` (``{side: (6,)}`` [N, N·m], sole frames) per knot, as far as they are final (an
-    unknown one is taken as the knot before's). ``tail``: ``(a, w)`` of the last frame (its
-    own QP, :meth:`StreamingAdaptor.final`), which ``last`` may then be."""
+    ``w`` (``{side: (6,)}`` [N, N·m], sole frames) per knot, as far as they are final.
+    ``tail``: ``(a, w)`` of the last frame (its own QP, :meth:`StreamingAdaptor.final`),
+    which ``last`` may then be. Knot ``last``'s verdict is None where it is undecided: the
+    next frame's acceleration not known yet, and the knot failing ``velocity_consistency``
+    alone without the allowance that acceleration may grant (module docstring)."""
     from ...assess.audit import audit
 
     n = len(H["t"])
@@ -114,7 +119,7 @@ def knot_verdicts(robot: Robot, contacts: Mapping[str, SoleContact], cone_half_a
     if last >= len(H["a"]):
         raise InvalidInputError(f"frame {last}'s acceleration is not known yet")
     keep = verdict_frames(H["c"], first, last)
-    a = [H["a"][min(k, len(H["a"]) - 1)] for k in keep]
+    a = [H["a"][min(k, len(H["a"]) - 1)] for k in keep]  # unknown: the strictest reading
     w = [H["w"][min(k, len(H["w"]) - 1)] for k in keep]
     flags = {s: np.array([H["c"][k][s] for k in keep]) for s in SIDES}
     mo = robot_motion(robot, np.array([H["t"][k] for k in keep]),
@@ -123,11 +128,23 @@ def knot_verdicts(robot: Robot, contacts: Mapping[str, SoleContact], cone_half_a
     rep = audit(robot, mo, {s: np.array([x[s] for x in w]) for s in SIDES}, contacts,
                 cone_half_angle=cone_half_angle)
     at = keep.index(first)
-    return [bool(x) for x in rep.knot_feasible[at:at + last - first + 1]]
+    out: list[bool | None] = [bool(x) for x in rep.knot_feasible[at:at + last - first + 1]]
+    if last + 1 < n and last + 1 >= len(H["a"]) and not out[-1]:
+        k = at + last - first
+        others = np.delete(rep.knot_checks[:, k], [c.name for c in rep.checks].index(
+            "velocity_consistency"))
+        if others.all():
+            out[-1] = None
+    return out
 
 
 def _empty() -> dict[str, list]:
     return {k: [] for k in ("t", "q", "v", "c", "a", "w")}
+
+
+def _judgeable(H: dict[str, list]) -> int:
+    """The last knot whose verdict may be known: its next frame and its own ``a`` are in."""
+    return min(len(H["t"]) - 2, len(H["a"]) - 1)
 
 
 def _add(H: dict[str, list], frame: tuple) -> None:
@@ -143,7 +160,7 @@ def _add(H: dict[str, list], frame: tuple) -> None:
 
 class InlineVerdicts:
     """:func:`knot_verdicts` in the caller, frame by frame: frame k − 1's verdict as soon as
-    frame k is added."""
+    frame k is added (where it is undecided, a frame later)."""
 
     def __init__(self, robot: Robot, contacts: Mapping[str, SoleContact],
                  cone_half_angle: float):
@@ -160,10 +177,12 @@ class InlineVerdicts:
         """Add one committed frame ``(t, q, v, c, a_prev, w_prev)`` and judge what it
         completes."""
         _add(self._H, frame)
-        last = min(len(self._H["t"]) - 2, len(self._H["a"]) - 1)
-        for j in range(self._done, last + 1):
-            self._new.append((j, knot_verdicts(*self._args, self._H, j, j)[0]))
-        self._done = max(self._done, last + 1)
+        for j in range(self._done, _judgeable(self._H) + 1):
+            ok = knot_verdicts(*self._args, self._H, j, j)[0]
+            if ok is None:
+                break
+            self._new.append((j, ok))
+            self._done = j + 1
 
     def collect(self, wait: bool = False, timeout: float | None = None) -> list[tuple[int, bool]]:
         """``[(frame, feasible), ...]`` judged since the last call (all of them already)."""
@@ -231,26 +250,34 @@ class _Pipe:
 
 
 def _serve(args: tuple[Robot, dict, float], pipe: _Pipe) -> None:
-    """The worker's loop: frames in, ``("verdicts", epoch, first, [bool, ...])`` out — every
-    frame judgeable, at most once per :data:`BATCH_PERIOD_S`."""
+    """The worker's loop: frames in, ``("verdicts", epoch, first, [bool, ...], pending)`` out
+    — every frame judgeable, at most once per :data:`BATCH_PERIOD_S`; ``pending``: the next
+    knot is undecided (it waits for the next frame)."""
     H, done, epoch, since = _empty(), 0, 0, -np.inf
+    undecided = -1  # len(H["a"]) when knot `done` was found undecided (it waits for more)
     while True:
         pipe.flush()
         for msg in pipe.recv():
             if msg[0] == "frame":
                 _add(H, msg[1])
             else:  # "reset"
-                H, done, epoch = _empty(), 0, msg[1]
+                H, done, epoch, undecided = _empty(), 0, msg[1], -1
         if pipe.eof:
             return
-        last = min(len(H["t"]) - 2, len(H["a"]) - 1)
+        last = _judgeable(H)
+        ready = last >= done and len(H["a"]) != undecided
         left = since + BATCH_PERIOD_S - time.monotonic()
-        if last >= done and left <= 0:
+        if ready and left <= 0:
             since = time.monotonic()
-            pipe.send(("verdicts", epoch, done, knot_verdicts(*args, H, done, last)))
-            done = last + 1
+            oks = knot_verdicts(*args, H, done, last)
+            pending = oks[-1] is None  # only the newest can be
+            if pending:
+                oks.pop()
+                undecided = len(H["a"])
+            pipe.send(("verdicts", epoch, done, oks, pending))
+            done += len(oks)
         else:  # nothing to judge yet: wait for frames (or for the period to pass)
-            pipe.wait(None if last < done else left)
+            pipe.wait(left if ready else None)
 
 
 def _child(args: tuple[Robot, dict, float], rfd: int, wfd: int, others: set[int]) -> None:
@@ -333,7 +360,7 @@ class VerdictWorker:
         _LIVE_FDS.update((down_w, up_r))
         self.pid = pid
         self._pipe = _Pipe(up_r, down_w)
-        self._epoch, self._sent, self._got = 0, 0, 0
+        self._epoch, self._sent, self._got, self._pending = 0, 0, 0, False
         self._stop = weakref.finalize(self, _stop, pid, os.getpid(), (down_w, up_r))
 
     @property
@@ -357,12 +384,15 @@ class VerdictWorker:
         self._check()
         self._epoch += 1
         self._sent = self._got = 0
+        self._pending = False
         self._pipe.send(("reset", self._epoch))
 
     def collect(self, wait: bool = False, timeout: float | None = None) -> list[tuple[int, bool]]:
         """``[(frame, feasible), ...]`` arrived since the last call; ``wait``: first wait until
-        every frame but the newest has one (``timeout`` [s], None: no limit; raises
-        :class:`VerdictWorkerError` when it passes)."""
+        every frame but the newest has one, or but the newest two where the one before the
+        newest is undecided (it waits for the newest's acceleration: :func:`knot_verdicts`)
+        (``timeout`` [s], None: no limit; raises :class:`VerdictWorkerError` when it
+        passes)."""
         self._check()
         out: list[tuple[int, bool]] = []
         end = None if timeout is None else time.monotonic() + timeout
@@ -372,14 +402,15 @@ class VerdictWorker:
                 if msg[0] == "error":
                     self.close()
                     raise VerdictWorkerError(f"the verdict worker failed:\n{msg[1]}")
-                _, epoch, first, oks = msg
+                _, epoch, first, oks, pending = msg
                 if epoch == self._epoch:
                     out.extend((first + i, ok) for i, ok in enumerate(oks))
-                    self._got = first + len(oks)
+                    self._got, self._pending = first + len(oks), pending
             if self._pipe.eof:
                 self.close()
                 raise VerdictWorkerError("the verdict worker exited")
-            if not wait or self._got >= self._sent - 1:
+            if not wait or self._got >= self._sent - 1 or (
+                    self._pending and self._got == self._sent - 2):
                 return out
             left = None if end is None else end - time.monotonic()
             if left is not None and left <= 0:

@@ -156,6 +156,73 @@ def test_verdicts_in_batches_and_one_by_one_are_the_whole_motion_audits_knot_by_
         np.testing.assert_array_equal(np.array(ver + last, bool), whole, err_msg=name)
 
 
+def _jumped(sa, H: dict, J: int, delta: float) -> dict:
+    """The history ``H`` with the robot jumping ``delta`` [m] along x (world) at frame ``J``
+    (every later frame moved with it, as a restart does) and frame ``J``'s base acceleration
+    changed so that the audit's allowance ``h·|a_J − a_(J−1)| / 2`` covers twice the jump's
+    velocity."""
+    H = {k: list(x) for k, x in H.items()}
+    for k in range(J, len(H["q"])):
+        H["q"][k] = H["q"][k].copy()
+        H["q"][k][0] += delta
+    h = H["t"][J] - H["t"][J - 1]
+    H["a"][J] = H["a"][J].copy()
+    H["a"][J][:3] = H["a"][J - 1][:3] + 4 * delta / h ** 2
+    return H
+
+
+def test_a_knot_before_a_jump_waits_for_the_next_acceleration(walk):
+    """Where the robot jumps (a restart: the frame after a lost one; 2 mm along x in 1/60 s
+    here, 0.12 m/s, twelve times ``velocity_consistency``'s tolerance), the knot before fails
+    that check without the allowance for a change of acceleration, and passes with the one
+    the next frame's acceleration grants: its verdict is undecided until that acceleration
+    is known. Both judges then deliver it (a frame later than the others, inline) and every
+    verdict is the audit of the whole motion, knot by knot; where the jump is at the last
+    frame, :func:`knot_verdicts` with the last frame's own acceleration (``final()``'s tail)
+    decides it."""
+    from gdimitate.retarget.streaming.verdict_worker import (
+        InlineVerdicts,
+        VerdictWorker,
+        knot_verdicts,
+    )
+
+    n, J = 14, 9
+    sa, motion, W, _ = _stream(walk, n)
+    H0 = {k: list(x) for k, x in sa._hist.items()}
+    H0["a"], H0["w"] = list(motion.a), [{s: W[s][k] for s in SIDES} for k in range(n)]
+    args = (sa._audit_robot, sa.contacts, 0.0)
+
+    def whole(H):
+        m = motion.replace(q=np.array(H["q"]), a=np.array(H["a"]))
+        return audit(sa._audit_robot, m, W, sa.contacts)
+
+    H = _jumped(sa, H0, J, 2e-3)
+    strict = whole({**H, "a": H0["a"]})  # the same jump without the allowance
+    assert not strict.check_knots("velocity_consistency")[J - 1]
+    rep = whole(H)
+    assert rep.knot_feasible[J - 1] and rep.knot_feasible[:J - 1].all()
+    for judge in (VerdictWorker(*args), InlineVerdicts(*args)):
+        pairs, at = [], {}
+        for k in range(n):
+            judge.add((H["t"][k], H["q"][k], H["v"][k], H["c"][k],
+                       *((H["a"][k - 1], H["w"][k - 1]) if k else (None, None))))
+            got = judge.collect(wait=True, timeout=60)
+            at.update((j, k) for j, _ in got)
+            pairs += got
+        judge.close()
+        assert [j for j, _ in pairs] == list(range(n - 1))
+        np.testing.assert_array_equal([ok for _, ok in pairs], rep.knot_feasible[:n - 1])
+        if isinstance(judge, InlineVerdicts):
+            assert at[J - 1] == J + 1 and all(at[j] == j + 1 for j in at if j != J - 1)
+    H = _jumped(sa, H0, n - 1, 2e-3)
+    head = {**H, "a": H["a"][:n - 1], "w": H["w"][:n - 1]}
+    assert knot_verdicts(*args, head, n - 2, n - 2) == [None]
+    tail = (H["a"][n - 1], H["w"][n - 1])
+    assert knot_verdicts(*args, head, n - 2, n - 1, tail=tail) == list(
+        whole(H).knot_feasible[n - 2:])
+    assert whole(H).knot_feasible[n - 2]
+
+
 def test_bad_demonstrator_velocity_is_refused(walk):
     human, demo, forces, talos = walk
     sa = gd.retarget.StreamingAdaptor(human, talos, "segment", dt=demo.dt, audit=False)
