@@ -15,13 +15,17 @@ SIGKILL; a start interrupted by Ctrl-C or SIGTERM stops the half-started process
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import weakref
+from collections.abc import Iterator
 from pathlib import Path
 
 import meshcat
@@ -171,6 +175,29 @@ def _stop(proc: subprocess.Popen, log: Path | None = None) -> None:
         log.unlink(missing_ok=True)
 
 
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Ctrl-C and SIGTERM that arrive within the block act after it, through the handlers
+    that were there: while ``subprocess.Popen`` creates the server (it runs once forked, and
+    an interrupt then would leave no handle to stop it with). Outside the main thread nothing
+    changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) not in (signal.SIG_IGN, None):
+            old[sig] = signal.signal(sig, lambda signum, frame: got.append(signum))
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        for sig in got:
+            signal.raise_signal(sig)
+
 class MeshcatServer:
     """A meshcat server (web page + zmq command socket) running as our own child process.
 
@@ -249,7 +276,7 @@ class MeshcatServer:
             fd, name = tempfile.mkstemp(prefix="gdimitate-meshcat-ready-")
             os.close(fd)
             ready_path = Path(name)
-            with open(ready_path, "wb") as ready_out:
+            with open(ready_path, "wb") as ready_out, _signals_held():
                 proc = subprocess.Popen(
                     [sys.executable, "-u", str(_SERVE_SCRIPT),
                      "--zmq-url", f"tcp://{_LOCALHOST}:{zmq_p}", "--port", str(web_p),

@@ -232,6 +232,24 @@ def test_ctrl_c_during_viewer_start_leaves_no_server(tmp_path, spawn):
     assert list(tmp.iterdir()) == []  # no logs, no ready files
 
 
+def test_ctrl_c_while_the_server_process_is_created_acts_after_it():
+    """Ctrl-C (and SIGTERM) arriving while ``subprocess.Popen`` creates the server — it runs
+    once forked, before Popen returns its handle — is held until the handle exists, then
+    raised through the handler that was there (``KeyboardInterrupt``): the start's clean-up
+    then has the process to stop. The handlers are the previous ones afterwards."""
+    from gdimitate.viz.server import _signals_held
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    reached = False
+    with pytest.raises(KeyboardInterrupt):
+        with _signals_held():
+            signal.raise_signal(signal.SIGINT)
+            time.sleep(0.05)  # a handler that raised would have raised by now
+            reached = True
+    assert reached
+    assert {s: signal.getsignal(s) for s in before} == before
+
+
 def test_server_exits_when_its_parent_is_killed(tmp_path, spawn):
     code = ("import time\nfrom gdimitate.viz import Viewer\nv = Viewer.start()\n"
             "print('started', flush=True)\ntime.sleep(60)\n")
