@@ -195,8 +195,8 @@ def _signals_held() -> Iterator[None]:
     finally:
         for sig, handler in old.items():
             signal.signal(sig, handler)
-        for sig in got:
-            signal.raise_signal(sig)
+        for signum in got:
+            signal.raise_signal(signum)
 
 class MeshcatServer:
     """A meshcat server (web page + zmq command socket) running as our own child process.

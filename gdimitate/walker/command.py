@@ -29,7 +29,8 @@ def walk_command(out: Path, demo, imitator: Robot, steps: int, gain: float, html
     else:
         args, forces = (demo.motion, demo.robot), demo.forces
     log(f"[1/3] periodic cycle → {imitator.name} (whole-body optimal adaptor, periodic seam) …")
-    cycle, forces = periodic_cycle(args[0], args[1], imitator, forces, rate)
+    cycle, forces = periodic_cycle(args[0], args[1], imitator, forces, rate,
+                                   say=lambda line: log(f"      {line}"))
     why = "feasible" if cycle.feasible else "NOT feasible: " + ", ".join(cycle.audit.binding[:4])
     log(f"      audit: {why}")
     from ..assess.verdict import gait_lines
