@@ -366,7 +366,9 @@ class StreamingAdaptor:
         moving = v_demo is not None
         cv = None
         if moving:
-            dm, dd = self.demonstrator.model, self.demonstrator.model.createData()
+            # the demonstrator's scratch Data (as the reference's features use it): creating a
+            # human's takes ~50 ms (eight nv³ tensors), most of a restart's cost
+            dm, dd = self.demonstrator.model, self.demonstrator.data
             pin.centerOfMass(dm, dd, f0["q"], v_demo)
             cv = self._ref.k * dd.vcom[0]
         q = initial_pose(self.imitator, self._ref, at, self._act, cv, collision=self._qp.sc)

@@ -679,7 +679,7 @@ def initial_velocity(robot, q: np.ndarray, ref: FrameReference, f0: dict, v_demo
     from ...model.kinematics import base_joint_id
 
     m, d = robot.model, robot.model.createData()
-    dm, dd = ref.d.model, ref.d.model.createData()
+    dm, dd = ref.d.model, ref.d.data  # a human's new Data would take ~50 ms (eight nv³ tensors)
     planar = robot.base == "planar"
     comp = np.array([0, 2, 4] if planar else range(6))
     pin.computeJointJacobians(m, d, q)
