@@ -73,6 +73,11 @@ STARTS = ("estimate", "rest")
 #: row). Stance taken at the demonstration's flag instead held a sole that had not landed
 #: where it was: Talos joining the shipped walk at rest hovered 3.7 mm up for 46 frames.
 LANDED_GAP, LANDED_SPEED = 9e-4, 0.05
+#: a stance whose sole is further above the floor than the audit's ``contact_gap`` tolerance
+#: [m] is not kept: the foot lands again (its stance held it where it was — a live stream's
+#: step after a restart, whose gap of dropped frames made it long, left G1's left sole 1.6 mm
+#: up for the 68 frames of its stance)
+HOVER_GAP = AuditTolerances().contact_gap
 #: after RECOVER_AFTER lost frames in a row — whose hard rows could not all hold (relaxed,
 #: failed or coasting), or whose stance sole slipped past the audit's tolerance — the stream
 #: starts again at the next frame, as a stream joined there does: the robot stood where it
@@ -291,13 +296,17 @@ class StreamingAdaptor:
         foot already in stance, or one that has landed (:data:`LANDED_GAP`,
         :data:`LANDED_SPEED`), may be down; a foot the demonstration lifts is lifted, unless
         the other has not landed yet (it then stays down: no flight the demonstration does
-        not have)."""
+        not have); a stance that began hovering (:data:`HOVER_GAP`) lands again."""
         H = self._hist
-        prev = H["c"][-1]
+        was = H["c"][-1]
+        prev = dict(was)
+        for s in SIDES:
+            if was[s] and self._sole_top(s) > HOVER_GAP:
+                prev[s] = False
         out = dict(flags) if all(prev[s] or not flags[s] for s in SIDES) else \
             self._landed(flags, prev)
         for s in SIDES:
-            if prev[s] and not out[s] and not any(out.values()) and any(flags.values()):
+            if was[s] and not out[s] and not any(out.values()) and any(flags.values()):
                 out[s] = True
         return out
 
@@ -313,13 +322,22 @@ class StreamingAdaptor:
             if not flags[s] or prev[s]:
                 out[s] = flags[s]
                 continue
-            oMf = data.oMf[self._fid[s]]
-            top = float(np.max(oMf.translation[2] + self.contacts[s].corners() @
-                               oMf.rotation[2]))
             speed = float(np.linalg.norm(pin.getFrameVelocity(
                 m, data, self._fid[s], pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).linear))
-            out[s] = top <= LANDED_GAP and speed <= LANDED_SPEED
+            out[s] = self._top(data, s) <= LANDED_GAP and speed <= LANDED_SPEED
         return out
+
+    def _top(self, data, side: str) -> float:
+        """The height [m] of sole ``side``'s highest corner, placed by ``data``."""
+        oMf = data.oMf[self._fid[side]]
+        return float(np.max(oMf.translation[2] + self.contacts[side].corners() @
+                            oMf.rotation[2]))
+
+    def _sole_top(self, side: str) -> float:
+        """:meth:`_top` at the last frame."""
+        m, data = self.imitator.model, self._qp.d1
+        pin.framesForwardKinematics(m, data, self._hist["q"][-1])
+        return self._top(data, side)
 
     @property
     def first_frame(self) -> int:

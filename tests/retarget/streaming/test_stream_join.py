@@ -244,3 +244,43 @@ def test_the_cmu_walk_streams_with_95_percent_feasible(name):
     assert verdicts.size == mo.T
     np.testing.assert_array_equal(verdicts[sa.first_frame:], rep.knot_feasible)
     assert verdicts.mean() >= 0.95, (int(verdicts.sum()), rep.binding)
+
+
+def test_a_stance_sole_above_the_floor_lands_again():
+    """A live stream that drops frames around a restart (here the CMU walk → G1 with frames
+    100–111 and 114–123 dropped: frame 112 is lost, 113 restarts, the step to 124 is ten
+    frame periods long) can leave a stance sole above the floor, where its stance would hold
+    it. At every frame where the robot's own stance sole is further above the floor than the
+    audit's ``contact_gap`` tolerance (its highest corner, Pinocchio on the written ``q``),
+    that foot is in swing at the next frame — unless the other foot is not down either (no
+    flight the demonstration does not have) — and the stream's verdicts are the audit of the
+    assembled motion."""
+    from gdimitate.assess.audit import AuditTolerances
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        demo = gd.load_demonstration(gd.gait.cmu_walk_path())
+    robot = _library("g1")
+    mo = demo.motion
+    keep = [k for k in range(mo.T) if not (100 <= k < 112 or 114 <= k < 124)]
+    sa = gd.retarget.StreamingAdaptor(demo.robot, robot, "segment", dt=mo.dt)
+    out = [sa.step(mo.q[k], {s: bool(mo.contact[s][k]) for s in SIDES},
+                   mo.t[k] - mo.t[keep[i - 1]] if i else None) for i, k in enumerate(keep)]
+    assert "recovered" in [r.status for r in out]
+    motion, W, verdicts = _assembled(sa, robot, out, mo.t[keep])
+    rep = audit(sa._audit_robot, motion, W, sa.contacts)
+    np.testing.assert_array_equal(verdicts[sa.first_frame:], rep.knot_feasible)
+    m, d = robot.model, robot.model.createData()
+    gap = AuditTolerances().contact_gap
+    hovered = 0
+    for k in range(motion.T - 1):
+        pin.framesForwardKinematics(m, d, motion.q[k])
+        for s in SIDES:
+            c = sa.contacts[s]
+            M = d.oMf[m.getFrameId(c.frame)]
+            top = float(np.max(M.translation[2] + c.corners() @ M.rotation[2]))
+            if motion.contact[s][k] and top > gap:
+                hovered += 1
+                other = [x for x in SIDES if x != s][0]
+                assert not motion.contact[s][k + 1] or not motion.contact[other][k + 1], (k, s)
+    assert hovered  # the case arises
