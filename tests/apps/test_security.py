@@ -221,7 +221,10 @@ def _gone(p: psutil.Process, timeout: float = 10.0) -> bool:
 
 @pytest.mark.slow
 def test_ctrl_c_during_viewer_start_leaves_no_server(tmp_path, spawn):
-    code = ("import time\nfrom gdimitate.viz import Viewer\nprint('starting', flush=True)\n"
+    # Ctrl-C raises KeyboardInterrupt, as in a Python started from a terminal (a shell's
+    # background job starts with SIGINT ignored, and Python then keeps it ignored)
+    code = ("import signal, time\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+            "from gdimitate.viz import Viewer\nprint('starting', flush=True)\n"
             "v = Viewer.start()\ntime.sleep(60)\n")
     tmp = tmp_path / "tmp"
     proc = spawn(["-c", code], tmp)
@@ -239,15 +242,19 @@ def test_ctrl_c_while_the_server_process_is_created_acts_after_it():
     then has the process to stop. The handlers are the previous ones afterwards."""
     from gdimitate.viz.server import _signals_held
 
-    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    reached = False
-    with pytest.raises(KeyboardInterrupt):
-        with _signals_held():
-            signal.raise_signal(signal.SIGINT)
-            time.sleep(0.05)  # a handler that raised would have raised by now
-            reached = True
-    assert reached
-    assert {s: signal.getsignal(s) for s in before} == before
+    outer = signal.signal(signal.SIGINT, signal.default_int_handler)  # as from a terminal
+    try:
+        before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+        reached = False
+        with pytest.raises(KeyboardInterrupt):
+            with _signals_held():
+                signal.raise_signal(signal.SIGINT)
+                time.sleep(0.05)  # a handler that raised would have raised by now
+                reached = True
+        assert reached
+        assert {s: signal.getsignal(s) for s in before} == before
+    finally:
+        signal.signal(signal.SIGINT, outer)
 
 
 def test_server_exits_when_its_parent_is_killed(tmp_path, spawn):
