@@ -300,9 +300,12 @@ class StreamingAdaptor:
         H = self._hist
         was = H["c"][-1]
         prev = dict(was)
-        for s in SIDES:
-            if was[s] and self._sole_top(s) > HOVER_GAP:
-                prev[s] = False
+        if any(was.values()):
+            m, data = self.imitator.model, self._qp.d1
+            pin.framesForwardKinematics(m, data, H["q"][-1])
+            for s in SIDES:
+                if was[s] and self._top(data, s) > HOVER_GAP:
+                    prev[s] = False
         out = dict(flags) if all(prev[s] or not flags[s] for s in SIDES) else \
             self._landed(flags, prev)
         for s in SIDES:
@@ -332,12 +335,6 @@ class StreamingAdaptor:
         oMf = data.oMf[self._fid[side]]
         return float(np.max(oMf.translation[2] + self.contacts[side].corners() @
                             oMf.rotation[2]))
-
-    def _sole_top(self, side: str) -> float:
-        """:meth:`_top` at the last frame."""
-        m, data = self.imitator.model, self._qp.d1
-        pin.framesForwardKinematics(m, data, self._hist["q"][-1])
-        return self._top(data, side)
 
     @property
     def first_frame(self) -> int:
