@@ -74,9 +74,10 @@ STARTS = ("estimate", "rest")
 #: where it was: Talos joining the shipped walk at rest hovered 3.7 mm up for 46 frames.
 LANDED_GAP, LANDED_SPEED = 9e-4, 0.05
 #: a stance whose sole is further above the floor than the audit's ``contact_gap`` tolerance
-#: [m] is not kept: the foot lands again (its stance held it where it was — a live stream's
-#: step after a restart, whose gap of dropped frames made it long, left G1's left sole 1.6 mm
-#: up for the 68 frames of its stance)
+#: [m] is not kept: the foot lands again, and where the other is not down either the robot is
+#: in the air until one lands (its stance held it where it was — a live stream's step after a
+#: restart, whose gap of dropped frames made it long, left G1's left sole 1.6 mm up for the 68
+#: frames of its stance; kept down as the only support, a sole 10.8 mm up for 13 frames)
 HOVER_GAP = AuditTolerances().contact_gap
 #: after RECOVER_AFTER lost frames in a row — whose hard rows could not all hold (relaxed,
 #: failed or coasting), or whose stance sole slipped past the audit's tolerance — the stream
@@ -296,7 +297,7 @@ class StreamingAdaptor:
         foot already in stance, or one that has landed (:data:`LANDED_GAP`,
         :data:`LANDED_SPEED`), may be down; a foot the demonstration lifts is lifted, unless
         the other has not landed yet (it then stays down: no flight the demonstration does
-        not have); a stance that began hovering (:data:`HOVER_GAP`) lands again."""
+        not have); a stance sole above the floor (:data:`HOVER_GAP`) lands again."""
         H = self._hist
         was = H["c"][-1]
         prev = dict(was)
@@ -309,7 +310,7 @@ class StreamingAdaptor:
         out = dict(flags) if all(prev[s] or not flags[s] for s in SIDES) else \
             self._landed(flags, prev)
         for s in SIDES:
-            if was[s] and not out[s] and not any(out.values()) and any(flags.values()):
+            if prev[s] and not out[s] and not any(out.values()) and any(flags.values()):
                 out[s] = True
         return out
 

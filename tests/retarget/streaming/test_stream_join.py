@@ -252,9 +252,10 @@ def test_a_stance_sole_above_the_floor_lands_again():
     frame periods long) can leave a stance sole above the floor, where its stance would hold
     it. At every frame where the robot's own stance sole is further above the floor than the
     audit's ``contact_gap`` tolerance (its highest corner, Pinocchio on the written ``q``),
-    that foot is in swing at the next frame — unless the other foot is not down either (no
-    flight the demonstration does not have) — and the stream's verdicts are the audit of the
-    assembled motion."""
+    that foot is in swing at the next frame (the robot in the air where the other is not down
+    either: kept down as the only support, a sole 10.8 mm up failed 13 frames), and the
+    stream's verdicts are the audit of the assembled motion: 314 of 320 frames feasible
+    (measured; 280 when a stance held its sole where it was)."""
     from gdimitate.assess.audit import AuditTolerances
 
     with warnings.catch_warnings():
@@ -281,6 +282,6 @@ def test_a_stance_sole_above_the_floor_lands_again():
             top = float(np.max(M.translation[2] + c.corners() @ M.rotation[2]))
             if motion.contact[s][k] and top > gap:
                 hovered += 1
-                other = [x for x in SIDES if x != s][0]
-                assert not motion.contact[s][k + 1] or not motion.contact[other][k + 1], (k, s)
+                assert not motion.contact[s][k + 1], (k, s)
     assert hovered  # the case arises
+    assert verdicts.sum() >= 310, int(verdicts.sum())
