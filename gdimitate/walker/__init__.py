@@ -58,10 +58,10 @@ def periodic_cycle(demo=None, demonstrator: Robot | None = None,
         raise InvalidInputError("periodic_cycle: a demo needs its demonstrator (a Robot)")
     imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
     opts = dict(force="measured", forces=forces) if forces is not None else {}
-    cyc = _cycle(demo, demonstrator, imit, rate, Weights(), opts)
+    w = Weights()
+    cyc = _cycle(demo, demonstrator, imit, rate, w, opts)
     first = cyc.gait.travel_ratio
     if cyc.feasible and first < KEPT[0]:
-        w = Weights()
         again = _cycle(demo, demonstrator, imit, rate,
                        replace(w, steps=w.steps * STRIDE_RETRY), opts)
         took = again.feasible and again.gait.travel_ratio > first
