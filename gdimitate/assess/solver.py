@@ -26,8 +26,11 @@ class SolverInfo:
     (solves only), ``build_s`` (0 when the NLP came from the cache), ``cached`` (the NLP was
     already built in this process), ``elastic`` (True when the hard problem failed and the
     least-infeasible solve ran), ``knots``, ``variables`` (free ones), ``constraints`` (rows
-    the schedule imposes), ``unmet`` and ``compiled`` (this call compiled the robot's
-    derivatives to C; False: none needed, or they came from the on-disk cache)."""
+    the schedule imposes), ``unmet``, ``compiled`` (this call compiled the robot's
+    derivatives to C; False: none needed, or they came from the on-disk cache) and ``retry``
+    (empty, or the line that says the motion was solved again for its stride and which one
+    was kept: :mod:`gdimitate.retarget.trajectory.stride`; ``iterations`` and ``time_s``
+    then count both solves)."""
 
     status: str
     success: bool
@@ -41,3 +44,4 @@ class SolverInfo:
     constraints: int
     unmet: tuple[Unmet, ...] = ()
     compiled: bool = False
+    retry: str = ""

@@ -65,6 +65,8 @@ class Verdict:
                        f"{s['time_s']:.1f} s" + ("; the hard problem failed: this is the "
                                                  "least-infeasible motion" if s["elastic"]
                                                  else ""))
+            if s.get("retry"):
+                out.append(s["retry"])
         if self.unmet:
             out.append("goals unmet: " + "; ".join(self.unmet_texts()[:6]))
         if not self.ok:

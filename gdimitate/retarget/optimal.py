@@ -29,7 +29,8 @@ ratio r at the demonstrator's cadence (the paper's); ``"froude"`` also runs the
 demonstration's clock × √r (docs/design.md §13 says how the default was chosen)."""
 
 OPTIONS = ("force", "forces", "rate", "mode", "weights", "limits", "contact", "body_map",
-           "tol", "ipopt", "verbose", "contacts", "stop", "periodic", "gait_scaling")
+           "tol", "ipopt", "verbose", "contacts", "stop", "periodic", "gait_scaling",
+           "stride_retry")
 """Keywords :func:`adapt_optimal` accepts (``adapt(..., method="optimal", **options)``)."""
 
 
@@ -58,6 +59,11 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
       demonstration's durations × √r (the motion's times then run on that clock); the
       result's ``gait`` (:class:`~gdimitate.model.footsteps.GaitComparison`) measures the steps
       against the demonstrator's so scaled;
+    - ``stride_retry`` (default True): a 3-D motion that is audit-feasible but travels less
+      than 0.8 of the scaled demonstrator's distance is solved again with the gait's weights
+      raised, and the second motion kept only where it is audit-feasible, misses no goal by
+      more and travels further (:mod:`.trajectory.stride`; ``solver.retry`` says what
+      happened); False: one solve;
     - ``periodic`` (default False): a periodic gait cycle (:mod:`.trajectory.periodic`) — one
       stride, heel strike to heel strike of the right foot, whose last knot is its first shifted
       by one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
@@ -105,7 +111,8 @@ def check_options(force: str, options: dict) -> dict:
          "contact": options.get("contact") or Contact(),
          "forces": options.get("forces"), "verbose": bool(options.get("verbose", True)),
          "periodic": bool(options.get("periodic", False)),
-         "gait_scaling": options.get("gait_scaling", GAIT_SCALING)}
+         "gait_scaling": options.get("gait_scaling", GAIT_SCALING),
+         "stride_retry": bool(options.get("stride_retry", True))}
     if o["gait_scaling"] not in SCALINGS:
         raise UnknownNameError("gait scaling", o["gait_scaling"], SCALINGS)
     if o["mode"] not in MODES:

@@ -8,11 +8,8 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
-from dataclasses import replace
 
-from ..model.footsteps import KEPT
 from ..model.robot import Robot
-from ..retarget.params import Weights
 from .loop import WalkPush, run_loop
 from .network import WalkNetwork
 from .result import WalkResult
@@ -27,13 +24,6 @@ __all__ = ["walk", "periodic_cycle", "WalkResult", "WalkNetwork", "WalkPush", "W
 WALK_RATE = 45.0
 #: Feedback gain of the ground into the network's input (0: open loop).
 DEFAULT_GAIN = 0.5
-#: The steps weight's factor for a cycle solved again because it strides short of the scaled
-#: demonstrator (:func:`periodic_cycle`): the largest whose pull on a step (at most 1.1 ×
-#: weight × δ, :mod:`gdimitate.retarget.parts.steps`) stays below the push direction's price
-#: (30 per rad and knot), so that the push still comes first. On the shipped stride Talos's
-#: cycle at the default weight limps (stride 0.70 of the scaled one, its knees at their torque
-#: bound); at twice the weight 0.93, audit-feasible, walked 20 steps in MuJoCo.
-STRIDE_RETRY = 2.0
 
 
 def periodic_cycle(demo=None, demonstrator: Robot | None = None,
@@ -43,10 +33,9 @@ def periodic_cycle(demo=None, demonstrator: Robot | None = None,
     ``imitator``: the measured push directions kept (``force="measured"``) when ``forces``
     are given. Without ``demo``: one stride (:func:`gdimitate.io.gait.one_stride`) of the shipped
     3-D walk (:func:`gdimitate.io.gait.human_walk_3d`). A feasible cycle that travels less
-    than :data:`~gdimitate.model.footsteps.KEPT`'s lower end of the scaled demonstrator's
-    stride (a short-stride optimum) is solved again with the steps weight ×
-    :data:`STRIDE_RETRY`, and the second kept where the audit accepts it and it travels
-    further; ``say`` is told of that (a line). Returns ``(cycle, forces)``."""
+    than 0.8 of the scaled demonstrator's stride is solved again by the adaptor with its gait
+    weights raised (:mod:`gdimitate.retarget.trajectory.stride`); ``say`` is told that line
+    (``cycle.solver.retry``). Returns ``(cycle, forces)``."""
     if demo is None:
         from ..io import gait
 
@@ -58,31 +47,20 @@ def periodic_cycle(demo=None, demonstrator: Robot | None = None,
         raise InvalidInputError("periodic_cycle: a demo needs its demonstrator (a Robot)")
     imit = imitator if isinstance(imitator, Robot) else Robot.load(imitator)
     opts = dict(force="measured", forces=forces) if forces is not None else {}
-    w = Weights()
-    cyc = _cycle(demo, demonstrator, imit, rate, w, opts)
-    first = cyc.gait.travel_ratio
-    if cyc.feasible and first < KEPT[0]:
-        again = _cycle(demo, demonstrator, imit, rate,
-                       replace(w, steps=w.steps * STRIDE_RETRY), opts)
-        took = again.feasible and again.gait.travel_ratio > first
-        if say is not None:
-            say(f"stride {first:.2f} of the scaled one: solved again with the steps weight × "
-                f"{STRIDE_RETRY:g}: {again.gait.travel_ratio:.2f}, "
-                + ("audit-feasible: kept" if took else "not kept (" + (
-                    "audit-infeasible" if not again.feasible else "no further") + ")"))
-        cyc = again if took else cyc
+    cyc = _cycle(demo, demonstrator, imit, rate, opts)
+    if say is not None and cyc.solver.retry:
+        say(cyc.solver.retry)
     return cyc, forces
 
 
-def _cycle(demo, demonstrator: Robot, imitator: Robot, rate: float, weights: Weights,
-           opts: dict):
+def _cycle(demo, demonstrator: Robot, imitator: Robot, rate: float, opts: dict):
     """One periodic solve (:func:`periodic_cycle`)."""
     from ..adaptation.adaptor import adapt
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         return adapt(demo, demonstrator, imitator, "optimal", rate=rate, periodic=True,
-                     verbose=False, weights=weights, **opts)
+                     verbose=False, **opts)
 
 
 def walk(demo=None, demonstrator: Robot | None = None, imitator: str | Robot = "g1",

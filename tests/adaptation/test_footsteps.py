@@ -124,6 +124,19 @@ def test_a_clip_cut_mid_stride_covers_the_scaled_distance(walk, robot):
     demonstrator's distance × r. With the steps cost alone (which acts in double support
     only) it travelled 0.36: the body started slow and ended 0.2 m behind its stance foot;
     the body-over-feet cost (retarget/parts/over_feet.py) carries it."""
+    h, clip, forces = _cut_stride(walk)
+    assert all(clip.contact[s][0] != clip.contact[s][-1] for s in SIDES)  # single support
+    r = gd.adapt(clip, h, robot("g1"), force="measured", forces=forces, verbose=False)
+    assert r.audit.feasible
+    own = np.hypot(*(r.motion.q[-1, :2] - r.motion.q[0, :2]))
+    demo = np.hypot(*(clip.q[-1, :2] - clip.q[0, :2]))
+    assert r.gait.travel_ratio == pytest.approx(own / (demo * r.gait.ratio), rel=1e-12)
+    assert 0.8 <= r.gait.travel_ratio <= 1.25
+
+
+def _cut_stride(walk):
+    """The shipped stride cut 0.3 s at each end (single support at both ends) and its
+    forces."""
     from gdimitate.model.contact import ContactForces, FootForces
 
     h, m, f = walk
@@ -135,13 +148,35 @@ def test_a_clip_cut_mid_stride_covers_the_scaled_distance(walk, robot):
     forces = ContactForces(fs.t[cut], {s: FootForces(v.force[cut], v.cop[cut], v.torque[cut],
                                                      v.contact[cut])
                                        for s, v in fs.feet.items()}, fs.source)
-    assert all(clip.contact[s][0] != clip.contact[s][-1] for s in SIDES)  # single support
-    r = gd.adapt(clip, h, robot("g1"), force="measured", forces=forces, verbose=False)
-    assert r.audit.feasible
-    own = np.hypot(*(r.motion.q[-1, :2] - r.motion.q[0, :2]))
-    demo = np.hypot(*(clip.q[-1, :2] - clip.q[0, :2]))
-    assert r.gait.travel_ratio == pytest.approx(own / (demo * r.gait.ratio), rel=1e-12)
-    assert 0.8 <= r.gait.travel_ratio <= 1.25
+    return h, clip, forces
+
+
+@pytest.mark.slow
+def test_a_short_motion_is_solved_again_with_the_gait_weights_raised(walk, robot):
+    """The cut stride → G1 with the body-over-feet weight at 15 (half the default) travels
+    0.69 of the scaled distance: audit-feasible but short, so the adaptor solves it again with
+    the steps and body-over-feet weights × ``STRIDE_RETRY`` and keeps that motion — the same
+    as an independent solve at those weights (0.84) — because it is audit-feasible, misses no
+    goal and travels further. ``solver.retry`` says so with both ratios, and the record counts
+    both solves' iterations."""
+    from gdimitate.retarget.params import Weights
+    from gdimitate.retarget.trajectory.stride import STRIDE_RETRY, stride_weights
+
+    h, clip, forces = _cut_stride(walk)
+    g1, w = robot("g1"), Weights(over_feet=15.0)
+    kw = dict(force="measured", forces=forces, verbose=False)
+    r = gd.adapt(clip, h, g1, weights=w, **kw)
+    once = gd.adapt(clip, h, g1, weights=w, stride_retry=False, **kw)
+    again = gd.adapt(clip, h, g1, weights=stride_weights(w), stride_retry=False, **kw)
+    r1, r2 = once.gait.travel_ratio, again.gait.travel_ratio
+    assert once.audit.feasible and r1 < 0.8 and not once.solver.retry
+    assert again.audit.feasible and not again.solver.unmet and 0.8 <= r2 <= 1.25
+    assert r.solver.retry == (f"travel {r1:.2f} of the scaled demonstrator's: solved again "
+                              f"with the steps and body-over-feet weights × {STRIDE_RETRY:g}: "
+                              f"{r2:.2f}, kept")
+    np.testing.assert_array_equal(r.motion.q, again.motion.q)
+    assert r.gait.travel_ratio == r2 and r.audit.feasible
+    assert r.solver.iterations == once.solver.iterations + again.solver.iterations
 
 
 def test_unknown_gait_scaling_is_refused(walk, robot):

@@ -34,38 +34,6 @@ def network(cycle):
     return WalkNetwork.tune(cycle[0].robot, cycle[0].motion)
 
 
-def test_a_cycle_short_of_the_scaled_stride_is_solved_again_with_the_steps_weight_doubled(
-        cycle):
-    """HOAP-2's cycle travels 0.27 of the scaled stride (its knees and ankles at their torque
-    bound): ``periodic_cycle`` solves it again with the steps weight × ``STRIDE_RETRY``, says
-    so with both travel ratios — those of independent ``adapt`` solves at the two weights —
-    and keeps the one that is audit-feasible and travels further (here the first: the
-    second does not)."""
-    from gdimitate import adapt
-    from gdimitate.io import gait
-    from gdimitate.retarget.params import Weights
-    from gdimitate.walker import STRIDE_RETRY, WALK_RATE
-
-    cyc, _ = cycle
-    lines: list[str] = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        again, _ = periodic_cycle(imitator="hoap2", say=lines.append)
-        human, whole, forces = gait.human_walk_3d()
-        demo, f1 = gait.one_stride(whole, forces)
-        ref = {w: adapt(demo, human, cyc.robot, "optimal", rate=WALK_RATE, periodic=True,
-                        verbose=False, force="measured", forces=f1, weights=Weights(steps=w))
-               for w in (100.0, 100.0 * STRIDE_RETRY)}
-    r1, r2 = (ref[w].gait.travel_ratio for w in sorted(ref))
-    assert r1 < 0.8 and ref[100.0].feasible
-    second = ref[100.0 * STRIDE_RETRY]
-    assert not (second.feasible and r2 > r1)
-    why = "no further" if second.feasible else "audit-infeasible"
-    assert lines == [f"stride {r1:.2f} of the scaled one: solved again with the steps weight × "
-                     f"{STRIDE_RETRY:g}: {r2:.2f}, not kept ({why})"]
-    np.testing.assert_array_equal(again.motion.q, ref[100.0].motion.q)
-
-
 def test_phase_lookup_equals_plan_at_knots(cycle):
     cyc, _ = cycle
     robot, mo = cyc.robot, cyc.motion

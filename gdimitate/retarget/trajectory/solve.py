@@ -7,6 +7,7 @@ from __future__ import annotations
 import ctypes
 import dataclasses
 import math
+import sys
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -30,7 +31,7 @@ from ..parts import Bound, ForceDirection, OverFeet, Steps, default_parts, lifto
 from ..parts.body import body_parts
 from ..targets import Targets, demonstration_targets, direction_frame, resample
 from ..threads import single_thread
-from . import codegen
+from . import codegen, stride
 from . import problem as pb
 from .initial import consistent_start, initial_q, initial_wrenches
 from .interrupt import guard
@@ -416,7 +417,33 @@ def trajectory_mode(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
                                o["contact"].rule)
     t0, compiles = time.perf_counter(), codegen.COMPILE_COUNT
     form = problem_for(imitator, force, o["contact"], bmap, act_names, periodic=periodic)
-    num = setup(form, tg, imitator, demonstrator, o["weights"], o["limits"], o["contact"], cs)
+
+    def solve(weights: Weights):
+        out = _solve_turned(form, tg, demonstrator, imitator, force, o, cs, weights, options,
+                            (t0, compiles))
+        motion = turn_motion(out.motion, psi) if imitator.base == "free" else out.motion
+        gait = compare_gait(demonstrator, own, imitator, motion, o["gait_scaling"])
+        return dataclasses.replace(out, motion=motion, gait=gait)
+
+    out = solve(o["weights"])
+    if o["stride_retry"] and imitator.base == "free" and stride.short(out):  # once
+        if o["verbose"]:
+            print(f"  {imitator.name}: travel {out.gait.travel_ratio:.2f} of the scaled "
+                  "demonstrator's: solving again with the gait's weights raised …",
+                  file=sys.stderr, flush=True)
+        out = stride.kept(out, solve(stride.stride_weights(o["weights"])))
+    return out
+
+
+def _solve_turned(form: pb.Formulation, tg: Targets, demonstrator: Robot, imitator: Robot,
+                  force: str, o: dict, cs: dict[str, SoleContact], weights: Weights,
+                  options: dict, since: tuple[float, int]):
+    """One solve of the problem ``form`` on the targets ``tg`` (in the heading frame) at
+    ``weights``: the packaged, audited :class:`~gdimitate.AdaptedMotion`, not yet turned
+    back. ``since``: the clock and :data:`.codegen.COMPILE_COUNT` before ``form`` was made
+    (``build_s`` and ``compiled`` count from there)."""
+    t0, compiles = since
+    num = setup(form, tg, imitator, demonstrator, weights, o["limits"], o["contact"], cs)
     c, cached = pb.compiled(form, tg.T, num.keep, options.get("ipopt"))
     build_s = 0.0 if cached else time.perf_counter() - t0
     t1 = time.perf_counter()
@@ -430,12 +457,8 @@ def trajectory_mode(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
                       variables=int(np.sum(num.lbx != num.ubx)),
                       constraints=int(num.keep.size), unmet=bad,
                       compiled=codegen.COMPILE_COUNT > compiles)
-    out = package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
-                  periodic)
-    # a planar imitator walks in its own x–z plane: the heading frame is its world
-    motion = turn_motion(out.motion, psi) if imitator.base == "free" else out.motion
-    gait = compare_gait(demonstrator, own, imitator, motion, o["gait_scaling"])
-    return dataclasses.replace(out, motion=motion, gait=gait)
+    return package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
+                   o["periodic"])
 
 
 def heading_frame(demonstrator: Robot, imitator: Robot, demo: Motion,
