@@ -172,7 +172,7 @@ def test_a_short_motion_is_solved_again_with_the_gait_weights_raised(walk, robot
     assert once.audit.feasible and r1 < 0.8 and not once.solver.retry
     assert again.audit.feasible and not again.solver.unmet and 0.8 <= r2 <= 1.25
     assert r.solver.retry == (f"travel {r1:.2f} of the scaled demonstrator's: solved again "
-                              f"with the steps and body-over-feet weights × {STRIDE_RETRY:g}: "
+                              f"with the gait's weights × {STRIDE_RETRY:g}: "
                               f"{r2:.2f}, kept")
     np.testing.assert_array_equal(r.motion.q, again.motion.q)
     assert r.gait.travel_ratio == r2 and r.audit.feasible

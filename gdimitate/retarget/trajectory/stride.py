@@ -57,8 +57,8 @@ def kept(first: Any, again: Any) -> Any:
         "audit-infeasible" if not again.audit.feasible else
         "a goal missed by more" if _goal_miss(again) > _goal_miss(first) else
         "no further") + ")"
-    note = (f"travel {r1:.2f} of the scaled demonstrator's: solved again with the steps and "
-            f"body-over-feet weights × {STRIDE_RETRY:g}: {r2:.2f}, {why}")
+    note = (f"travel {r1:.2f} of the scaled demonstrator's: solved again with the gait's "
+            f"weights × {STRIDE_RETRY:g}: {r2:.2f}, {why}")
     out = again if take else first
     s1, s2 = first.solver, again.solver
     solver = dataclasses.replace(out.solver, iterations=s1.iterations + s2.iterations,

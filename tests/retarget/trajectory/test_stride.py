@@ -62,7 +62,7 @@ def test_the_second_motion_is_kept_only_where_it_costs_nothing(again, take, why)
     assert out.solver.iterations == 5 + again.solver.iterations
     assert out.solver.time_s == pytest.approx(1.5 + again.solver.time_s)
     assert out.solver.retry == (f"travel 0.70 of the scaled demonstrator's: solved again with "
-                                f"the steps and body-over-feet weights × {STRIDE_RETRY:g}: "
+                                f"the gait's weights × {STRIDE_RETRY:g}: "
                                 f"{again.gait.travel_ratio:.2f}, {why}")
 
 
