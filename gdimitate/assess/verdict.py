@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from .audit.report import AT_BOUND, AT_POSITION
+
 __all__ = ["EXIT_NOT_FEASIBLE", "Verdict", "solver_record", "verdict", "gait_lines",
            "limits_at_bound", "push_errors", "report_lines", "written_gait_lines"]
 
@@ -33,7 +35,9 @@ class Verdict:
     scaled units; a push direction's in radians, :func:`push_errors`); ``solver``: the
     solver's record (:func:`solver_record`) or None;
     ``reasons``: each failed check as the judge measured it, ``"name value unit > bound at
-    knot k"`` (the audit's numbers: what the console prints as the reason)."""
+    knot k"`` (the audit's numbers: what the console prints as the reason); ``at_bound``:
+    per unmet goal, the imitator's limits the audit finds at their bound at its knot
+    (:meth:`~gdimitate.assess.audit.report.AuditReport.limits_at`: what may hold it back)."""
 
     feasible: bool
     judge: str
@@ -41,6 +45,7 @@ class Verdict:
     unmet: tuple[tuple[str, float, int], ...]
     solver: dict[str, Any] | None
     reasons: tuple[str, ...] = ()
+    at_bound: tuple[tuple[str, ...], ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -80,18 +85,26 @@ class Verdict:
         (a report's ``solver``): what a console renders from a written report."""
         return cls(bool(d["feasible"]), d["judge"], tuple(d["failed"]),
                    tuple((u["name"], _num(u["violation"]), int(u["knot"])) for u in d["unmet"]),
-                   solver, tuple(d.get("reasons", ())))
+                   solver, tuple(d.get("reasons", ())),
+                   tuple(tuple(u.get("at_bound", ())) for u in d["unmet"]))
 
     def unmet_texts(self) -> list[str]:
-        """Each unmet goal as every output prints it: ``"name off by v unit at knot k"``."""
-        return [f"{n} off by {v:.3g}{_unit(n, v)} at knot {k}" for n, v, k in self.unmet]
+        """Each unmet goal as every output prints it: ``"name off by v unit at knot k"``, and
+        ``" (at their bound there: …)"`` where limits are (:attr:`at_bound`)."""
+        return [f"{n} off by {v:.3g}{_unit(n, v)} at knot {k}"
+                + (f" (at their bound there: {', '.join(b[:4])})" if b else "")
+                for (n, v, k), b in zip(self.unmet, self._bounds())]
+
+    def _bounds(self) -> tuple[tuple[str, ...], ...]:
+        return self.at_bound or tuple(() for _ in self.unmet)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``feasible``, ``ok``, ``judge``, ``failed``, ``unmet`` (list of
-        ``{name, violation, knot}``)."""
+        ``{name, violation, knot, at_bound}``)."""
         return {"feasible": self.feasible, "ok": self.ok, "judge": self.judge,
                 "failed": list(self.failed), "reasons": list(self.reasons),
-                "unmet": [{"name": n, "violation": v, "knot": k} for n, v, k in self.unmet]}
+                "unmet": [{"name": n, "violation": v, "knot": k, "at_bound": list(b)}
+                          for (n, v, k), b in zip(self.unmet, self._bounds())]}
 
 
 def push_errors(result: Any) -> dict[str, tuple[float, int, str]]:
@@ -185,7 +198,8 @@ def verdict(result: Any) -> Verdict:
         unmet = tuple(u for u in unmet if _as_check(u[0]) not in checked)
         worst = sorted((c for c in aud.checks if not c.passed), key=lambda c: -c.violation)
         return Verdict(bool(aud.feasible), "audit (Pinocchio)", tuple(aud.binding), unmet,
-                       solver, tuple(_reason(c) for c in worst))
+                       solver, tuple(_reason(c) for c in worst),
+                       tuple(tuple(aud.limits_at(k)) for _, _, k in unmet))
     r = result.report
     failed = [f"{s}: {n} frames unreachable" for s, n in r.infeasible_frames.items() if n]
     failed += [f"position:{j} exceeded by {v:.3g} rad" for j, v in
@@ -194,13 +208,10 @@ def verdict(result: Any) -> Verdict:
                    "limits; no dynamics checked)", tuple(failed), unmet, solver)
 
 
-#: a joint whose worst torque or velocity is at least this share of its limit is at its bound
-AT_BOUND = 0.99
-
-
 def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
     """The actuated joints' limits the audited motion reaches (torque or velocity at ≥
-    ``share`` of its limit, most used first; then positions within 1e-3 of a limit), as
+    ``share`` of its limit, most used first; then positions within
+    :data:`~gdimitate.assess.audit.report.AT_POSITION` of a limit), as
     ``"velocity:J 1.00"`` — where a gait is not kept, the limits that may hold it back (at
     their bound somewhere in the motion, not proven to be the cause)."""
     out: list[tuple[float, str]] = []
@@ -208,7 +219,7 @@ def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
         for kind, r in (("torque", j.torque_ratio), ("velocity", j.velocity_ratio)):
             if np.isfinite(r) and r >= share:
                 out.append((float(r), f"{kind}:{j.name} {r:.2f}"))
-        if np.isfinite(j.position_margin) and j.position_margin <= 1e-3:
+        if np.isfinite(j.position_margin) and j.position_margin <= AT_POSITION:
             out.append((0.0, f"position:{j.name}"))  # after the torques and velocities
     return [x for _, x in sorted(out, key=lambda p: -p[0])]
 

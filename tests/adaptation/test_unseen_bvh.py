@@ -16,6 +16,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from gdimitate.model.footsteps import KEPT
@@ -39,13 +40,42 @@ def sfu_run(tmp_path_factory):
             f"iterations, {solver['time_s']:.1f} s; audit failed: {audit['binding']}; goals "
             f"unmet: {rep['verdict']['unmet']}; travel ratio {gait['travel_ratio']:.3f}\n"
             + p.stdout[-1500:])
-    return p.returncode, rep, said
+    return p.returncode, rep, said, out, p.stdout
 
 
 @pytest.mark.slow
 def test_sfu_style_walk_onto_g1_is_feasible_and_keeps_the_gait(sfu_run):
-    _, rep, said = sfu_run
+    _, rep, said, _, _ = sfu_run
     assert rep["audit"]["feasible"] is True, said
     assert KEPT == (0.8, 1.25)
     assert KEPT[0] <= rep["gait"]["travel_ratio"] <= KEPT[1], said
 
+
+
+@pytest.mark.slow
+def test_an_unmet_goal_names_the_limits_at_their_bound_at_its_knot(sfu_run, robot):
+    """Where a goal is left unmet the verdict says which of the robot's limits are at their
+    bound at that knot (issue 32: "where the robot cannot follow, which limit"): here the
+    right push, 0.077 rad off at the last stance knot before toe-off, with G1's right ankle
+    roll at its lower stop. The positions named are those the written motion's own ``q``
+    holds within 1 mm or mrad of the URDF's limits at that knot (recomputed here from the
+    npz and the model), and the console prints the same list."""
+    from gdimitate.assess.audit.report import AT_POSITION
+
+    code, rep, said, out, stdout = sfu_run
+    unmet = rep["verdict"]["unmet"]
+    assert code == 3 and unmet, said
+    q = np.load(out / "imitator_motion.npz")["q"]
+    m = robot("g1").model
+    for u in unmet:
+        k, want = u["knot"], set()
+        for j in range(2, m.njoints):  # the actuated joints (1: the free flyer)
+            lo, hi = m.lowerPositionLimit[m.joints[j].idx_q], m.upperPositionLimit[
+                m.joints[j].idx_q]
+            x = q[k, m.joints[j].idx_q]
+            if min(x - lo, hi - x) <= AT_POSITION:
+                want.add(f"position:{m.names[j]}")
+        assert {b for b in u["at_bound"] if b.startswith("position:")} == want, said
+        printed = ", ".join(u["at_bound"][:4])
+        assert not u["at_bound"] or f"(at their bound there: {printed})" in stdout, stdout
+    assert any("position:right_ankle_roll_joint" in u["at_bound"] for u in unmet), said

@@ -258,7 +258,7 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
     base_check = add(_make("base_residual", res, tol.base_residual, "max", "N", weight))
 
     # joints
-    joints, unlimited = _joint_checks(robot, motion, motion.v, tau, fd, tol, add)
+    joints, unlimited, use = _joint_checks(robot, motion, motion.v, tau, fd, tol, add)
     vc = add(_velocity_consistency(motion.t, motion.v, motion.a, fd, tol))
 
     # feet
@@ -282,26 +282,31 @@ def run_audit(robot, motion, wrenches, contacts, target, cone_half_angle, tol,
         velocity_consistency=Worst(vc.value, vc.knot),
         knot_feasible=np.logical_and.reduce(masks), tau=tau, knot_checks=np.array(masks),
         tolerances=tol,
-        cone_half_angle=float(cone_half_angle), self_collision=collision)
+        cone_half_angle=float(cone_half_angle), self_collision=collision, joint_use=use)
 
 
 def _joint_checks(robot, motion: Motion, v: np.ndarray, tau: np.ndarray, fd: np.ndarray,
-                  tol: AuditTolerances, add) -> tuple[list[JointAudit], list[tuple[str, str]]]:
+                  tol: AuditTolerances, add
+                  ) -> tuple[list[JointAudit], list[tuple[str, str]], np.ndarray]:
     """Per actuated joint: torque and velocity against their limits (the velocity at a knot is
     the larger of ``v`` ``(T, nv)`` and the forward difference of ``q``, ``fd`` ``(T-1, nv)``)
     and the position range; each check is passed to ``add``. Returns the :class:`JointAudit`
-    list and the ``(joint, "effort" | "velocity")`` pairs without a limit."""
+    list, the ``(joint, "effort" | "velocity")`` pairs without a limit and
+    :attr:`AuditReport.joint_use` ``(T, n_joints, 3)``."""
     model = robot.model
     vmag = np.abs(v)
     vmag[:-1] = np.maximum(vmag[:-1], np.abs(fd))
     joints, unlimited = [], []
-    for j in _actuated_joints(robot):
+    act = _actuated_joints(robot)
+    use = np.full((motion.T, len(act), 3), np.nan)
+    for i, j in enumerate(act):
         jm, name = model.joints[j], model.names[j]
         dofs = slice(jm.idx_v, jm.idx_v + jm.nv)
         tq = np.max(np.abs(tau[:, dofs]), axis=1)
         eff = _limit(model.effortLimit[dofs])
         if np.isfinite(eff):
-            c = add(_make(f"torque:{name}", tq / eff, 1 + tol.torque, "max", "-", 1.0))
+            use[:, i, 0] = tq / eff
+            c = add(_make(f"torque:{name}", use[:, i, 0], 1 + tol.torque, "max", "-", 1.0))
             t_ratio = c.value
         else:
             unlimited.append((name, "effort"))
@@ -311,7 +316,9 @@ def _joint_checks(robot, motion: Motion, v: np.ndarray, tau: np.ndarray, fd: np.
         vlim = _limit(model.velocityLimit[dofs])
         vw = _worst(vj)
         if np.isfinite(vlim):
-            c = add(_make(f"velocity:{name}", vj / vlim, 1 + tol.velocity, "max", "-", 1.0))
+            use[:, i, 1] = vj / vlim
+            c = add(_make(f"velocity:{name}", use[:, i, 1], 1 + tol.velocity, "max", "-",
+                          1.0))
             v_ratio, v_knot = c.value, c.knot
         else:
             unlimited.append((name, "velocity"))
@@ -321,14 +328,15 @@ def _joint_checks(robot, motion: Motion, v: np.ndarray, tau: np.ndarray, fd: np.
             lo, hi = model.lowerPositionLimit[jm.idx_q], model.upperPositionLimit[jm.idx_q]
             if abs(lo) < _NO_LIMIT and abs(hi) < _NO_LIMIT and lo < hi:
                 qj = motion.q[:, jm.idx_q]
-                c = add(_make(f"position:{name}", np.minimum(qj - lo, hi - qj), -tol.position,
+                use[:, i, 2] = np.minimum(qj - lo, hi - qj)
+                c = add(_make(f"position:{name}", use[:, i, 2], -tol.position,
                               "min", "rad" if jm.shortname().startswith("JointModelR") else "m",
                               float(hi - lo)))
                 pm = Worst(c.value, c.knot)
         joints.append(JointAudit(name, tw.value, tw.knot, eff, t_ratio, float(np.max(vj)),
                                  v_knot, vlim, v_ratio, pm.value, pm.knot))
 
-    return joints, unlimited
+    return joints, unlimited, use
 
 
 def _velocity_consistency(t: np.ndarray, v: np.ndarray, a: np.ndarray, fd: np.ndarray,

@@ -22,8 +22,14 @@ __all__ = [
     "FootAudit",
     "AuditReport",
     "CORNER_NAMES",
+    "AT_BOUND",
+    "AT_POSITION",
 ]
 
+#: A joint whose torque or velocity is at least this share of its limit is at its bound.
+AT_BOUND = 0.99
+#: A joint within this distance [rad or m] of a position limit is at its bound.
+AT_POSITION = 1e-3
 #: Names of the four sole corners in :meth:`gdimitate.model.contact.SoleContact.corners` order.
 CORNER_NAMES = ("front-left", "front-right", "back-right", "back-left")
 
@@ -234,7 +240,9 @@ class AuditReport:
     bool: each check's per-knot pass flags, rows in ``checks`` order; ``tolerances``;
     ``cone_half_angle`` [rad]; ``self_collision``: the closest approach of the robot's own
     collision geometries (:class:`SelfCollisionAudit`; ``None``: the robot has no collision
-    geometry — not checked, and the summary says so).
+    geometry — not checked, and the summary says so); ``joint_use`` ``(T, n_joints, 3)``: per
+    knot and actuated joint (``joints``' order) the torque ratio |τ|/limit, the velocity ratio
+    and the position margin [rad or m] (NaN: no such limit), what :meth:`limits_at` reads.
     """
 
     feasible: bool
@@ -252,6 +260,23 @@ class AuditReport:
     tolerances: AuditTolerances = field(default_factory=AuditTolerances)
     cone_half_angle: float = 0.0
     self_collision: SelfCollisionAudit | None = None
+    joint_use: np.ndarray | None = None
+
+    def limits_at(self, knot: int, share: float = AT_BOUND) -> list[str]:
+        """The actuated joints' limits at their bound at ``knot`` (torque or velocity at ≥
+        ``share`` of its limit, most used first, as ``"torque:J 1.00"``; then positions within
+        :data:`AT_POSITION` of a limit, ``"position:J"``): what may hold a goal back there
+        (at their bound, not proven to be the cause); empty without :attr:`joint_use`."""
+        if self.joint_use is None or not 0 <= knot < len(self.joint_use):
+            return []
+        out: list[tuple[float, str]] = []
+        for j, (tr, vr, pm) in zip(self.joints, self.joint_use[knot]):
+            for kind, r in (("torque", tr), ("velocity", vr)):
+                if np.isfinite(r) and r >= share:
+                    out.append((float(r), f"{kind}:{j.name} {r:.2f}"))
+            if np.isfinite(pm) and pm <= AT_POSITION:
+                out.append((0.0, f"position:{j.name}"))
+        return [x for _, x in sorted(out, key=lambda p: -p[0])]
 
     @property
     def force_direction_error(self) -> dict[str, ForceDirectionAudit | None]:
@@ -282,10 +307,10 @@ class AuditReport:
         raise UnknownNameError("joint", name, [j.name for j in self.joints])
 
     def to_dict(self) -> dict:
-        """Everything but the arrays ``tau`` and ``knot_checks`` as plain JSON types (NaN and
-        inf become ``None``)."""
+        """Everything but the arrays ``tau``, ``knot_checks`` and ``joint_use`` as plain JSON
+        types (NaN and inf become ``None``)."""
         return jsonable({f.name: getattr(self, f.name) for f in fields(self)
-                         if f.name not in ("tau", "knot_checks")})
+                         if f.name not in ("tau", "knot_checks", "joint_use")})
 
     def summary(self, only_failed: bool = False) -> str:
         """A text table: one line per check (value, bound, unit, worst knot, status)."""
