@@ -46,6 +46,7 @@ import argparse
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -164,7 +165,7 @@ _CHILD = textwrap.dedent("""
     print("RESULT " + json.dumps({**sim,
         "feasible": bool(r.audit.feasible), "binding": list(r.audit.binding[:3]),
         "iterations": int(r.solver.iterations), "cpu_s": cpu, "travel": travel,
-        "speed": travel / dur,
+        "speed": travel / dur, "retry": r.solver.retry,
         "unmet": [[u.name, round(float(u.violation), 4)] for u in r.solver.unmet[:2]]}))
 """)
 
@@ -214,7 +215,7 @@ _CLI_CHILD = textwrap.dedent("""
     print("RESULT " + json.dumps({**sim,
         "feasible": bool(aud.get("feasible")), "binding": list(aud.get("binding", [])[:3]),
         "iterations": int(sol.get("iterations", -1)), "cpu_s": cpu, "travel": travel,
-        "speed": travel / dur, "exit": p.returncode,
+        "speed": travel / dur, "exit": p.returncode, "retry": sol.get("retry", ""),
         "unmet": [[u["name"], round(float(u["violation"]), 4)] for u in (
             (rep.get("verdict") or {}).get("unmet") or sol.get("unmet", []))[:2]]}))
 """)
@@ -275,10 +276,12 @@ def row(tag: str, clip: str, variant: str, robot: str, r: dict) -> str:
     if r.get("exit"):  # the command's exit status (sfu), where not 0, and the goals unmet
         feas += f" (exit {r['exit']}" + "".join(f"; {n} {v:.3g}" for n, v in r["unmet"]) + ")"
     kept = 0.8 <= r["travel"] <= 1.25
+    retry = re.match(r"travel ([0-9.]+) .*, (kept|not kept)", r.get("retry") or "")
+    again = f" (solved again from {retry[1]}: {retry[2]})" if retry else ""
     sim = ("" if "fell" not in r else
            f" {'FELL' if r['fell'] else 'walked'}, slip {r['slip_cm']:.2f} cm |")
     return (f"| {tag} | {clip} | {variant} | {robot} | {feas} | {r['travel']:.2f}"
-            f"{'' if kept else ' (not kept)'} | {r['speed']:.2f} | {r['iterations']} | "
+            f"{'' if kept else ' (gait not kept)'}{again} | {r['speed']:.2f} | {r['iterations']} | "
             f"{r['cpu_s']:.1f} |{sim}")
 
 
