@@ -125,10 +125,25 @@ def _exit_on_sigterm(signum: int, frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
+#: The longest AF_UNIX socket path, in bytes (Linux's ``sun_path`` holds 108 with its NUL).
+SUN_PATH_MAX = 107
+#: What the forkserver's socket adds to the temporary folder: ``/pymp-XXXXXXXX/listener-XXXXXXXX``.
+_SOCKET_TAIL = len("/pymp-XXXXXXXX/listener-XXXXXXXX")
+
+
+def forkserver_fits(tmp: str | None = None) -> bool:
+    """Whether multiprocessing's forkserver can bind its socket under the temporary folder
+    ``tmp`` (default :func:`tempfile.gettempdir`, i.e. ``$TMPDIR``): Python before 3.14 puts
+    it there and fails with ``OSError: AF_UNIX path too long`` when the folder's path exceeds
+    about 75 bytes (CPython issue 132124), as a cluster's per-job ``$TMPDIR`` can."""
+    return len(os.fsencode(tmp or tempfile.gettempdir())) + _SOCKET_TAIL <= SUN_PATH_MAX
+
+
 def _context() -> mp.context.BaseContext:
     # forkserver: workers fork from a clean server that imported gdimitate once (not from this
-    # process and its threads); spawn where there is none (Windows, macOS without it).
-    if "forkserver" in mp.get_all_start_methods():
+    # process and its threads); spawn where there is none (Windows, macOS without it) or where
+    # its socket's path would be too long (forkserver_fits): spawn talks through pipes.
+    if "forkserver" in mp.get_all_start_methods() and forkserver_fits():
         ctx = mp.get_context("forkserver")
         ctx.set_forkserver_preload(["gdimitate.batch.job"])
         return ctx

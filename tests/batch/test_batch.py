@@ -295,6 +295,37 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor, s
     assert list(tmp.iterdir()) == []
 
 
+def test_a_temporary_folder_too_long_for_the_forkservers_socket(tmp_path):
+    """A ``$TMPDIR`` whose path leaves no room for multiprocessing's forkserver socket
+    (``/pymp-XXXXXXXX/listener-XXXXXXXX`` after it, at most 107 bytes in all on Linux) made
+    ``gdimitate batch`` with worker processes fail at its first file with ``OSError: AF_UNIX
+    path too long`` (Python < 3.14; a cluster job's ``$TMPDIR`` is often that long): the
+    batch now starts its workers by spawning there, and runs every file in them."""
+    from gdimitate.batch.run import SUN_PATH_MAX, forkserver_fits
+
+    assert forkserver_fits("/" + "x" * (SUN_PATH_MAX - 33)) is True  # 75 bytes: just fits
+    assert forkserver_fits("/" + "x" * (SUN_PATH_MAX - 32)) is False
+    demos = tmp_path / "demos"
+    demos.mkdir()
+    _mot_slices(demos, [0, 30], 40)
+    tmp = tmp_path / ("t" * max(1, 90 - len(str(tmp_path))))
+    tmp.mkdir()
+    assert not forkserver_fits(str(tmp))
+    out = tmp_path / "out"
+    p = subprocess.Popen([sys.executable, "-m", "gdimitate.apps.cli", "batch", str(demos),
+                          "--imitator", "hoap2", "--method", "analytic", "--out", str(out),
+                          "--workers", "2", "--executor", "process", "--quiet"],
+                         env={**os.environ, "TMPDIR": str(tmp)}, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    _, err = p.communicate(timeout=300)
+    assert "AF_UNIX" not in err and p.returncode in (0, 3), err[-2000:]
+    rows = _read_csv(out / "summary.csv")
+    assert sorted(r["file"] for r in rows) == ["walk0.mot", "walk1.mot"]
+    assert {r["status"] for r in rows} == {"done"}
+    assert p.pid not in {int(r["worker"].rsplit(":", 1)[1]) for r in rows}  # in workers
+    assert list(tmp.iterdir()) == []  # nothing left in the temporary folder
+
+
 def test_cli_batch_exit_status_and_table(inputs, tmp_path, capsys):
     from gdimitate.apps.cli import main
 
