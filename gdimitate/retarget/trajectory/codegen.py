@@ -8,13 +8,16 @@ user's cache folder (:func:`cache_dir`: ``$GDIMITATE_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/gdimitate``, else ``~/.cache/gdimitate``) under a key the caller derives from
 everything the expressions depend on (the robot's fingerprint, the list of parts, the code's
 own version), and loads it with ``casadi.external``. A later process with the same key loads
-the library without building or compiling anything; nothing is written to the working folder.
+the library without building or compiling anything; processes that miss the same library
+together compile it once (a build lock; the others wait and load it); nothing is written to
+the working folder.
 A machine without a C compiler (or a failed compilation) keeps CasADi's virtual machine and
 says so once in a :class:`SlowDerivativesWarning`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import shutil
@@ -23,7 +26,7 @@ import sys
 import tempfile
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import casadi as ca
@@ -189,13 +192,52 @@ def compiled_functions(key: str, make: Callable[[], list[ca.Function]], label: s
     compiled and cached (``label``, e.g. ``"g1's"``, names them in the message that says so);
     ``make()``'s own functions when no C compiler is available (``compiled`` False)."""
     lib = cache_dir() / f"knot-{key[:24]}.so"
+    cached = _load(lib)
+    if cached is not None:
+        return cached, True
+    with _building(lib):  # another process building the same library: wait, then load it
+        cached = _load(lib)
+        return (cached, True) if cached is not None else _compile(lib, make, label)
+
+
+def _load(lib: Path) -> dict[str, ca.Function] | None:
+    """The functions of the cached library ``lib`` (None: not there, or damaged)."""
     names_file = lib.with_suffix(".names")
-    if lib.exists() and names_file.exists():
-        names = names_file.read_text().split()
+    if not (lib.exists() and names_file.exists()):
+        return None
+    try:
+        return {n: ca.external(n, str(lib)) for n in names_file.read_text().split()}
+    except RuntimeError:
+        return None  # a damaged library: rebuild it
+
+
+@contextlib.contextmanager
+def _building(lib: Path) -> Iterator[None]:
+    """Hold the build lock of ``lib`` (an exclusive ``flock`` on ``<lib>.lock``; the system
+    releases it when its process ends): the processes of a batch or of a parallel test run
+    that miss the same library compile it once, the others waiting to load it. Without
+    ``fcntl`` (Windows) or a writable cache, no lock."""
+    try:
+        import fcntl
+
+        lib.parent.mkdir(parents=True, exist_ok=True)
+        f = open(lib.with_suffix(".lock"), "a")  # noqa: SIM115 — held across the yield
+    except (ImportError, OSError):
+        yield
+        return
+    with f:
+        fcntl.flock(f, fcntl.LOCK_EX)
         try:
-            return {n: ca.external(n, str(lib)) for n in names}, True
-        except RuntimeError:
-            pass  # a damaged library: rebuild it
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+def _compile(lib: Path, make: Callable[[], list[ca.Function]], label: str
+             ) -> tuple[dict[str, ca.Function], bool]:
+    """:func:`compiled_functions` on a cache miss: build, compile and cache ``make()``'s
+    functions into ``lib`` (its own, uncompiled, without a working C compiler)."""
+    names_file = lib.with_suffix(".names")
     funcs = make()
     cc = _compiler()
     if cc is None:

@@ -55,6 +55,47 @@ def test_compiled_once_then_loaded(tmp_path, monkeypatch, capfd):
                                    rtol=1e-14, atol=1e-15)
 
 
+_RACER = """
+import sys, time
+from pathlib import Path
+import casadi as ca
+from gdimitate.retarget.trajectory import codegen
+start, key = float(sys.argv[1]), sys.argv[2]
+def make():
+    x = ca.SX.sym("x", 40)
+    y = x
+    for _ in range(20):  # 65 k instructions: gcc takes about a second
+        y = ca.sin(ca.mtimes(ca.DM.ones(40, 40) / 40, y)) + x
+    return [ca.Function("racer", [x], [y])]
+time.sleep(max(0.0, start - time.time()))  # both processes miss the cache together
+funs, compiled = codegen.compiled_functions(key, make, "a racer's")
+print("COMPILED", codegen.COMPILE_COUNT, compiled, float(funs["racer"](1.0)[0][0]))
+"""
+
+
+def test_processes_missing_the_same_library_compile_it_once(tmp_path):
+    """Two processes that miss the same library at the same moment (a batch's workers, a
+    parallel test run, on an empty cache) compile it once: the second waits on the build
+    lock and loads what the first compiled. Both get the same numbers."""
+    import subprocess
+    import sys
+    import time
+
+    if codegen._compiler() is None:
+        pytest.skip("no C compiler on this machine")
+    env = {**os.environ, codegen.ENV: str(tmp_path / "cache")}
+    start = time.time() + 4.0  # after both interpreters have imported casadi and gdimitate
+    procs = [subprocess.Popen([sys.executable, "-c", _RACER, str(start), "race"], env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    lines = [next(x for x in out.splitlines() if x.startswith("COMPILED")).split()
+             for out, _ in outs]
+    assert sorted(int(x[1]) for x in lines) == [0, 1], outs  # one compiled, one loaded
+    assert all(x[2] == "True" for x in lines) and lines[0][3] == lines[1][3]
+    assert sum("compiling a racer's" in err for _, err in outs) == 1
+
+
 def test_no_compiler_falls_back_with_one_warning(tmp_path, monkeypatch):
     monkeypatch.setenv(codegen.ENV, str(tmp_path / "cache"))
     monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
