@@ -125,6 +125,17 @@ def _exit_on_sigterm(signum: int, frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
+def _pool_job(*task: Any) -> BatchRow:
+    """:func:`process_file` in a pool worker that ends with it when SIGTERM stops it: the
+    executor's worker loop catches a job's ``SystemExit`` and would take the next queued file
+    (then be killed while writing it, its temporary left in the output folder); here the
+    file's temporary is removed on the way out and the process exits."""
+    try:
+        return process_file(*task)
+    except SystemExit as e:
+        os._exit(e.code if isinstance(e.code, int) else 1)
+
+
 #: The longest AF_UNIX socket path, in bytes (Linux's ``sun_path`` holds 108 with its NUL).
 SUN_PATH_MAX = 107
 #: What the forkserver's socket adds to the temporary folder: ``/pymp-XXXXXXXX/listener-XXXXXXXX``.
@@ -173,7 +184,7 @@ def _run_process(tasks: Sequence[Task], workers: int, on_row: Callable[[BatchRow
                              initializer=_worker_init)
     finished = False
     try:
-        futures = {ex.submit(process_file, *t): t for t in tasks}
+        futures = {ex.submit(_pool_job, *t): t for t in tasks}
         for f in as_completed(futures):
             try:
                 row = f.result()

@@ -295,6 +295,41 @@ def test_cli_ctrl_c_stops_workers_and_keeps_finished_files(tmp_path, executor, s
     assert list(tmp.iterdir()) == []
 
 
+def test_a_worker_stopped_during_a_file_does_not_take_the_next(tmp_path):
+    """SIGTERM to a pool worker in the middle of a file (how a stopped batch ends its
+    workers): the file's temporary is removed and the worker exits. The executor's own loop
+    caught the job's ``SystemExit`` and took the next queued file, so a stop that waited 5 s
+    for it and then killed it could leave that file's temporary in the output folder (seen
+    once under load). Here the next file is never started."""
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    from gdimitate.batch.run import _context, _pool_job, _worker_init
+
+    demos, out = tmp_path / "demos", tmp_path / "out"
+    demos.mkdir()
+    out.mkdir()
+    warm, slow, nxt = _mot_slices(demos, [0, 10, 20], 60)
+    opts = BatchOptions("hoap2", method="optimal", simulate=True)  # seconds: solve, MuJoCo
+    with ProcessPoolExecutor(1, mp_context=_context(), initializer=_worker_init) as ex:
+        row = ex.submit(_pool_job, str(warm), str(out), ANALYTIC).result(120)
+        pid = int(row.worker.rsplit(":", 1)[1])  # the one worker
+        assert row.status == "done" and pid > 1 and pid != os.getpid()
+        assert pid in {c.pid for c in psutil.Process().children(recursive=True)}
+        first = ex.submit(_pool_job, str(slow), str(out), opts)
+        second = ex.submit(_pool_job, str(nxt), str(out), ANALYTIC)
+        time.sleep(0.5)  # into the slow file
+        assert not first.done()
+        os.kill(pid, signal.SIGTERM)
+        with pytest.raises(BrokenProcessPool):
+            first.result(60)
+        with pytest.raises(BrokenProcessPool):
+            second.result(60)
+    assert not output_paths(nxt, out, ANALYTIC)[0].exists()  # the next file never started
+    assert not output_paths(slow, out, opts)[0].exists()
+    assert not list(out.glob(".*.tmp*"))
+
+
 def test_a_temporary_folder_too_long_for_the_forkservers_socket(tmp_path):
     """A ``$TMPDIR`` whose path leaves no room for multiprocessing's forkserver socket
     (``/pymp-XXXXXXXX/listener-XXXXXXXX`` after it, at most 107 bytes in all on Linux) made
