@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .audit.report import AT_BOUND, AT_POSITION
+from .audit.report import AT_BOUND, at_bound
 
 __all__ = ["EXIT_NOT_FEASIBLE", "Verdict", "solver_record", "verdict", "gait_lines",
            "limits_at_bound", "push_errors", "report_lines", "written_gait_lines"]
@@ -213,15 +213,10 @@ def limits_at_bound(aud: Any, share: float = AT_BOUND) -> list[str]:
     ``share`` of its limit, most used first; then positions within
     :data:`~gdimitate.assess.audit.report.AT_POSITION` of a limit), as
     ``"velocity:J 1.00"`` — where a gait is not kept, the limits that may hold it back (at
-    their bound somewhere in the motion, not proven to be the cause)."""
-    out: list[tuple[float, str]] = []
-    for j in getattr(aud, "joints", ()):
-        for kind, r in (("torque", j.torque_ratio), ("velocity", j.velocity_ratio)):
-            if np.isfinite(r) and r >= share:
-                out.append((float(r), f"{kind}:{j.name} {r:.2f}"))
-        if np.isfinite(j.position_margin) and j.position_margin <= AT_POSITION:
-            out.append((0.0, f"position:{j.name}"))  # after the torques and velocities
-    return [x for _, x in sorted(out, key=lambda p: -p[0])]
+    their bound somewhere in the motion, not proven to be the cause;
+    :func:`~gdimitate.assess.audit.report.at_bound`)."""
+    return at_bound(((j.name, j.torque_ratio, j.velocity_ratio, j.position_margin)
+                     for j in getattr(aud, "joints", ())), share)
 
 
 def gait_lines(result: Any) -> list[str]:

@@ -24,12 +24,28 @@ __all__ = [
     "CORNER_NAMES",
     "AT_BOUND",
     "AT_POSITION",
+    "at_bound",
 ]
 
 #: A joint whose torque or velocity is at least this share of its limit is at its bound.
 AT_BOUND = 0.99
 #: A joint within this distance [rad or m] of a position limit is at its bound.
 AT_POSITION = 1e-3
+def at_bound(rows, share: float = AT_BOUND) -> list[str]:
+    """The limits at their bound among ``rows`` of ``(joint, torque ratio, velocity ratio,
+    position margin)`` (NaN: no such limit): a torque or velocity at ≥ ``share`` of its limit
+    as ``"torque:J 1.00"``, most used first, then a position within :data:`AT_POSITION` of a
+    limit as ``"position:J"`` — the one reading of "at its bound" every output uses."""
+    out: list[tuple[float, str]] = []
+    for name, tr, vr, pm in rows:
+        for kind, r in (("torque", tr), ("velocity", vr)):
+            if np.isfinite(r) and r >= share:
+                out.append((float(r), f"{kind}:{name} {r:.2f}"))
+        if np.isfinite(pm) and pm <= AT_POSITION:
+            out.append((0.0, f"position:{name}"))
+    return [x for _, x in sorted(out, key=lambda p: -p[0])]
+
+
 #: Names of the four sole corners in :meth:`gdimitate.model.contact.SoleContact.corners` order.
 CORNER_NAMES = ("front-left", "front-right", "back-right", "back-left")
 
@@ -269,14 +285,8 @@ class AuditReport:
         (at their bound, not proven to be the cause); empty without :attr:`joint_use`."""
         if self.joint_use is None or not 0 <= knot < len(self.joint_use):
             return []
-        out: list[tuple[float, str]] = []
-        for j, (tr, vr, pm) in zip(self.joints, self.joint_use[knot]):
-            for kind, r in (("torque", tr), ("velocity", vr)):
-                if np.isfinite(r) and r >= share:
-                    out.append((float(r), f"{kind}:{j.name} {r:.2f}"))
-            if np.isfinite(pm) and pm <= AT_POSITION:
-                out.append((0.0, f"position:{j.name}"))
-        return [x for _, x in sorted(out, key=lambda p: -p[0])]
+        return at_bound(((j.name, *use) for j, use in zip(self.joints, self.joint_use[knot])),
+                        share)
 
     @property
     def force_direction_error(self) -> dict[str, ForceDirectionAudit | None]:
