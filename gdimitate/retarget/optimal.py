@@ -59,11 +59,11 @@ def adapt_optimal(demo: Motion, demonstrator: Robot, imitator: Robot, force: str
       demonstration's durations × √r (the motion's times then run on that clock); the
       result's ``gait`` (:class:`~gdimitate.model.footsteps.GaitComparison`) measures the steps
       against the demonstrator's so scaled;
-    - ``stride_retry`` (default True): a 3-D motion that is audit-feasible but travels less
-      than 0.8 of the scaled demonstrator's distance is solved again with the gait's weights
-      raised, and the second motion kept only where it is audit-feasible, misses no goal by
-      more and travels further (:mod:`.trajectory.stride`; ``solver.retry`` says what
-      happened); False: one solve;
+    - ``stride_retry`` (default True; the trajectory mode — a stream follows its frames): a
+      3-D motion that is audit-feasible but travels less than 0.8 of the scaled
+      demonstrator's distance is solved again with the gait's weights raised, and the second
+      motion kept only where it is audit-feasible, misses no goal by more and travels further
+      (:mod:`.trajectory.stride`; ``solver.retry`` says what happened); False: one solve;
     - ``periodic`` (default False): a periodic gait cycle (:mod:`.trajectory.periodic`) — one
       stride, heel strike to heel strike of the right foot, whose last knot is its first shifted
       by one stride (:class:`~.parts.periodic.PeriodicSeam`), the audit with its seam checks.
