@@ -309,8 +309,9 @@ def test_a_worker_stopped_during_a_file_does_not_take_the_next(tmp_path):
     demos, out = tmp_path / "demos", tmp_path / "out"
     demos.mkdir()
     out.mkdir()
-    warm, slow, nxt = _mot_slices(demos, [0, 10, 20], 60)
-    opts = BatchOptions("hoap2", method="optimal", simulate=True)  # seconds: solve, MuJoCo
+    warm, nxt = _mot_slices(demos, [0, 20], 60)
+    (slow,) = _mot_slices(demos, [0], 151, prefix="whole")  # the whole walk: seconds
+    opts = BatchOptions("hoap2", method="optimal", simulate=True)
     with ProcessPoolExecutor(1, mp_context=_context(), initializer=_worker_init) as ex:
         row = ex.submit(_pool_job, str(warm), str(out), ANALYTIC).result(120)
         pid = int(row.worker.rsplit(":", 1)[1])  # the one worker
@@ -318,7 +319,7 @@ def test_a_worker_stopped_during_a_file_does_not_take_the_next(tmp_path):
         assert pid in {c.pid for c in psutil.Process().children(recursive=True)}
         first = ex.submit(_pool_job, str(slow), str(out), opts)
         second = ex.submit(_pool_job, str(nxt), str(out), ANALYTIC)
-        time.sleep(0.5)  # into the slow file
+        time.sleep(0.3)  # into the slow file
         assert not first.done()
         os.kill(pid, signal.SIGTERM)
         with pytest.raises(BrokenProcessPool):
