@@ -52,14 +52,12 @@ def kept(first: Any, again: Any) -> Any:
     ``first`` and travels further, else ``first``; the solver record of the result counts
     both solves' iterations and time and says in ``retry`` what happened."""
     r1, r2 = first.gait.travel_ratio, again.gait.travel_ratio
-    take = bool(again.audit.feasible and _goal_miss(again) <= _goal_miss(first) and r2 > r1)
-    why = "kept" if take else "not kept (" + (
-        "audit-infeasible" if not again.audit.feasible else
-        "a goal missed by more" if _goal_miss(again) > _goal_miss(first) else
-        "no further") + ")"
+    why = ("audit-infeasible" if not again.audit.feasible else
+           "a goal missed by more" if _goal_miss(again) > _goal_miss(first) else
+           "no further" if not r2 > r1 else "")
     note = (f"travel {r1:.2f} of the scaled demonstrator's: solved again with the gait's "
-            f"weights × {STRIDE_RETRY:g}: {r2:.2f}, {why}")
-    out = again if take else first
+            f"weights × {STRIDE_RETRY:g}: {r2:.2f}, " + (f"not kept ({why})" if why else "kept"))
+    out = first if why else again
     s1, s2 = first.solver, again.solver
     solver = dataclasses.replace(out.solver, iterations=s1.iterations + s2.iterations,
                                  time_s=s1.time_s + s2.time_s, retry=note)
