@@ -24,6 +24,10 @@ the sole measurement and the viewer apply): as loaded, iCub's meshes lie 90° of
 thighs horizontal, the chest in front of the torso, each foot across its leg — so the left
 thigh sat 1.5 cm from the chest and the left foot 1 mm from the right ankle at the neutral
 pose, and the adaptor's sphere rows, cut from those shapes, held the thighs off the chest.
+
+:class:`Proximity` measures, along a sequence of configurations, only the pairs that may be
+near (a lower bound on each pair's distance kept from call to call): the audit's closest pair
+per knot and the streaming mode's collision rows, with the answers of measuring every pair.
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ import pinocchio as pin
 from ..errors import InvalidInputError
 from .meshes import ASSIMP_Y_UP_UNDO, collada_y_up
 
-__all__ = ["SelfCollision", "self_collision", "limb_groups", "placement", "TRUNK"]
+__all__ = ["SelfCollision", "Proximity", "self_collision", "limb_groups", "placement", "TRUNK"]
 
 TRUNK = "trunk"
 #: Default clearance [m] below which a pair at the neutral pose is left out.
@@ -119,18 +123,155 @@ class SelfCollision:
     def distances(self, q: np.ndarray) -> np.ndarray:
         """Signed distances ``(T, P)`` [m] of the checked pairs at configurations ``q``
         ``(T, nq)`` (or ``(P,)`` for one ``(nq,)``); negative where two shapes overlap."""
-        q = np.asarray(q, dtype=float)
-        one = q.ndim == 1
-        Q = np.atleast_2d(q)
-        if Q.shape[1] != self.model.nq:
-            raise InvalidInputError(f"q has {Q.shape[1]} columns; the model has nq = "
-                                    f"{self.model.nq}")
+        Q, one = self._configurations(q)
         data, gdata = self.model.createData(), pin.GeometryData(self.geometry)
         out = np.empty((Q.shape[0], len(self.pairs)))
         for k, qk in enumerate(Q):
             pin.computeDistances(self.model, data, self.geometry, gdata, qk)
             out[k] = [r.min_distance for r in gdata.distanceResults]
         return out[0] if one else out
+
+    def closest(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The closest pair at each configuration of ``q`` ``(T, nq)``: its signed distance
+        ``(T,)`` [m] and its index into :attr:`pairs` ``(T,)`` — ``distances(q)``'s row minima
+        and their indices, measuring only the pairs that could be closest
+        (:class:`Proximity`)."""
+        Q, _ = self._configurations(q)
+        data, near = self.model.createData(), Proximity(self)
+        dist, which = np.empty(Q.shape[0]), np.empty(Q.shape[0], int)
+        for k, qk in enumerate(Q):
+            pin.forwardKinematics(self.model, data, qk)
+            dist[k], which[k] = near.closest(data)
+        return dist, which
+
+    def _configurations(self, q) -> tuple[np.ndarray, bool]:
+        q = np.asarray(q, dtype=float)
+        Q = np.atleast_2d(q)
+        if Q.shape[1] != self.model.nq:
+            raise InvalidInputError(f"q has {Q.shape[1]} columns; the model has nq = "
+                                    f"{self.model.nq}")
+        return Q, q.ndim == 1
+
+
+class Proximity:
+    """Which pairs of a :class:`SelfCollision` may be near, along a sequence of
+    configurations, with as few exact distances as can be: a lower bound on each pair's
+    signed distance, kept from call to call, decides which pairs are measured (coal's GJK,
+    ~7 µs a pair).
+
+    The bound is the larger of two, both exact bounds (never above the distance):
+    - the bounding spheres' gap ``|c_a − c_b| − r_a − r_b`` (each geometry in its local
+      bounding box's sphere, coal's ``aabb_center`` and ``aabb_radius``: a shape inside its
+      sphere is never closer to another than the spheres, nor deeper inside it);
+    - the pair's last measured distance less how far each of its two shapes has moved since
+      (a signed distance changes by at most the largest displacement of a point of either
+      shape): ``|Δc| + r·|2 sin(θ/2)|`` for a shape whose sphere's centre moved by ``Δc``
+      and which turned by the angle ``θ``, ``(2 sin(θ/2))² = 3 − tr(R_new R_oldᵀ)``.
+
+    So a pair is measured only where its bound falls below the distance asked about (Talos
+    walking: ~25 of its 988 pairs a frame, against ~70 by the spheres alone), and the answers
+    are those of measuring every pair (up to GJK's tolerance, 1e-6 m)."""
+
+    def __init__(self, collision: SelfCollision):
+        geom = collision.geometry
+        self.c = collision
+        centre, radius = [], []
+        for g in geom.geometryObjects:
+            shape = g.geometry
+            shape.computeLocalAABB()
+            centre.append(g.placement.act(np.asarray(shape.aabb_center, float)))
+            radius.append(float(shape.aabb_radius))
+        self.radius = np.array(radius)  # (G,) [m]
+        self.centre = np.array(centre).reshape(-1, 3)  # in each parent joint's frame (G, 3)
+        parent = np.array([int(g.parentJoint) for g in geom.geometryObjects], int)
+        self.pairs = np.array([(p.first, p.second) for p in geom.collisionPairs],
+                              int).reshape(-1, 2)  # geometry indices (P, 2)
+        self.joints = parent[self.pairs]  # each pair's parent joints (P, 2)
+        used, self._of = np.unique(parent, return_inverse=True)
+        self._used = [int(j) for j in used]
+        self.gdata = pin.GeometryData(geom)
+        #: the joints' placements (U, 4, 4) and each pair's lower bound (P,) at the last call
+        self._H: np.ndarray | None = None
+        self._low = np.full(len(self.pairs), -np.inf)
+
+    def bounds(self, data) -> np.ndarray:
+        """``(P,)`` lower bounds [m] of the pairs' signed distances at ``data``'s joint
+        placements (``data.oMi``), and the geometries placed there for :meth:`distance`."""
+        pin.updateGeometryPlacements(self.c.model, data, self.c.geometry, self.gdata)
+        H = np.array([data.oMi[j].homogeneous for j in self._used])  # (U, 4, 4)
+        R, t = H[self._of, :3, :3], H[self._of, :3, 3]
+        w = (R @ self.centre[:, :, None])[:, :, 0] + t  # sphere centres, world (G, 3)
+        a, b = self.pairs[:, 0], self.pairs[:, 1]
+        low = np.linalg.norm(w[a] - w[b], axis=1) - self.radius[a] - self.radius[b]
+        if self._H is not None:
+            R0, t0 = self._H[self._of, :3, :3], self._H[self._of, :3, 3]
+            w0 = (R0 @ self.centre[:, :, None])[:, :, 0] + t0
+            turn = np.sqrt(np.maximum(3.0 - np.einsum("gij,gij->g", R, R0), 0.0))
+            moved = np.linalg.norm(w - w0, axis=1) + self.radius * turn  # (G,)
+            low = np.maximum(low, self._low - moved[a] - moved[b])
+        self._H, self._low = H, low
+        return low
+
+    def distance(self, i: int):
+        """Pair ``i``'s coal ``DistanceResult`` at the placements of the last :meth:`bounds`
+        (its bound becomes that distance)."""
+        r = pin.computeDistance(self.c.geometry, self.gdata, int(i))
+        self._low[i] = r.min_distance
+        return r
+
+    def within(self, data, watch: float, among: np.ndarray | None = None
+               ) -> tuple[np.ndarray, list]:
+        """The pairs (of ``among``, indices; None: all) closer than ``watch`` [m] at
+        ``data``'s joint placements: their indices ``(K,)`` and coal ``DistanceResult`` objects."""
+        low = self.bounds(data)
+        cand = np.flatnonzero(low < watch) if among is None else among[low[among] < watch]
+        res = [self.distance(i) for i in cand]
+        keep = [k for k, r in enumerate(res) if r.min_distance < watch]
+        return cand[keep], [res[k] for k in keep]
+
+    def near(self, data, watch: float, among: np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pairs (of ``among``; None: all) closer than ``watch`` [m] at ``data``'s
+        configuration, whose joint Jacobians are computed (``pin.computeJointJacobians``):
+        their indices ``(K,)``, signed distances ``(K,)`` [m] and the distances' rates per
+        velocity ``(K, nv)``: ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` the unit
+        normal from a to b), so ``ḋ = J_d v``."""
+        m = self.c.model
+        idx, res = self.within(data, watch, among)
+        if not idx.size:
+            return idx, np.zeros(0), np.zeros((0, m.nv))
+        dist = np.array([r.min_distance for r in res])
+        n = np.array([r.normal for r in res], float)  # (K, 3)
+        pts = np.array([(r.getNearestPoint1(), r.getNearestPoint2()) for r in res],
+                       float)  # (K, 2, 3)
+        jt = self.joints[idx]  # (K, 2)
+        J = np.zeros((m.njoints, 6, m.nv))
+        origin = np.zeros((m.njoints, 3))
+        for j in np.unique(jt):
+            if j > 0:  # the universe does not move
+                J[j] = pin.getJointJacobian(m, data, int(j),
+                                            pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+                origin[j] = data.oMi[int(j)].translation
+        r = pts - origin[jt]  # each nearest point from its joint's origin (K, 2, 3)
+        # nᵀ(v + ω × r) = nᵀ v + (r × n)ᵀ ω at each point; a's moves it away from b
+        c = np.concatenate([np.broadcast_to(n[:, None], r.shape), np.cross(r, n[:, None])], 2)
+        c[:, 0] *= -1.0
+        rate = (c.reshape(-1, 1, 12) @ J[jt].reshape(-1, 12, m.nv))[:, 0]
+        return idx, dist, rate
+
+    def closest(self, data) -> tuple[float, int]:
+        """The closest pair at ``data``'s joint placements: its signed distance [m] and index
+        (``inf, -1`` without pairs); measured in the order of their bounds, until the next
+        bound is no less than the least distance found."""
+        low = self.bounds(data)
+        best, arg = np.inf, -1
+        for i in np.argsort(low):
+            if low[i] >= best:
+                break
+            r = self.distance(int(i)).min_distance
+            if r < best:
+                best, arg = r, int(i)
+        return best, arg
 
 
 def _convex(geom: pin.GeometryModel) -> pin.GeometryModel:

@@ -382,10 +382,9 @@ def _self_collision(robot, motion, margin, tol, add) -> SelfCollisionAudit | Non
     sc = self_collision(robot)
     if sc is None or not sc.pairs:
         return None
-    D = sc.distances(motion.q)
-    closest = D.min(axis=1)
+    closest, pair = sc.closest(motion.q)
     c = add(_make("self_collision", closest, margin - tol.self_collision, "min", "m", 0.05))
-    return SelfCollisionAudit(c.value, c.knot, sc.pairs[int(np.argmin(D[c.knot]))],
+    return SelfCollisionAudit(c.value, c.knot, sc.pairs[int(pair[c.knot])],
                               float(margin), len(sc.pairs), sc.excluded)
 
 

@@ -41,7 +41,8 @@ import pinocchio as pin
 from ...model.footsteps import sole_frames
 from ...model.heading import yaw_matrix
 from ...model.robot import SIDES
-from .receding import Tasks, distance_rows, q_of_v
+from ...model.selfcollision import Proximity
+from .receding import Tasks, q_of_v
 
 __all__ = ["FrameReference"]
 
@@ -470,9 +471,15 @@ BASE_HEIGHTS, SOLE_TOL = (0.92, 0.88, 0.84, 0.80, 0.75, 0.70), 1e-4
 #: the least distance [m] of the robot's own collision pairs at the first frame (Talos at the
 #: shipped walk's frame 1.0 s: its right gripper 4.4 cm inside its thigh, which the first
 #: step's collision rows could not undo within its torque limits)
-START_CLEARANCE, CLEARANCE_WEIGHT, NEAR = 3e-3, 1e5, 0.1
-#: every REFRESH-th Gauss–Newton step measures all the pairs; in between, those within NEAR
+START_CLEARANCE, CLEARANCE_WEIGHT, NEAR = 3e-3, 1e6, 0.1
+#: every REFRESH-th Gauss–Newton step chooses the pairs within NEAR whose rows it may take
 REFRESH = 10
+#: the largest Gauss–Newton step [rad, m] on any coordinate (a longer one is scaled down):
+#: undamped, Talos's steps at the walk's pose 1.0 s in swept its limbs through each other
+#: and back, chaotically (a 1e-11 difference in one row grew to 0.4 m in ten steps), and ended
+#: with its gripper 4.3 cm inside its thigh or 3.7 mm clear by chance; damped, 3.1 mm clear,
+#: in fewer steps on every robot and start tried
+GN_STEP = 0.2
 #: the first frame's Gauss–Newton steps stop when no coordinate moves more than STILL [rad, m]
 STILL = 1e-10
 
@@ -553,7 +560,7 @@ def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: d
     z_root = d.oMi[root].translation[2] - min(d.oMf[f].translation[2] for f in fids.values())
     rot = f0["base"] if f0["base"] is not None else ref.root0
     targets = f0["joints"]
-    near = _Near(m, collision)
+    near = _Near(collision)
     qa, vl = q_of_v(m, act_idx), _leg_dofs(m, fids, act_idx)  # vl: held at their limits
     for _ in range(iterations):
         pin.computeJointJacobians(m, d, q)
@@ -582,10 +589,11 @@ def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: d
         J.append(Js)
         e.append(targets - q[qa])
         w.append(np.full(act_idx.size, 0.1))
-        near.rows(q, d, J, e, w)
+        near.rows(d, J, e, w)
         Ja, ea, wa = np.vstack(J), np.concatenate(e), np.concatenate(w)
         dq = _bounded_step(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv), Ja.T @ (wa * ea),
                            m, q, vl)
+        dq *= min(1.0, GN_STEP / max(float(np.max(np.abs(dq))), 1e-300))
         q = np.clip(pin.integrate(m, q, dq), m.lowerPositionLimit, m.upperPositionLimit)
         if np.max(np.abs(dq)) < STILL:  # converged
             break
@@ -595,42 +603,32 @@ def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: d
     return q, err
 
 
-
 class _Near:
     """:func:`initial_pose`'s self-collision rows: each pair of ``collision`` (a
     :class:`~gdimitate.model.selfcollision.SelfCollision`, or None: none) closer than
-    :data:`START_CLEARANCE` asks, weighted :data:`CLEARANCE_WEIGHT`, to be that far apart."""
+    :data:`START_CLEARANCE` asks, weighted :data:`CLEARANCE_WEIGHT`, to be that far apart —
+    among the pairs within :data:`NEAR` at the last of every :data:`REFRESH` steps (a pair
+    the Gauss–Newton steps swept into from farther off is left alone until then: with every
+    pair, Talos's steps at the walk's pose 1.0 s in went through its limbs and back, and
+    its gripper stayed 2.7 cm inside its thigh)."""
 
-    def __init__(self, m, collision):
-        self.m, self.c = m, collision
-        self.near = np.zeros(0, int)  # the pairs closer than NEAR [m] at the last refresh
-        self.calls = 0
+    def __init__(self, collision):
+        self.c, self.calls = collision, 0
+        self.among = np.zeros(0, int)
         if collision is not None:
-            g = collision.geometry
-            self.gdata = pin.GeometryData(g)
-            self.joints = [(int(g.geometryObjects[p.first].parentJoint),
-                            int(g.geometryObjects[p.second].parentJoint))
-                           for p in g.collisionPairs]
+            self.proximity = Proximity(collision)
 
-    def rows(self, q: np.ndarray, d, J: list, e: list, w: list) -> None:
-        """Append the rows at ``q`` (``d``: its data, joint Jacobians computed)."""
+    def rows(self, d, J: list, e: list, w: list) -> None:
+        """Append the rows at ``d``'s configuration (joint Jacobians computed)."""
         if self.c is None:
             return
-        g = self.c.geometry
-        if self.calls % REFRESH == 0:  # every pair; in between, those that were near
-            pin.computeDistances(self.m, d, g, self.gdata, q)
-            self.near = np.flatnonzero([r.min_distance < NEAR
-                                        for r in self.gdata.distanceResults])
-        else:
-            pin.updateGeometryPlacements(self.m, d, g, self.gdata, q)
-            for i in self.near:
-                pin.computeDistance(g, self.gdata, int(i))
+        if self.calls % REFRESH == 0:
+            self.among = self.proximity.within(d, NEAR)[0]
         self.calls += 1
-        for dist, Jd in distance_rows(self.m, d, self.gdata, self.joints, self.near,
-                                      START_CLEARANCE):
-            J.append(Jd[None])
-            e.append(np.array([START_CLEARANCE - dist]))
-            w.append(np.array([CLEARANCE_WEIGHT]))
+        _, dist, Jd = self.proximity.near(d, START_CLEARANCE, self.among)
+        J.append(Jd)
+        e.append(START_CLEARANCE - dist)
+        w.append(np.full(dist.size, CLEARANCE_WEIGHT))
 
 
 def _leg_dofs(m, fids: dict, act_idx: np.ndarray) -> np.ndarray:

@@ -37,6 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...model.robot import SIDES
+from ...model.selfcollision import Proximity, self_collision
 
 __all__ = ["FrameQP", "Tasks", "SOLVED"]
 
@@ -52,9 +53,6 @@ TORQUE_MARGIN, VELOCITY_MARGIN, FLOOR_MARGIN = 1e-3, 1e-3, 5e-4
 #: pairs of the robot's own collision geometries closer than COLLISION_WATCH [m] at knot j
 #: get a row keeping them COLLISION_MARGIN [m] apart at the next knot
 COLLISION_WATCH, COLLISION_MARGIN = 0.03, 1e-3
-#: every COLLISION_EVERY-th frame all pairs are measured; in between, those that were closer
-#: than COLLISION_NEAR [m] (Talos: 77 of 999 pairs at its neutral pose; 0.07 ms, not 0.75)
-COLLISION_EVERY, COLLISION_NEAR = 5, 0.1
 #: re-linearise the next knot's sole rows when the step moves a held foot faster than this [m/s]
 AHEAD_TOL, PASSES = 2e-5, 6
 #: from the second pass on, a proximal term PROXIMAL/2 |a − a_lin|² [rad/s²]⁻² keeps each pass
@@ -148,15 +146,9 @@ class FrameQP:
         self.lim_v = np.flatnonzero(np.isfinite(vel) & (vel < 1e30) & (vel > 0))
         self.vel = vel[self.lim_v]
         self.pos = _position_rows(m, self.act_idx)
-        from ...model.selfcollision import self_collision
-
         self.sc = self_collision(robot)  # the audit's pairs (None: no collision geometry)
         if self.sc is not None:
-            self.gdata, self.dc = pin.GeometryData(self.sc.geometry), m.createData()
-            self.sc_joints = [(int(self.sc.geometry.geometryObjects[p.first].parentJoint),
-                               int(self.sc.geometry.geometryObjects[p.second].parentJoint))
-                              for p in self.sc.geometry.collisionPairs]
-            self._near, self._count = np.arange(len(self.sc_joints)), 0
+            self.proximity = Proximity(self.sc)
         self.q_act = q_of_v(m, self.act_idx)
         legs = {jm for x in SIDES for jm in m.supports[m.frames[self.fid[x]].parentJoint]}
         leg_v = {m.joints[j].idx_v for j in legs if j > 0}
@@ -362,25 +354,13 @@ class FrameQP:
         demonstrator does."""
         if self.sc is None:
             return
-        m, d, geom, gd = self.m, self.dc, self.sc.geometry, self.gdata
-        pin.computeJointJacobians(m, d, q)
-        if self._count % COLLISION_EVERY == 0:
-            pin.computeDistances(m, d, geom, gd, q)
-            dist = np.array([r.min_distance for r in gd.distanceResults])
-            self._near = np.flatnonzero(dist < COLLISION_NEAR)
-        else:
-            pin.updateGeometryPlacements(m, d, geom, gd, q)
-            for i in self._near:
-                pin.computeDistance(geom, gd, int(i))
-        self._count += 1
-        A, lb = [], []
-        for dist, Jd in distance_rows(m, d, gd, self.sc_joints, self._near, COLLISION_WATCH):
-            A.append(h * h * Jd)
-            lb.append(COLLISION_MARGIN - dist - h * Jd @ v)
-        if A:
-            M = np.zeros((len(A), rows.n))
-            M[:, :m.nv] = np.array(A)
-            rows.add(M, np.full(len(A), 1e30), np.array(lb), 0, "collision")
+        m = self.m  # self.d: the joint placements and Jacobians at q (_terms)
+        _, dist, Jd = self.proximity.near(self.d, COLLISION_WATCH)
+        if dist.size:
+            M = np.zeros((dist.size, rows.n))
+            M[:, :m.nv] = h * h * Jd
+            rows.add(M, np.full(dist.size, 1e30), COLLISION_MARGIN - dist - h * Jd @ v, 0,
+                     "collision")
 
     def _feet_ahead(self, rows, t, v, h, nxt, tk: Tasks, ahead, a_lin) -> float:
         """Rows of the next knot's soles; returns how far the feet held still or at rest
@@ -469,32 +449,6 @@ def _solve(H, f, A, up, lo, sense, kind) -> tuple[np.ndarray, int]:
         if flag in SOLVED:
             return np.asarray(x), 2
     return np.linalg.lstsq(H + 1e-9 * np.eye(H.shape[0]), -f, rcond=None)[0], int(flag)
-
-
-def distance_rows(m, d, gdata, joints: list, pairs, watch: float) -> list:
-    """``[(distance [m], ∂distance/∂v (nv,)), ...]`` of the collision ``pairs`` (indices into
-    ``gdata.distanceResults``, computed at ``d``'s configuration, whose joint Jacobians are
-    computed) closer than ``watch`` [m]; ``joints``: each pair's parent joints ``(a, b)``.
-    ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` from a to b)."""
-    out, jac = [], {}
-    for i in pairs:
-        res, (ja, jb) = gdata.distanceResults[int(i)], joints[int(i)]
-        if res.min_distance >= watch:
-            continue
-        n = np.asarray(res.normal, float)
-        Jd = np.zeros(m.nv)
-        for j, p, sgn in ((jb, res.getNearestPoint2(), 1.0),
-                          (ja, res.getNearestPoint1(), -1.0)):
-            if j > 0:
-                if j not in jac:
-                    jac[j] = pin.getJointJacobian(m, d, j, _LWA)
-                J = jac[j]
-                r = np.asarray(p) - d.oMi[j].translation
-                rn = np.array([r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2],
-                               r[0] * n[1] - r[1] * n[0]])
-                Jd += sgn * (n @ J[:3] + rn @ J[3:])  # nᵀ(v + ω × r) = nᵀv + (r × n)ᵀω
-        out.append((float(res.min_distance), Jd))
-    return out
 
 
 def _cone(c, margin: float) -> np.ndarray:
