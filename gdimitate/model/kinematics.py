@@ -33,7 +33,7 @@ from .urdfgen import PLANAR_BASE
 if TYPE_CHECKING:
     from .robot import Robot
 
-__all__ = ["Placements", "actuated_v_indices", "anchor_schedule", "anchored_base_offsets",
+__all__ = ["Placements", "cross", "actuated_v_indices", "anchor_schedule", "anchored_base_offsets",
            "base_joint_id", "base_nq", "base_v_indices", "check_q", "frame_paths",
            "frame_placements", "frame_rotations", "joint_paths", "kinematic_contact",
            "robot_motion", "PLANAR_BASE"]
@@ -222,3 +222,17 @@ def robot_motion(robot: Robot, t: np.ndarray, q: np.ndarray,
     nqs = tuple(int(m.joints[i].nq) for i in range(1, m.njoints))
     return Motion(t=t, joint_names=robot.joint_names, q=check_q(robot, q), contact=contact,
                   base_nq=base_nq(robot), joint_nq=nqs)
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` along the last axis (``(..., 3)`` each, broadcast): ``np.cross`` without its
+    axis handling (~25 µs a call for two 3-vectors with numpy 2; 2 µs here)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.ndim == 1 and b.ndim == 1:
+        a0, a1, a2 = a.tolist()
+        b0, b1, b2 = b.tolist()
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    return a[..., _NEXT] * b[..., _AFTER] - a[..., _AFTER] * b[..., _NEXT]
+
+
+_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])

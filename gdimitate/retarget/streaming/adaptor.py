@@ -78,7 +78,8 @@ LANDED_GAP, LANDED_SPEED = 9e-4, 0.05
 #: in the air until one lands (its stance held it where it was — a live stream's step after a
 #: restart, whose gap of dropped frames made it long, left G1's left sole 1.6 mm up for the 68
 #: frames of its stance; kept down as the only support, a sole 10.8 mm up for 13 frames)
-HOVER_GAP = AuditTolerances().contact_gap
+_TOLERANCES = AuditTolerances()
+HOVER_GAP = _TOLERANCES.contact_gap
 #: after RECOVER_AFTER lost frames in a row — whose hard rows could not all hold (relaxed,
 #: failed or coasting), or whose stance sole slipped past the audit's tolerance — the stream
 #: starts again at the next frame, as a stream joined there does: the robot stood where it
@@ -490,7 +491,7 @@ class StreamingAdaptor:
         """Whether a foot in stance since an earlier frame has moved, at the frame just
         committed, further from where its stance began than the audit allows (its ``slip``
         and ``slip_rotation`` tolerances): the frame is lost though its QP held."""
-        data, tol = self._qp.d1, AuditTolerances()  # _commit's kinematics of the new frame
+        data, tol = self._qp.d1, _TOLERANCES  # _commit's kinematics of the new frame
         for s, start in self._anchor.items():
             if not own[s]:
                 continue

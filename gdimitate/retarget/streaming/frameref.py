@@ -173,7 +173,7 @@ class FrameReference:
 
     def _centre(self, poses: dict, f: dict) -> np.ndarray:
         down = [x for x in SIDES if f["contact"][x]] or list(SIDES)
-        return np.mean([poses[x].translation[:2] for x in down], axis=0)
+        return sum(poses[x].translation[:2] for x in down) / len(down)
 
     def _map(self, p: np.ndarray) -> np.ndarray:
         return self.k * p[:2] + self.off
@@ -190,8 +190,8 @@ class FrameReference:
         h = max(f2["t"] - f0["t"], 1e-9)
         hs = [x for x in SIDES if f1["contact"][x] and x in anchors]
         if hs:
-            ctr = np.mean([anchors[x].translation[:2] for x in hs], axis=0)
-            dem = np.mean([f1["soles"][x].translation[:2] for x in hs], axis=0)
+            ctr = sum(anchors[x].translation[:2] for x in hs) / len(hs)  # (np.mean: 10×)
+            dem = sum(f1["soles"][x].translation[:2] for x in hs) / len(hs)
             gain = min(1.0, (f2["t"] - f1["t"]) / TAU_OFFSET)
             self.off = self.off + gain * (ctr - self.k * dem - self.off)
         com = [np.append(self._map(f["com"]), self.z0 + self.s * (f["com"][2] - self.zd0))

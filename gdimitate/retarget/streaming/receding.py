@@ -36,6 +36,7 @@ import daqp
 import numpy as np
 import pinocchio as pin
 
+from ...model.kinematics import cross
 from ...model.robot import SIDES
 from ...model.selfcollision import Proximity, self_collision
 
@@ -465,7 +466,7 @@ def _across(d: np.ndarray) -> np.ndarray:
     ref = np.array([0.0, 1.0, 0.0]) if abs(d[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
     e1 = ref - (ref @ d) * d
     e1 /= np.linalg.norm(e1)
-    return np.array([e1, np.cross(d, e1)])
+    return np.array([e1, cross(d, e1)])
 
 
 def q_of_v(m, vi: np.ndarray) -> np.ndarray:
