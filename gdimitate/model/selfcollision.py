@@ -234,7 +234,7 @@ class Proximity:
         ``data``'s joint placements: their indices ``(K,)`` and coal ``DistanceResult`` objects."""
         low = self.bounds(data)
         cand = np.flatnonzero(low < watch) if among is None else among[low[among] < watch]
-        res = [self.distance(i) for i in cand]
+        res = [self.distance(int(i)) for i in cand]
         keep = [k for k, r in enumerate(res) if r.min_distance < watch]
         return cand[keep], [res[k] for k in keep]
 
