@@ -68,12 +68,8 @@ def turn_points(p: np.ndarray, yaw: float, about: np.ndarray | None = None) -> n
     """Points ``p`` ``(..., 3)`` [m] turned by ``yaw`` [rad] about the vertical through
     ``about`` ``(2,)`` (default: the origin); NaN rows stay NaN."""
     p = np.asarray(p, float)
-    ox, oy = (0.0, 0.0) if about is None else (float(about[0]), float(about[1]))
-    c, s = np.cos(yaw), np.sin(yaw)
-    out = p.copy()
-    dx, dy = p[..., 0] - ox, p[..., 1] - oy
-    out[..., 0], out[..., 1] = c * dx - s * dy + ox, s * dx + c * dy + oy
-    return out
+    c = np.zeros(3) if about is None else np.r_[np.asarray(about, float)[:2], 0.0]
+    return (p - c) @ yaw_matrix(yaw).T + c
 
 
 def turn_motion(motion: Motion, yaw: float, about: np.ndarray | None = None) -> Motion:
@@ -99,11 +95,9 @@ def turn_configurations(q: np.ndarray, yaw: float, about: np.ndarray | None = No
     q = np.array(q, float)
     flat = q.reshape(-1, q.shape[-1])
     flat[:, :3] = turn_points(flat[:, :3], yaw, about)
-    # the yaw's quaternion (0, 0, s, c) (x, y, z, w: Pinocchio's order) times each base's
-    c, s = np.cos(yaw / 2), np.sin(yaw / 2)
-    x, y, z, w = flat[:, 3].copy(), flat[:, 4].copy(), flat[:, 5].copy(), flat[:, 6].copy()
-    flat[:, 3], flat[:, 4] = c * x - s * y, c * y + s * x
-    flat[:, 5], flat[:, 6] = c * z + s * w, c * w - s * z
+    Q = pin.Quaternion(yaw_matrix(yaw))
+    for i in range(len(flat)):
+        flat[i, 3:7] = (Q * pin.Quaternion(flat[i, 3:7])).coeffs()
     return flat.reshape(q.shape)
 
 
