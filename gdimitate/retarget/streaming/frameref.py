@@ -477,8 +477,10 @@ REFRESH = 10
 #: the largest Gauss–Newton step [rad, m] on any coordinate (a longer one is scaled down):
 #: undamped, Talos's steps at the walk's pose 1.0 s in swept its limbs through each other
 #: and back, chaotically (a 1e-11 difference in one row grew to 0.4 m in ten steps), and ended
-#: with its gripper 4.3 cm inside its thigh or 3.7 mm clear by chance; damped, 3.1 mm clear,
-#: in fewer steps on every robot and start tried
+#: with its gripper 4.3 cm inside its thigh or 3.7 mm clear by chance; damped (and the
+#: clearance rows weighing 1e6, not 1e5), 3.0 mm clear. The steps still do not all converge
+#: (100 a base height on several robots and starts, the collision rows' set flipping), with
+#: the soles within 1.5e-5 of their goals
 GN_STEP = 0.2
 #: the first frame's Gauss–Newton steps stop when no coordinate moves more than STILL [rad, m]
 STILL = 1e-10
