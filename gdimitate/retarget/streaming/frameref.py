@@ -471,17 +471,9 @@ BASE_HEIGHTS, SOLE_TOL = (0.92, 0.88, 0.84, 0.80, 0.75, 0.70), 1e-4
 #: the least distance [m] of the robot's own collision pairs at the first frame (Talos at the
 #: shipped walk's frame 1.0 s: its right gripper 4.4 cm inside its thigh, which the first
 #: step's collision rows could not undo within its torque limits)
-START_CLEARANCE, CLEARANCE_WEIGHT, NEAR = 3e-3, 1e6, 0.1
+START_CLEARANCE, CLEARANCE_WEIGHT, NEAR = 3e-3, 1e5, 0.1
 #: every REFRESH-th Gauss–Newton step chooses the pairs within NEAR whose rows it may take
 REFRESH = 10
-#: the largest Gauss–Newton step [rad, m] on any coordinate (a longer one is scaled down):
-#: undamped, Talos's steps at the walk's pose 1.0 s in swept its limbs through each other
-#: and back, chaotically (a 1e-11 difference in one row grew to 0.4 m in ten steps), and ended
-#: with its gripper 4.3 cm inside its thigh or 3.7 mm clear by chance; damped (and the
-#: clearance rows weighing 1e6, not 1e5), 3.0 mm clear. The steps still do not all converge
-#: (100 a base height on several robots and starts, the collision rows' set flipping), with
-#: the soles within 1.5e-5 of their goals
-GN_STEP = 0.2
 #: the first frame's Gauss–Newton steps stop when no coordinate moves more than STILL [rad, m]
 STILL = 1e-10
 
@@ -591,11 +583,10 @@ def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: d
         J.append(Js)
         e.append(targets - q[qa])
         w.append(np.full(act_idx.size, 0.1))
-        near.rows(d, J, e, w)
+        near.rows(q, d, J, e, w)
         Ja, ea, wa = np.vstack(J), np.concatenate(e), np.concatenate(w)
         dq = _bounded_step(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv), Ja.T @ (wa * ea),
                            m, q, vl)
-        dq *= min(1.0, GN_STEP / max(float(np.max(np.abs(dq))), 1e-300))
         q = np.clip(pin.integrate(m, q, dq), m.lowerPositionLimit, m.upperPositionLimit)
         if np.max(np.abs(dq)) < STILL:  # converged
             break
@@ -610,24 +601,27 @@ class _Near:
     :class:`~gdimitate.model.selfcollision.SelfCollision`, or None: none) closer than
     :data:`START_CLEARANCE` asks, weighted :data:`CLEARANCE_WEIGHT`, to be that far apart —
     among the pairs within :data:`NEAR` at the last of every :data:`REFRESH` steps (a pair
-    the Gauss–Newton steps swept into from farther off is left alone until then: with every
-    pair, Talos's steps at the walk's pose 1.0 s in went through its limbs and back, and
-    its gripper stayed 2.7 cm inside its thigh)."""
+    the Gauss–Newton steps swept into from farther off is left alone until then). These
+    steps are sensitive to round-off where the rows fight the soles: at Talos's walk pose
+    1.0 s in, a difference of 1e-11 in one row's rate grew to 0.4 m within ten steps and left
+    the gripper 4.3 cm inside the thigh instead of 3.7 mm clear (the rates are computed as
+    before, pair by pair, for that reason). Damping the steps and weighing the rows 1e6
+    instead made the soles stop 2.4 mm short of their goals at a restart of Talos's CMU walk
+    (six base heights tried: 0.67 s); a step with the clearance as a hard row (a QP) would
+    settle it, not tried."""
 
     def __init__(self, collision):
         self.c, self.calls = collision, 0
-        self.among = np.zeros(0, int)
         if collision is not None:
             self.proximity = Proximity(collision)
 
-    def rows(self, d, J: list, e: list, w: list) -> None:
-        """Append the rows at ``d``'s configuration (joint Jacobians computed)."""
+    def rows(self, q: np.ndarray, d, J: list, e: list, w: list) -> None:
+        """Append the rows at ``q`` (``d``: its data, joint Jacobians computed)."""
         if self.c is None:
             return
-        if self.calls % REFRESH == 0:
-            self.among = self.proximity.within(d, NEAR)[0]
+        _, dist, Jd = self.proximity.tracked(d, q, self.calls % REFRESH == 0, NEAR,
+                                             START_CLEARANCE)
         self.calls += 1
-        _, dist, Jd = self.proximity.near(d, START_CLEARANCE, self.among)
         J.append(Jd)
         e.append(START_CLEARANCE - dist)
         w.append(np.full(dist.size, CLEARANCE_WEIGHT))
