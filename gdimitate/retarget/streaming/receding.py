@@ -56,9 +56,9 @@ TORQUE_MARGIN, VELOCITY_MARGIN, FLOOR_MARGIN = 1e-3, 1e-3, 5e-4
 COLLISION_WATCH, COLLISION_MARGIN = 0.03, 1e-3
 #: every COLLISION_EVERY-th frame all pairs are measured; in between, those that were closer
 #: than COLLISION_NEAR [m] (Talos: 77 of 999 pairs at its neutral pose; 0.07 ms, not 0.75).
-#: Only the pairs within COLLISION_WATCH at every frame (Proximity.near) changed the
-#: motions through GJK's cached guesses (Talos on the SFU-style walk: 248 of 265 frames
-#: feasible, not 253)
+#: (Proximity.tracked). Measuring instead only the pairs whose bound (Proximity.bounds) was
+#: within COLLISION_WATCH, every frame, changed the motions through coal's cached GJK
+#: guesses (Talos on the SFU-style walk: 248 of 265 frames feasible, not 253)
 COLLISION_EVERY, COLLISION_NEAR = 5, 0.1
 #: re-linearise the next knot's sole rows when the step moves a held foot faster than this [m/s]
 AHEAD_TOL, PASSES = 2e-5, 6
