@@ -27,7 +27,10 @@ class SolverInfo:
     already built in this process), ``elastic`` (True when the hard problem failed and the
     least-infeasible solve ran), ``knots``, ``variables`` (free ones), ``constraints`` (rows
     the schedule imposes), ``unmet``, ``compiled`` (this call compiled the robot's
-    derivatives to C; False: none needed, or they came from the on-disk cache) and ``retry``
+    derivatives to C — or started their compilation in the background; False: none needed,
+    or they came from the on-disk cache), ``derivatives`` (what evaluated them: ``"C"``, or
+    ``"virtual machine"``, CasADi's, while their C is compiled in the background or without
+    a compiler: :mod:`gdimitate.retarget.trajectory.codegen`) and ``retry``
     (empty, or the line that says the motion was solved again for its stride and which one
     was kept: :mod:`gdimitate.retarget.trajectory.stride`; ``iterations`` and ``time_s``
     then count both solves)."""
@@ -45,3 +48,4 @@ class SolverInfo:
     unmet: tuple[Unmet, ...] = ()
     compiled: bool = False
     retry: str = ""
+    derivatives: str = "C"

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -32,11 +33,17 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-__all__ = ["cache_dir", "compiled_functions", "SlowDerivativesWarning", "source_digest",
-           "COMPILE_COUNT", "split_rows", "pieces", "PIECE_SIZE", "OVERLAP",
-           "INSTRUCTIONS_PER_S"]
+__all__ = ["cache_dir", "compiled_functions", "library", "mode", "MODE_ENV",
+           "SlowDerivativesWarning", "source_digest", "COMPILE_COUNT", "split_rows", "pieces",
+           "PIECE_SIZE", "OVERLAP", "INSTRUCTIONS_PER_S"]
 
 ENV = "GDIMITATE_CACHE_DIR"
+MODE_ENV = "GDIMITATE_COMPILE"
+"""How a cache miss is compiled: ``background`` (the default) — the first run solves with
+CasADi's virtual machine while a detached process compiles the library for later runs
+(G1's derivatives take about a minute to compile on two cores, its stride's solve about
+three times as long uncompiled: the first result comes sooner); ``wait`` — compiled first,
+then the solve (the test suite's setting: every run then times the same code)."""
 CFLAGS = ("-O1", "-fPIC", "-fno-math-errno")
 COMPILE_COUNT = 0
 """How many libraries this process has compiled (a disk-cache hit leaves it unchanged)."""
@@ -90,11 +97,56 @@ def _warn(why: str) -> None:
         _WARNED = True
 
 
+def _write_sources(funcs: list[ca.Function], folder: Path) -> list[str]:
+    """One C file per function in ``folder`` (largest first: the compiler's longest job starts
+    first), and the functions' names in ``names``; returns the files' stems."""
+    stems = []
+    for f in sorted(funcs, key=lambda f: -f.n_instructions()):
+        cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+        cg.add(f)
+        cg.generate(str(folder) + os.sep)
+        stems.append(f.name())
+    (folder / "names").write_text("\n".join(f.name() for f in funcs))
+    (folder / "order").write_text("\n".join(stems))
+    return stems
+
+
+def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], None]) -> None:
+    """Compile :func:`_write_sources`' files in ``folder`` in parallel (one compiler per core:
+    separate files also bound the compiler's memory), link them into ``lib`` (atomically: a
+    concurrent process sees the whole library or none) and its names file; ``done(n)`` after
+    each file. Raises :class:`subprocess.CalledProcessError` when the compiler fails."""
+    stems = (folder / "order").read_text().split()
+    objs: list[str] = []
+    procs: list[subprocess.Popen] = []
+
+    def running() -> list[subprocess.Popen]:
+        return [p for p in procs if p.poll() is None]
+
+    for stem in stems:
+        obj = folder / f"{stem}.o"
+        objs.append(str(obj))
+        while len(running()) >= (os.cpu_count() or 1):
+            running()[0].wait()
+            done(len(procs) - len(running()))
+        procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(folder / f"{stem}.c"),
+                                       "-o", str(obj)], stderr=subprocess.PIPE, text=True))
+    for p in procs:
+        _, err = p.communicate()
+        done(len(procs) - len(running()))
+        if p.returncode:
+            raise subprocess.CalledProcessError(p.returncode, p.args, stderr=err)
+    out = folder / lib.name
+    subprocess.run([cc, "-shared", *objs, "-o", str(out), "-lm"], check=True,
+                   capture_output=True, text=True)
+    os.replace(folder / "names", lib.with_suffix(".names"))
+    os.replace(out, lib)
+
+
 def _build(funcs: list[ca.Function], lib: Path, cc: str, label: str = "") -> None:
-    """One C file per function, compiled in parallel (one compiler per core: the Hessian's
-    file dominates; separate files also bound the compiler's memory), linked into ``lib``.
-    Says on stderr what it compiles, about how long it takes (:data:`INSTRUCTIONS_PER_S`) and
-    how far it is (a progress bar over the files), then how long it took."""
+    """Compile ``funcs`` into ``lib`` now (:data:`MODE` ``wait``). Says on stderr what it
+    compiles, about how long it takes (:data:`INSTRUCTIONS_PER_S`) and how far it is (a
+    progress bar over the files), then how long it took."""
     global COMPILE_COUNT
     from tqdm import tqdm
 
@@ -107,32 +159,8 @@ def _build(funcs: list[ca.Function], lib: Path, cc: str, label: str = "") -> Non
           file=sys.stderr, flush=True)
     with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp, \
             tqdm(total=len(funcs), unit="file", file=sys.stderr, leave=False) as bar:
-        objs: list[str] = []
-        procs: list[subprocess.Popen] = []
-
-        def running() -> list[subprocess.Popen]:
-            return [p for p in procs if p.poll() is None]
-
-        for f in sorted(funcs, key=lambda f: -f.n_instructions()):
-            cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
-            cg.add(f)
-            cg.generate(tmp + os.sep)
-            obj = Path(tmp) / f"{f.name()}.o"
-            objs.append(str(obj))
-            while len(running()) >= (os.cpu_count() or 1):
-                running()[0].wait()
-                bar.update(len(procs) - len(running()) - bar.n)
-            procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(Path(tmp) / f"{f.name()}.c"),
-                                           "-o", str(obj)], stderr=subprocess.PIPE, text=True))
-        for p in procs:
-            _, err = p.communicate()
-            bar.update(len(procs) - len(running()) - bar.n)
-            if p.returncode:
-                raise subprocess.CalledProcessError(p.returncode, p.args, stderr=err)
-        out = Path(tmp) / lib.name
-        subprocess.run([cc, "-shared", *objs, "-o", str(out), "-lm"], check=True,
-                       capture_output=True, text=True)
-        os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
+        _write_sources(funcs, Path(tmp))
+        _compile_sources(Path(tmp), lib, cc, lambda n: bar.update(n - bar.n))
     COMPILE_COUNT += 1
     print(f"gdimitate: compiled in {time.perf_counter() - t0:.0f} s; later runs load it",
           file=sys.stderr, flush=True)
@@ -188,16 +216,116 @@ def pieces(fun: dict[str, ca.Function], name: str) -> list[ca.Function]:
 def compiled_functions(key: str, make: Callable[[], list[ca.Function]], label: str = ""
                        ) -> tuple[dict[str, ca.Function], bool]:
     """``({name: function}, compiled)`` for the functions ``make()`` builds: loaded from the
-    cached library of ``key`` when it exists (``make`` is then not called), else built,
-    compiled and cached (``label``, e.g. ``"g1's"``, names them in the message that says so);
-    ``make()``'s own functions when no C compiler is available (``compiled`` False)."""
-    lib = cache_dir() / f"knot-{key[:24]}.so"
+    cached library of ``key`` when it exists (``make`` is then not called; ``compiled``
+    True). On a miss, by :func:`mode`: ``background`` — ``make()``'s own functions (CasADi's
+    virtual machine; ``compiled`` False) while a detached process compiles the library for
+    later calls (:func:`_in_background`); ``wait`` — built, compiled and cached now.
+    ``label``, e.g. ``"g1's"``, names them in the message that says so; ``make()``'s own
+    functions when no C compiler is available."""
+    lib = library(key)
     cached = _load(lib)
     if cached is not None:
         return cached, True
+    if mode() == "background":
+        return _in_background(lib, make, label)
     with _building(lib):  # another process building the same library: wait, then load it
         cached = _load(lib)
         return (cached, True) if cached is not None else _compile(lib, make, label)
+
+
+def library(key: str) -> Path:
+    """The cached library of ``key`` (it may not exist yet)."""
+    return cache_dir() / f"knot-{key[:24]}.so"
+
+
+def mode() -> str:
+    """:data:`MODE_ENV`'s value, ``background`` (the default) or ``wait``."""
+    value = os.environ.get(MODE_ENV, "background").strip().lower() or "background"
+    if value not in ("background", "wait"):
+        from ...errors import InvalidInputError
+
+        raise InvalidInputError(f"{MODE_ENV}={value!r}: use 'background' (the default: the "
+                                "first run solves while the compiler works) or 'wait'")
+    return value
+
+
+def _in_background(lib: Path, make: Callable[[], list[ca.Function]], label: str
+                   ) -> tuple[dict[str, ca.Function], bool]:
+    """A cache miss in ``background`` mode: ``make()``'s functions, run by CasADi's virtual
+    machine this time, and — unless another process is compiling ``lib`` already (it holds
+    ``<lib>.lock``) or an earlier build failed (``<lib>.failed`` holds why) — their C files
+    written into a build folder in the cache and a detached process (:func:`_spawn`) that
+    compiles them into ``lib``, holding the lock until it is done."""
+    global COMPILE_COUNT
+    funcs = make()
+    own = {f.name(): f for f in funcs}
+    cc = _compiler()
+    if cc is None:
+        _warn("no C compiler found (set CC or install gcc)")
+        return own, False
+    failed = lib.with_suffix(".failed")
+    if failed.exists():
+        _warn(f"compiling the derivatives failed ({failed.read_text().strip()[:200]}; "
+              f"delete {failed} to try again)")
+        return own, False
+    try:
+        import fcntl
+
+        lib.parent.mkdir(parents=True, exist_ok=True)
+        lock = open(lib.with_suffix(".lock"), "a")  # noqa: SIM115 — handed to the builder
+    except (ImportError, OSError):
+        return _compile(lib, make, label)  # no lock to hand over: compile now
+    with lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:  # another process is compiling it
+            print(f"gdimitate: another process is compiling {label or 'the'} derivatives; "
+                  "this run uses CasADi's virtual machine (slower)", file=sys.stderr,
+                  flush=True)
+            return own, False
+        cached = _load(lib)  # finished between our miss and the lock
+        if cached is not None:
+            return cached, True
+        folder = Path(tempfile.mkdtemp(dir=lib.parent, prefix=".build-"))
+        _write_sources(funcs, folder)
+        _spawn(folder, lib, cc, lock.fileno())
+    COMPILE_COUNT += 1
+    total = sum(f.n_instructions() for f in funcs)
+    print(f"gdimitate: {label or 'the'} optimal-adaptor derivatives run in CasADi's virtual "
+          f"machine this time (about 3× slower); the C compiler builds them in the background "
+          f"for later runs ({total / 1e6:.2f} M instructions, roughly "
+          f"{_minutes(total / INSTRUCTIONS_PER_S)}; kept in {lib.parent})", file=sys.stderr,
+          flush=True)
+    return own, False
+
+
+def _spawn(folder: Path, lib: Path, cc: str, lock_fd: int) -> None:
+    """Start ``python -m gdimitate.retarget.trajectory.codegen FOLDER LIB CC`` detached: in a
+    session of its own, through a shell that exits at once (so it is nobody's child: a batch's
+    or a test's process tree does not hold it, Ctrl-C in the terminal does not stop it), at
+    niceness 10 (it yields to the run in the foreground), its output into ``FOLDER/log``. It
+    inherits ``lock_fd``, the build lock, and holds it until it ends."""
+    args = " ".join(shlex.quote(a) for a in (sys.executable, "-m", __name__, str(folder),
+                                              str(lib), cc))
+    subprocess.run(["/bin/sh", "-c", f"{args} </dev/null >{shlex.quote(str(folder / 'log'))} "
+                    "2>&1 &"], pass_fds=(lock_fd,), start_new_session=True, check=True)
+
+
+def _main(folder: str, lib: str, cc: str) -> int:
+    """The detached builder (:func:`_spawn`): compile ``folder``'s sources into ``lib``,
+    remove ``folder``; on failure write why into ``<lib>.failed``."""
+    os.nice(10)
+    out = Path(lib)
+    try:
+        _compile_sources(Path(folder), out, cc, lambda n: None)
+    except (OSError, subprocess.CalledProcessError) as e:
+        detail = getattr(e, "stderr", "") or str(e)
+        with contextlib.suppress(OSError):
+            out.with_suffix(".failed").write_text(detail.strip()[:2000] or repr(e))
+        return 1
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return 0
 
 
 def _load(lib: Path) -> dict[str, ca.Function] | None:
@@ -237,18 +365,19 @@ def _compile(lib: Path, make: Callable[[], list[ca.Function]], label: str
              ) -> tuple[dict[str, ca.Function], bool]:
     """:func:`compiled_functions` on a cache miss: build, compile and cache ``make()``'s
     functions into ``lib`` (its own, uncompiled, without a working C compiler)."""
-    names_file = lib.with_suffix(".names")
     funcs = make()
     cc = _compiler()
     if cc is None:
         _warn("no C compiler found (set CC or install gcc)")
         return {f.name(): f for f in funcs}, False
     try:
-        names_file.parent.mkdir(parents=True, exist_ok=True)
-        names_file.write_text("\n".join(f.name() for f in funcs))
         _build(funcs, lib, cc, label)
     except (OSError, subprocess.CalledProcessError) as e:
         detail = getattr(e, "stderr", "") or str(e)
         _warn(f"compiling the derivatives failed ({detail.strip()[:200]})")
         return {f.name(): f for f in funcs}, False
     return {f.name(): ca.external(f.name(), str(lib)) for f in funcs}, True
+
+
+if __name__ == "__main__":
+    sys.exit(_main(*sys.argv[1:4]))

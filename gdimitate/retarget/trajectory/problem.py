@@ -259,7 +259,6 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
             k = Knot(robot, sym, flags, _weights(parts), extra)
         cons, slices, g_rows, labels, scale, pairs, pslices, prow, x0, costs = \
             _knot_expressions(k, parts)
-        digest = hashlib.sha1(repr((key, _SOURCE)).encode()).hexdigest()
         fun, comp = codegen.compiled_functions(
             digest, lambda: _functions(k, g_rows, slices, costs, prow, x0), f"{robot.name}'s")
         seams = [p for p in parts if isinstance(p, SeamConstraint)]
@@ -267,6 +266,10 @@ def formulation(robot: Robot, flags: Flags, parts: tuple[Part, ...]) -> Formulat
         return Formulation(k, parts, cons, slices, pairs, pslices, labels, scale, fun, comp,
                            seam, seam_labels, seam_sizes)
 
+    digest = hashlib.sha1(repr((key, _SOURCE)).encode()).hexdigest()
+    form = _FORM.get(key)
+    if form is not None and not form.compiled and codegen.library(digest).exists():
+        del _FORM[key]  # its library has come (compiled in the background): load it now
     return _lru(_FORM, key, make)
 
 

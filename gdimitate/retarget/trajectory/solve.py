@@ -456,7 +456,8 @@ def _solve_turned(form: pb.Formulation, tg: Targets, demonstrator: Robot, imitat
                       cached=cached, elastic=elastic, knots=tg.T,
                       variables=int(np.sum(num.lbx != num.ubx)),
                       constraints=int(num.keep.size), unmet=bad,
-                      compiled=codegen.COMPILE_COUNT > compiles)
+                      compiled=codegen.COMPILE_COUNT > compiles,
+                      derivatives="C" if c.form.compiled else "virtual machine")
     return package(c, num, z, tg, demonstrator, imitator, cs, force, o["contact"], info,
                    o["periodic"])
 

@@ -257,3 +257,134 @@ def test_the_solver_record_says_what_was_compiled(tmp_path, monkeypatch):
     finally:
         pb.clear_cache()
     assert runs == [(True, False), (False, False), (False, True)]
+
+
+def _wait_for_build(lib, timeout: float = 120.0) -> None:
+    """Until the detached builder of ``lib`` has let go of its lock (it holds it to the end)."""
+    import fcntl
+    import time
+
+    deadline = time.monotonic() + timeout
+    with open(lib.with_suffix(".lock"), "a") as f:
+        while True:
+            try:
+                fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(f, fcntl.LOCK_UN)
+                return
+            except BlockingIOError:
+                assert time.monotonic() < deadline, "the background build did not end"
+                time.sleep(0.1)
+
+
+@pytest.fixture
+def background(tmp_path, monkeypatch):
+    """The users' default: a cache miss solves in the virtual machine while a detached
+    process compiles; an empty cache of its own."""
+    if codegen._compiler() is None:
+        pytest.skip("no C compiler on this machine")
+    monkeypatch.setenv(codegen.MODE_ENV, "background")
+    monkeypatch.setenv(codegen.ENV, str(tmp_path / "cache"))
+    return tmp_path / "cache"
+
+
+def test_a_miss_runs_uncompiled_while_a_detached_process_compiles(background, tmp_path,
+                                                                   monkeypatch, capfd):
+    """Issue 37: the first run does not wait for the compiler. It gets the functions as CasADi
+    builds them (the same numbers) at once; a process that is nobody's child (a batch's or a
+    test's process tree does not hold it) compiles them into the cache; the next call loads
+    the library without building anything; the build folder is gone and nothing was written
+    to the working folder."""
+    import psutil
+
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    n = codegen.COMPILE_COUNT
+    key = f"bg-{os.getpid()}-{np.random.default_rng().integers(1 << 30)}"
+    funs, compiled = codegen.compiled_functions(key, _functions, "the test's")
+    assert not compiled and codegen.COMPILE_COUNT == n + 1
+    assert isinstance(funs["val"], ca.Function) and funs["val"].class_name() == "SXFunction"
+    said = capfd.readouterr().err
+    assert "the test's optimal-adaptor derivatives run in CasADi's virtual machine this " \
+           "time" in said and "builds them in the background" in said
+    builders = [p for p in psutil.Process().children(recursive=True)
+                if "codegen" in " ".join(p.cmdline())]
+    assert builders == []  # detached: not this process's child
+    lib = codegen.library(key)
+    _wait_for_build(lib)
+    assert lib.exists() and not lib.with_suffix(".failed").exists()
+    assert not [p for p in background.iterdir() if p.name.startswith(".build-")]
+
+    def must_not_build():
+        raise AssertionError("a cached library must be loaded, not rebuilt")
+
+    again, compiled2 = codegen.compiled_functions(key, must_not_build)
+    assert compiled2 and codegen.COMPILE_COUNT == n + 1
+    x = np.array([0.3, -1.2, 0.7])
+    for name in ("val", "dval"):
+        assert again[name].class_name() == "External"
+        np.testing.assert_array_equal(np.array(again[name](x)), np.array(funs[name](x)))
+    assert list(work.iterdir()) == []
+
+
+def test_a_miss_during_another_build_neither_waits_nor_builds_again(background, capfd):
+    """A process that misses a library another process is compiling (it holds the build
+    lock) solves uncompiled at once and starts no second build."""
+    import fcntl
+
+    key = f"busy-{os.getpid()}"
+    lib = codegen.library(key)
+    lib.parent.mkdir(parents=True)
+    n = codegen.COMPILE_COUNT
+    with open(lib.with_suffix(".lock"), "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)  # the other process's build
+        funs, compiled = codegen.compiled_functions(key, _functions, "the test's")
+    assert not compiled and codegen.COMPILE_COUNT == n
+    assert "another process is compiling the test's derivatives" in capfd.readouterr().err
+    assert not [p for p in background.iterdir() if p.name.startswith(".build-")]
+    assert float(funs["val"](np.array([0.5, 2.0, 0.0]))[0]) == pytest.approx(np.sin(0.5) * 2)
+
+
+def test_a_failed_background_build_is_said_and_not_tried_again(background, tmp_path,
+                                                              monkeypatch):
+    """The detached compiler fails (here a compiler that refuses every file): why is kept in
+    ``<lib>.failed``, the next miss says it in a SlowDerivativesWarning and runs uncompiled
+    without starting another build."""
+    cc = tmp_path / "broken-cc"
+    cc.write_text("#!/bin/sh\necho 'broken-cc: no code today' >&2\nexit 1\n")
+    cc.chmod(0o755)
+    monkeypatch.setenv("CC", str(cc))
+    monkeypatch.setattr(codegen, "_WARNED", False)
+    key = f"fail-{os.getpid()}"
+    codegen.compiled_functions(key, _functions)
+    lib = codegen.library(key)
+    _wait_for_build(lib)
+    assert "broken-cc: no code today" in lib.with_suffix(".failed").read_text()
+    n = codegen.COMPILE_COUNT
+    with pytest.warns(codegen.SlowDerivativesWarning, match="no code today"):
+        funs, compiled = codegen.compiled_functions(key, _functions)
+    assert not compiled and codegen.COMPILE_COUNT == n and not lib.exists()
+
+
+def test_the_adaptor_loads_the_library_once_it_has_come(background):
+    """In one process: the first adaptation of a problem runs its derivatives uncompiled
+    (the solver record says so); once the background build has landed, the next call of the
+    same problem runs the compiled library, to the same result."""
+    from gdimitate.adaptation.adaptor import adapt
+    from gdimitate.apps.cases import paper_case
+    from gdimitate.retarget.trajectory import problem as pb
+
+    d, i, m = paper_case("I")
+    m = m.replace(t=m.t[:30], q=m.q[:30], contact={s: c[:30] for s, c in m.contact.items()})
+    pb.clear_cache()
+    try:
+        first = adapt(m, d, i, method="optimal", rate=25, verbose=False)
+        assert first.solver.derivatives == "virtual machine" and first.solver.compiled
+        for lib in background.glob("*.lock"):
+            _wait_for_build(lib.with_suffix(".so"))
+        second = adapt(m, d, i, method="optimal", rate=25, verbose=False)
+    finally:
+        pb.clear_cache()
+    assert second.solver.derivatives == "C" and not second.solver.compiled
+    assert second.solver.iterations == first.solver.iterations
+    np.testing.assert_allclose(second.motion.q, first.motion.q, rtol=0, atol=1e-9)
