@@ -58,6 +58,12 @@ INSTRUCTIONS_PER_S = 5500.0
 OVERLAP = 1.15
 """A cut is kept when its two pieces together take at most this many times the instructions
 of the whole (what they recompute both)."""
+BACKGROUND_DELAY = 60.0
+"""Seconds the background build waits for the run that started it to end before it starts
+compiling anyway [s]. A compiler beside the run slows it more than its niceness says: on 2
+cores, the first `gdimitate demo` took 47 s with no compiler beside it (numba compiling the
+oscillators' kernels in 21 s) and 72–89 s with one (the kernels 44–58 s), one compiler job or
+two. A short run is over first; a batch gets its library a minute later."""
 _WARNED = False
 
 
@@ -111,9 +117,10 @@ def _write_sources(funcs: list[ca.Function], folder: Path) -> list[str]:
     return stems
 
 
-def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], None]) -> None:
-    """Compile :func:`_write_sources`' files in ``folder`` in parallel (one compiler per core:
-    separate files also bound the compiler's memory), link them into ``lib`` (atomically: a
+def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], None],
+                     jobs: int) -> None:
+    """Compile :func:`_write_sources`' files in ``folder``, ``jobs`` compilers at a time
+    (separate files also bound the compiler's memory), link them into ``lib`` (atomically: a
     concurrent process sees the whole library or none) and its names file; ``done(n)`` after
     each file. Raises :class:`subprocess.CalledProcessError` when the compiler fails."""
     stems = (folder / "order").read_text().split()
@@ -126,7 +133,7 @@ def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], Non
     for stem in stems:
         obj = folder / f"{stem}.o"
         objs.append(str(obj))
-        while len(running()) >= (os.cpu_count() or 1):
+        while len(running()) >= jobs:
             running()[0].wait()
             done(len(procs) - len(running()))
         procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(folder / f"{stem}.c"),
@@ -160,7 +167,8 @@ def _build(funcs: list[ca.Function], lib: Path, cc: str, label: str = "") -> Non
     with tempfile.TemporaryDirectory(dir=lib.parent, prefix=".build-") as tmp, \
             tqdm(total=len(funcs), unit="file", file=sys.stderr, leave=False) as bar:
         _write_sources(funcs, Path(tmp))
-        _compile_sources(Path(tmp), lib, cc, lambda n: bar.update(n - bar.n))
+        _compile_sources(Path(tmp), lib, cc, lambda n: bar.update(n - bar.n),
+                         os.cpu_count() or 1)
     COMPILE_COUNT += 1
     print(f"gdimitate: compiled in {time.perf_counter() - t0:.0f} s; later runs load it",
           file=sys.stderr, flush=True)
@@ -303,21 +311,30 @@ def _spawn(folder: Path, lib: Path, cc: str, lock_fd: int) -> None:
     """Start ``python -m gdimitate.retarget.trajectory.codegen FOLDER LIB CC`` detached: in a
     session of its own, through a shell that exits at once (so it is nobody's child: a batch's
     or a test's process tree does not hold it, Ctrl-C in the terminal does not stop it), at
-    niceness 10 (it yields to the run in the foreground), its output into ``FOLDER/log``. It
-    inherits ``lock_fd``, the build lock, and holds it until it ends."""
+    niceness 10, its output into ``FOLDER/log``; it starts compiling when this process has
+    ended or after :data:`BACKGROUND_DELAY` s. It inherits ``lock_fd``, the build lock, and
+    holds it until it ends."""
     args = " ".join(shlex.quote(a) for a in (sys.executable, "-m", __name__, str(folder),
-                                              str(lib), cc))
+                                              str(lib), cc, str(os.getpid()),
+                                              str(BACKGROUND_DELAY)))
     subprocess.run(["/bin/sh", "-c", f"{args} </dev/null >{shlex.quote(str(folder / 'log'))} "
                     "2>&1 &"], pass_fds=(lock_fd,), start_new_session=True, check=True)
 
 
-def _main(folder: str, lib: str, cc: str) -> int:
-    """The detached builder (:func:`_spawn`): compile ``folder``'s sources into ``lib``,
-    remove ``folder``; on failure write why into ``<lib>.failed``."""
+def _main(folder: str, lib: str, cc: str, parent: str, delay: str) -> int:
+    """The detached builder (:func:`_spawn`): once process ``parent`` has ended or ``delay``
+    seconds have passed, compile ``folder``'s sources into ``lib`` (every core when the
+    parent is gone, all but one beside it) and remove ``folder``; on failure write why into
+    ``<lib>.failed``."""
     os.nice(10)
+    pid, deadline = int(parent), time.monotonic() + float(delay)
+    while pid > 1 and _alive(pid) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    cores = os.cpu_count() or 1
+    jobs = max(1, cores - 1) if pid > 1 and _alive(pid) else cores
     out = Path(lib)
     try:
-        _compile_sources(Path(folder), out, cc, lambda n: None)
+        _compile_sources(Path(folder), out, cc, lambda n: None, jobs)
     except (OSError, subprocess.CalledProcessError) as e:
         detail = getattr(e, "stderr", "") or str(e)
         with contextlib.suppress(OSError):
@@ -379,5 +396,16 @@ def _compile(lib: Path, make: Callable[[], list[ca.Function]], label: str
     return {f.name(): ca.external(f.name(), str(lib)) for f in funcs}, True
 
 
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` (> 1) still exists."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
 if __name__ == "__main__":
-    sys.exit(_main(*sys.argv[1:4]))
+    sys.exit(_main(*sys.argv[1:6]))

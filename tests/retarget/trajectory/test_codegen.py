@@ -284,6 +284,7 @@ def background(tmp_path, monkeypatch):
         pytest.skip("no C compiler on this machine")
     monkeypatch.setenv(codegen.MODE_ENV, "background")
     monkeypatch.setenv(codegen.ENV, str(tmp_path / "cache"))
+    monkeypatch.setattr(codegen, "BACKGROUND_DELAY", 0.0)  # not waiting for this process
     return tmp_path / "cache"
 
 
@@ -388,3 +389,34 @@ def test_the_adaptor_loads_the_library_once_it_has_come(background):
     assert second.solver.derivatives == "C" and not second.solver.compiled
     assert second.solver.iterations == first.solver.iterations
     np.testing.assert_allclose(second.motion.q, first.motion.q, rtol=0, atol=1e-9)
+
+
+_FIRST_RUN = """
+import sys, time
+from pathlib import Path
+import casadi as ca
+from gdimitate.retarget.trajectory import codegen
+x = ca.SX.sym("x", 2)
+funs, compiled = codegen.compiled_functions(sys.argv[1], lambda: [ca.Function("sq", [x], [x * x])])
+time.sleep(3.0)  # a small library compiles in under a second: it must not have, meanwhile
+print("FIRST", compiled, codegen.library(sys.argv[1]).exists(), float(funs["sq"](3.0)[0]))
+"""
+
+
+def test_the_background_build_waits_for_the_run_that_started_it(background, monkeypatch):
+    """By default the detached compiler starts when the process that missed the library has
+    ended (a compiler beside the first demo doubled its numba compilation): nothing is
+    compiled while that process runs; after it has ended the library comes and the next
+    process loads it."""
+    import subprocess
+    import sys
+
+    monkeypatch.setattr(codegen, "BACKGROUND_DELAY", 60.0)
+    key = f"first-{os.getpid()}"
+    out = subprocess.run([sys.executable, "-c", _FIRST_RUN, key], capture_output=True,
+                         text=True, timeout=120, env={**os.environ})
+    assert "FIRST False False 9.0" in out.stdout, out
+    lib = codegen.library(key)
+    _wait_for_build(lib)
+    again, compiled = codegen.compiled_functions(key, lambda: [])
+    assert compiled and float(again["sq"](3.0)[0]) == 9.0
