@@ -128,6 +128,13 @@ def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], Non
     procs: list[subprocess.Popen] = []
 
     def running() -> list[subprocess.Popen]:
+        failed = next((p for p in procs if p.poll()), None)
+        if failed is not None:  # stop at the first failure, not after every file
+            for p in procs:
+                if p.poll() is None:
+                    p.kill()
+            err = Path(failed.args[-1]).with_suffix(".err").read_text()
+            raise subprocess.CalledProcessError(failed.returncode, failed.args, stderr=err)
         return [p for p in procs if p.poll() is None]
 
     for stem in stems:
@@ -136,13 +143,12 @@ def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], Non
         while len(running()) >= jobs:
             running()[0].wait()
             done(len(procs) - len(running()))
-        procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(folder / f"{stem}.c"),
-                                       "-o", str(obj)], stderr=subprocess.PIPE, text=True))
+        with open(folder / f"{stem}.err", "w") as err:  # the child keeps its own descriptor
+            procs.append(subprocess.Popen([cc, *CFLAGS, "-c", str(folder / f"{stem}.c"),
+                                           "-o", str(obj)], stderr=err))
     for p in procs:
-        _, err = p.communicate()
+        p.wait()
         done(len(procs) - len(running()))
-        if p.returncode:
-            raise subprocess.CalledProcessError(p.returncode, p.args, stderr=err)
     out = folder / lib.name
     subprocess.run([cc, "-shared", *objs, "-o", str(out), "-lm"], check=True,
                    capture_output=True, text=True)

@@ -420,3 +420,13 @@ def test_the_background_build_waits_for_the_run_that_started_it(background, monk
     _wait_for_build(lib)
     again, compiled = codegen.compiled_functions(key, lambda: [])
     assert compiled and float(again["sq"](3.0)[0]) == 9.0
+
+
+def test_an_unknown_compile_mode_is_refused(monkeypatch):
+    from gdimitate.errors import InvalidInputError
+
+    monkeypatch.setenv(codegen.MODE_ENV, "later")
+    with pytest.raises(InvalidInputError, match="'background'.*or 'wait'"):
+        codegen.compiled_functions("never-built", _functions)
+    monkeypatch.setenv(codegen.MODE_ENV, " Wait ")
+    assert codegen.mode() == "wait"
