@@ -287,8 +287,11 @@ def _in_background(lib: Path, make: Callable[[], list[ca.Function]], label: str
 
         lib.parent.mkdir(parents=True, exist_ok=True)
         lock = open(lib.with_suffix(".lock"), "a")  # noqa: SIM115 — handed to the builder
-    except (ImportError, OSError):
-        return _compile(lib, make, label)  # no lock to hand over: compile now
+    except ImportError:  # no flock to hand over (Windows): compile now
+        return _compile(lib, lambda: funcs, label)
+    except OSError as e:  # a cache folder that cannot be written
+        _warn(f"the cache folder {lib.parent} cannot be written ({e})")
+        return own, False
     with lock:
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -300,9 +303,13 @@ def _in_background(lib: Path, make: Callable[[], list[ca.Function]], label: str
         cached = _load(lib)  # finished between our miss and the lock
         if cached is not None:
             return cached, True
-        folder = Path(tempfile.mkdtemp(dir=lib.parent, prefix=".build-"))
-        _write_sources(funcs, folder)
-        _spawn(folder, lib, cc, lock.fileno())
+        try:
+            folder = Path(tempfile.mkdtemp(dir=lib.parent, prefix=".build-"))
+            _write_sources(funcs, folder)
+            _spawn(folder, lib, cc, lock.fileno())
+        except (OSError, subprocess.CalledProcessError) as e:  # a full disk, no /bin/sh
+            _warn(f"the background build could not start ({e})")
+            return own, False
     COMPILE_COUNT += 1
     total = sum(f.n_instructions() for f in funcs)
     print(f"gdimitate: {label or 'the'} optimal-adaptor derivatives run in CasADi's virtual "

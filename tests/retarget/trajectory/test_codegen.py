@@ -430,3 +430,17 @@ def test_an_unknown_compile_mode_is_refused(monkeypatch):
         codegen.compiled_functions("never-built", _functions)
     monkeypatch.setenv(codegen.MODE_ENV, " Wait ")
     assert codegen.mode() == "wait"
+
+
+def test_a_cache_folder_that_cannot_be_written_runs_uncompiled_with_a_warning(background,
+                                                                               monkeypatch):
+    """A cache path that is a file (or read-only): the miss says so once and solves in the
+    virtual machine; nothing raises."""
+    blocker = background.parent / "not-a-folder"
+    blocker.write_text("")
+    monkeypatch.setenv(codegen.ENV, str(blocker / "cache"))
+    monkeypatch.setattr(codegen, "_WARNED", False)
+    with pytest.warns(codegen.SlowDerivativesWarning, match="cannot be written"):
+        funs, compiled = codegen.compiled_functions("ro", _functions)
+    assert not compiled and float(funs["val"](np.array([0.5, 2.0, 0.0]))[0]) == \
+        pytest.approx(np.sin(0.5) * 2)
