@@ -148,8 +148,8 @@ _STRUCTURED = textwrap.dedent("""
 def structured_row(name: str, knots: int) -> str:
     """One row of the ``--structured`` table (IPOPT and fatrop on one problem)."""
     p = subprocess.run([sys.executable, "-c", _STRUCTURED, name, str(knots)],
-                       capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
-                       cwd=str(ROOT))
+                       capture_output=True, text=True, cwd=str(ROOT),
+                       env={**os.environ, "PYTHONPATH": str(ROOT), "GDIMITATE_COMPILE": "wait"})
     r = next((json.loads(ln[7:]) for ln in p.stdout.splitlines() if ln.startswith("RESULT ")),
              None)
     if r is None:

@@ -55,7 +55,8 @@ _CHILD = textwrap.dedent("""
 
 def run(flags: str, robot: str, repeats: int) -> dict:
     with tempfile.TemporaryDirectory() as cache:
-        env = {**os.environ, "GDIMITATE_CACHE_DIR": cache, "OMP_NUM_THREADS": "1"}
+        env = {**os.environ, "GDIMITATE_CACHE_DIR": cache, "OMP_NUM_THREADS": "1",
+               "GDIMITATE_COMPILE": "wait"}  # the compilation timed before the solve
         p = subprocess.run([sys.executable, "-c", _CHILD, flags, robot, str(repeats)],
                            cwd=ROOT, env=env, capture_output=True, text=True, timeout=3600)
     for line in p.stdout.splitlines():

@@ -244,7 +244,8 @@ def sfu_file(folder: Path, variant: str) -> Path | None:
 
 def run(tree: Path, clip: str, variant: str, robot: str, scaling: str, simulate: bool,
         lift: str = "") -> dict:
-    env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1"}
+    env = {**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1",
+           "GDIMITATE_COMPILE": "wait"}  # every case timed compiled
     if clip == "sfu":
         if scaling != "geometric" or lift:
             return {"error": "the sfu clip runs the command line's defaults"}
