@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 import sys
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -363,6 +364,14 @@ def _select(keep: np.ndarray, ng: int) -> ca.DM:
     return ca.DM(sp, 1.0)
 
 
+def _parallel(form: Formulation) -> tuple:
+    """How the knots' Jacobian and Hessian are mapped: uncompiled (CasADi's virtual machine,
+    while the library is built in the background — which waits for this run, leaving its
+    cores free), in one thread per core; compiled, serially (a solve stays on one core: a
+    batch runs one per core). G1's stride in the virtual machine, 2 cores: 30 → 20 s."""
+    return () if form.compiled else ("thread", max(1, os.cpu_count() or 1))
+
+
 def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled:
     """Map the knot's functions over ``T`` knots and assemble values and derivatives (never
     CasADi's MX-level differentiation of the mapped graph: two orders of magnitude slower)."""
@@ -372,13 +381,14 @@ def _build(form: Formulation, T: int, keep: np.ndarray, ipopt: dict) -> Compiled
     P = ca.MX.sym("P", form.knot.par.size, T)
     z, p = ca.vec(X), ca.vec(P)
     g_list = [ca.vec(f["kg"].map(T)(X, P))]
-    j_list = [_blockdiag(f["kjac"].map(T)(X, P), nx)]
+    par = _parallel(form)
+    j_list = [_blockdiag(f["kjac"].map(T, *par)(X, P), nx)]
     ng = ngk * T + ns * (T - 1) + form.nseam
     S = _select(keep, ng)
     lam_f, lam_s = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(keep))
     lam_g = ca.mtimes(S.T, lam_s)
     lam_k = ca.reshape(lam_g[:ngk * T], ngk, T)
-    hs = [h.map(T)(X, P, lam_f / T, lam_k) for h in codegen.pieces(f, "kh")]
+    hs = [h.map(T, *par)(X, P, lam_f / T, lam_k) for h in codegen.pieces(f, "kh")]
     H = _blockdiag(functools.reduce(ca.plus, hs), nx)  # (never 0 + H: that fills H)
     if T > 1 and ns:
         E = _pair_spread(nx, T)
