@@ -41,8 +41,8 @@ ENV = "GDIMITATE_CACHE_DIR"
 MODE_ENV = "GDIMITATE_COMPILE"
 """How a cache miss is compiled: ``background`` (the default) — the first run solves with
 CasADi's virtual machine while a detached process compiles the library for later runs
-(G1's derivatives take about a minute to compile on two cores, its stride's solve about
-three times as long uncompiled: the first result comes sooner); ``wait`` — compiled first,
+(G1's derivatives take about a minute to compile on two cores, its stride's solve 20 s
+uncompiled against 9 s compiled: the first result comes sooner); ``wait`` — compiled first,
 then the solve (the test suite's setting: every run then times the same code)."""
 CFLAGS = ("-O1", "-fPIC", "-fno-math-errno")
 COMPILE_COUNT = 0
@@ -313,10 +313,10 @@ def _in_background(lib: Path, make: Callable[[], list[ca.Function]], label: str
     COMPILE_COUNT += 1
     total = sum(f.n_instructions() for f in funcs)
     print(f"gdimitate: {label or 'the'} optimal-adaptor derivatives run in CasADi's virtual "
-          f"machine this time (about 3× slower); the C compiler builds them in the background "
-          f"for later runs ({total / 1e6:.2f} M instructions, roughly "
-          f"{_minutes(total / INSTRUCTIONS_PER_S)}; kept in {lib.parent})", file=sys.stderr,
-          flush=True)
+          f"machine this time (slower: one thread per core); the C compiler builds them in the "
+          f"background once this run has ended, for later runs ({total / 1e6:.2f} M "
+          f"instructions, roughly {_minutes(total / INSTRUCTIONS_PER_S)}; kept in "
+          f"{lib.parent})", file=sys.stderr, flush=True)
     return own, False
 
 
