@@ -133,7 +133,7 @@ def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], Non
             for p in procs:
                 if p.poll() is None:
                     p.kill()
-            err = Path(failed.args[-1]).with_suffix(".err").read_text()
+            err = (folder / f"{stems[procs.index(failed)]}.err").read_text()
             raise subprocess.CalledProcessError(failed.returncode, failed.args, stderr=err)
         return [p for p in procs if p.poll() is None]
 
