@@ -303,8 +303,10 @@ def _in_background(lib: Path, make: Callable[[], list[ca.Function]], label: str
         cached = _load(lib)  # finished between our miss and the lock
         if cached is not None:
             return cached, True
+        for stale in lib.parent.glob(f".build-{lib.stem}-*"):  # a builder that was killed
+            shutil.rmtree(stale, ignore_errors=True)  # (we hold its lock: none is running)
         try:
-            folder = Path(tempfile.mkdtemp(dir=lib.parent, prefix=".build-"))
+            folder = Path(tempfile.mkdtemp(dir=lib.parent, prefix=f".build-{lib.stem}-"))
             _write_sources(funcs, folder)
             _spawn(folder, lib, cc, lock.fileno())
         except (OSError, subprocess.CalledProcessError) as e:  # a full disk, no /bin/sh

@@ -444,3 +444,20 @@ def test_a_cache_folder_that_cannot_be_written_runs_uncompiled_with_a_warning(ba
         funs, compiled = codegen.compiled_functions("ro", _functions)
     assert not compiled and float(funs["val"](np.array([0.5, 2.0, 0.0]))[0]) == \
         pytest.approx(np.sin(0.5) * 2)
+
+
+def test_a_killed_builders_folder_is_removed_by_the_next_build(background):
+    """A background build killed before it finished (a cluster's job scheduler ends every
+    process of a job) leaves its build folder and no library; the next miss of that library
+    removes the folder and builds again."""
+    key = f"killed-{os.getpid()}"
+    lib = codegen.library(key)
+    stale = background / f".build-{lib.stem}-x1y2z3"
+    stale.mkdir(parents=True)
+    (stale / "val.c").write_text("/* half-written */")
+    other = background / ".build-knot-someone-else-abc"
+    other.mkdir()
+    codegen.compiled_functions(key, _functions)
+    assert not stale.exists() and other.exists()
+    _wait_for_build(lib)
+    assert lib.exists()
