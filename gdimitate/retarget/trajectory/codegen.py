@@ -46,7 +46,8 @@ uncompiled against 9 s compiled: the first result comes sooner); ``wait`` — co
 then the solve (the test suite's setting: every run then times the same code)."""
 CFLAGS = ("-O1", "-fPIC", "-fno-math-errno")
 COMPILE_COUNT = 0
-"""How many libraries this process has compiled (a disk-cache hit leaves it unchanged)."""
+"""How many libraries this process has compiled, or started compiling in the background (a
+disk-cache hit leaves it unchanged)."""
 PIECE_SIZE = 120_000
 """SX instructions above which :func:`split_rows` cuts a function into pieces: the C
 compiler's time grows faster than the size of one function body (its register allocation
@@ -103,9 +104,9 @@ def _warn(why: str) -> None:
         _WARNED = True
 
 
-def _write_sources(funcs: list[ca.Function], folder: Path) -> list[str]:
-    """One C file per function in ``folder`` (largest first: the compiler's longest job starts
-    first), and the functions' names in ``names``; returns the files' stems."""
+def _write_sources(funcs: list[ca.Function], folder: Path) -> None:
+    """One C file per function in ``folder``, the functions' names in ``names`` and the
+    files' compile ``order`` (largest first: the compiler's longest job starts first)."""
     stems = []
     for f in sorted(funcs, key=lambda f: -f.n_instructions()):
         cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
@@ -114,7 +115,6 @@ def _write_sources(funcs: list[ca.Function], folder: Path) -> list[str]:
         stems.append(f.name())
     (folder / "names").write_text("\n".join(f.name() for f in funcs))
     (folder / "order").write_text("\n".join(stems))
-    return stems
 
 
 def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], None],
@@ -157,7 +157,7 @@ def _compile_sources(folder: Path, lib: Path, cc: str, done: Callable[[int], Non
 
 
 def _build(funcs: list[ca.Function], lib: Path, cc: str, label: str = "") -> None:
-    """Compile ``funcs`` into ``lib`` now (:data:`MODE` ``wait``). Says on stderr what it
+    """Compile ``funcs`` into ``lib`` now (:data:`MODE_ENV` ``wait``). Says on stderr what it
     compiles, about how long it takes (:data:`INSTRUCTIONS_PER_S`) and how far it is (a
     progress bar over the files), then how long it took."""
     global COMPILE_COUNT
@@ -236,11 +236,12 @@ def compiled_functions(key: str, make: Callable[[], list[ca.Function]], label: s
     later calls (:func:`_in_background`); ``wait`` — built, compiled and cached now.
     ``label``, e.g. ``"g1's"``, names them in the message that says so; ``make()``'s own
     functions when no C compiler is available."""
+    background = mode() == "background"  # a misspelt setting is said on every call
     lib = library(key)
     cached = _load(lib)
     if cached is not None:
         return cached, True
-    if mode() == "background":
+    if background:
         return _in_background(lib, make, label)
     with _building(lib):  # another process building the same library: wait, then load it
         cached = _load(lib)
