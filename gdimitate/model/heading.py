@@ -67,9 +67,16 @@ def walk_heading(robot, motion: Motion) -> float:
 def turn_points(p: np.ndarray, yaw: float, about: np.ndarray | None = None) -> np.ndarray:
     """Points ``p`` ``(..., 3)`` [m] turned by ``yaw`` [rad] about the vertical through
     ``about`` ``(2,)`` (default: the origin); NaN rows stay NaN."""
-    p = np.asarray(p, float)
-    c = np.zeros(3) if about is None else np.r_[np.asarray(about, float)[:2], 0.0]
-    return (p - c) @ yaw_matrix(yaw).T + c
+    return _turned(np.asarray(p, float), yaw_matrix(yaw), about)
+
+
+def _turned(p: np.ndarray, R: np.ndarray, about: np.ndarray | None) -> np.ndarray:
+    """:func:`turn_points` by the rotation ``R`` ``(3, 3)`` (numpy's per-call overhead kept
+    off a streamed frame's path)."""
+    if about is None:
+        return p @ R.T
+    c = np.array([float(about[0]), float(about[1]), 0.0])
+    return (p - c) @ R.T + c
 
 
 def turn_motion(motion: Motion, yaw: float, about: np.ndarray | None = None) -> Motion:
@@ -94,11 +101,12 @@ def turn_configurations(q: np.ndarray, yaw: float, about: np.ndarray | None = No
     """Free-flyer configurations ``q`` ``(..., nq)`` turned like :func:`turn_motion`."""
     q = np.array(q, float)
     flat = q.reshape(-1, q.shape[-1])
-    flat[:, :3] = turn_points(flat[:, :3], yaw, about)
-    Q = pin.Quaternion(yaw_matrix(yaw))
-    for i in range(len(flat)):
-        flat[i, 3:7] = (Q * pin.Quaternion(flat[i, 3:7])).coeffs()
-    return flat.reshape(q.shape)
+    R = yaw_matrix(yaw)
+    flat[:, :3] = _turned(flat[:, :3], R, about)
+    Q = pin.Quaternion(R)
+    for row in flat:
+        row[3:7] = (Q * pin.Quaternion(row[3:7])).coeffs()
+    return q
 
 
 def turn_forces(forces: ContactForces, yaw: float, about: np.ndarray | None = None

@@ -202,18 +202,15 @@ class Proximity:
         #: the joints' placements (U, 4, 4) and each pair's lower bound (P,) at the last call
         self._H: np.ndarray | None = None
         self._low = np.full(len(self.pairs), -np.inf)
-        self._kept = np.arange(len(self.pairs))  # tracked()'s pairs
+        self._kept = self._on = np.arange(len(self.pairs))  # tracked()'s kept, measured
 
     def bounds(self, data) -> np.ndarray:
         """``(P,)`` lower bounds [m] of the pairs' signed distances at ``data``'s joint
         placements (``data.oMi``), and the geometries placed there for :meth:`distance`."""
         pin.updateGeometryPlacements(self.c.model, data, self.c.geometry, self.gdata)
-        H = np.array([data.oMi[j].homogeneous for j in self._used])  # (U, 4, 4)
-        R, t = H[self._of, :3, :3], H[self._of, :3, 3]
-        w = (R @ self.centre[:, :, None])[:, :, 0] + t  # sphere centres, world (G, 3)
-        a, b = self.pairs[:, 0], self.pairs[:, 1]
-        low = np.linalg.norm(w[a] - w[b], axis=1) - self.radius[a] - self.radius[b]
+        H, w, low = self._spheres(data)
         if self._H is not None:
+            R, a, b = H[self._of, :3, :3], self.pairs[:, 0], self.pairs[:, 1]
             R0, t0 = self._H[self._of, :3, :3], self._H[self._of, :3, 3]
             w0 = (R0 @ self.centre[:, :, None])[:, :, 0] + t0
             turn = np.sqrt(np.maximum(3.0 - np.einsum("gij,gij->g", R, R0), 0.0))
@@ -221,6 +218,16 @@ class Proximity:
             low = np.maximum(low, self._low - moved[a] - moved[b])
         self._H, self._low = H, low
         return low
+
+    def _spheres(self, data) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At ``data``'s joint placements: the joints' placements ``(U, 4, 4)``, the
+        bounding spheres' centres ``(G, 3)`` [m] (world) and the pairs' sphere gaps
+        ``|c_a − c_b| − r_a − r_b`` ``(P,)`` [m]."""
+        H = np.array([data.oMi[j].homogeneous for j in self._used])  # (U, 4, 4)
+        R, t = H[self._of, :3, :3], H[self._of, :3, 3]
+        w = (R @ self.centre[:, :, None])[:, :, 0] + t  # sphere centres, world (G, 3)
+        a, b = self.pairs[:, 0], self.pairs[:, 1]
+        return H, w, np.linalg.norm(w[a] - w[b], axis=1) - self.radius[a] - self.radius[b]
 
     def distance(self, i: int):
         """Pair ``i``'s coal ``DistanceResult`` at the placements of the last :meth:`bounds`
@@ -231,50 +238,69 @@ class Proximity:
 
     def tracked(self, data, q: np.ndarray, refresh: bool, near: float, watch: float
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The pairs near at ``q`` (``data``: its joint Jacobians computed there), as the
-        streaming mode's frames and first pose measure them: when ``refresh``, every pair,
-        keeping those within ``near`` [m]; otherwise the kept ones only. Returns the kept
-        pairs within ``watch`` [m]: their indices ``(K,)``, signed distances ``(K,)`` [m] and
-        :meth:`rates` ``(K, nv)``. Not the bounds: coal's GJK starts from each pair's last
-        answer (``enable_cached_gjk_guess``; the same pair at the same configuration differs
-        by up to 2e-3 in its normal with another history), and measuring fewer pairs changed
-        the streams' motions (Talos on the SFU-style walk: 248 of 265 frames feasible, not
-        253)."""
-        g, gd = self.c.geometry, self.gdata
+        """The pairs near at ``q`` (``data``: its joint placements and Jacobians computed
+        there), as the streaming mode's frames and first pose measure them: when
+        ``refresh``, every pair that may be within ``near`` [m] (its bounding spheres' gap
+        below it: the others cannot be), keeping those that are; otherwise the kept ones
+        only (coal's GJK in Pinocchio's loop over the active pairs, ~2 µs a pair). Returns
+        the kept pairs within ``watch`` [m]: their indices ``(K,)``, signed distances
+        ``(K,)`` [m] and :meth:`rates` ``(K, nv)``. Not the bounds every frame: coal's GJK
+        starts from each pair's last answer (``enable_cached_gjk_guess``; the same pair at
+        the same configuration differs by up to 2e-3 in its normal with another history),
+        and measuring fewer pairs every frame changed the streams' motions (Talos on the
+        SFU-style walk: 248 of 265 frames feasible, not 253)."""
+        g, gd, m = self.c.geometry, self.gdata, self.c.model
         if refresh:
-            pin.computeDistances(self.c.model, data, g, gd, q)
-            self._kept = np.flatnonzero([r.min_distance < near for r in gd.distanceResults])
+            self._active(np.flatnonzero(self._spheres(data)[2] < near))
+            pin.computeDistances(m, data, g, gd, q)
+            res = gd.distanceResults
+            self._kept = np.array([i for i in self._on if res[int(i)].min_distance < near],
+                                  int)
+            self._active(self._kept)
         else:
-            pin.updateGeometryPlacements(self.c.model, data, g, gd, q)
-            for i in self._kept:
-                pin.computeDistance(g, gd, int(i))
+            pin.computeDistances(m, data, g, gd, q)  # the kept pairs: the active ones
         res = gd.distanceResults
-        idx = np.array([i for i in self._kept if res[int(i)].min_distance < watch], int)
-        close = [res[int(i)] for i in idx]
-        return idx, np.array([r.min_distance for r in close]), self.rates(data, idx, close)
+        close = [res[int(i)] for i in self._kept]
+        keep = [k for k, r in enumerate(close) if r.min_distance < watch]
+        close = [close[k] for k in keep]
+        return (self._kept[keep], np.array([r.min_distance for r in close]),
+                self.rates(data, self._kept[keep], close))
+
+    def _active(self, pairs: np.ndarray) -> None:
+        """Make ``pairs`` (indices) the ones ``pin.computeDistances`` measures."""
+        self.gdata.deactivateAllCollisionPairs()
+        for i in pairs:
+            self.gdata.activateCollisionPair(int(i))
+        self._on = pairs
 
     def rates(self, data, idx: np.ndarray, res: list) -> np.ndarray:
         """``(K, nv)``: the rate per velocity of the distance of each pair of ``idx`` whose
         coal ``DistanceResult`` is in ``res``, at ``data`` (joint Jacobians computed):
-        ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` the unit normal from a to b);
-        pair by pair (the first pose's Gauss–Newton steps turn a difference of 1e-11 in the
-        order of a sum into another pose)."""
+        ``ḋ = nᵀ (ṗ_b − ṗ_a)`` at the nearest points (``n`` the unit normal from a to b).
+        All pairs at once, with the arithmetic of one pair at a time — each side's
+        ``nᵀ J_v + (r × n)ᵀ J_ω`` summed over its three rows in order, b's less a's — bit for
+        bit (the first pose's Gauss–Newton steps turn a difference of 1e-11 into another
+        pose)."""
         m = self.c.model
-        rate = np.zeros((len(idx), m.nv))
-        jac: dict[int, np.ndarray] = {}
-        for k, (r, (ja, jb)) in enumerate(zip(res, self.joints[np.asarray(idx, int)])):
-            n = np.asarray(r.normal, float)
-            for j, p, sign in ((int(jb), r.getNearestPoint2(), 1.0),
-                               (int(ja), r.getNearestPoint1(), -1.0)):
-                if j > 0:  # the universe does not move
-                    if j not in jac:
-                        jac[j] = pin.getJointJacobian(m, data, j,
-                                                      pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-                    J = jac[j]
-                    # nᵀ(v + ω × r) = nᵀ v + (r × n)ᵀ ω at the point; a's moves it away from b
-                    rn = cross(np.asarray(p) - data.oMi[j].translation, n)
-                    rate[k] += sign * (n @ J[:3] + rn @ J[3:])
-        return rate
+        if not len(res):
+            return np.zeros((0, m.nv))
+        joints = self.joints[np.asarray(idx, int)][:, ::-1]  # (K, 2): b's, a's
+        used = np.unique(joints)
+        jac = np.zeros((used.size, 6, m.nv))  # the universe's stays 0: it does not move
+        origin = np.zeros((used.size, 3))
+        for u, j in enumerate(used.tolist()):
+            if j > 0:
+                jac[u] = pin.getJointJacobian(m, data, j, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+                origin[u] = data.oMi[j].translation
+        at = np.searchsorted(used, joints)  # (K, 2)
+        n = np.array([r.normal for r in res], float)  # (K, 3)
+        p = np.array([(r.getNearestPoint2(), r.getNearestPoint1()) for r in res], float)
+        # nᵀ(v + ω × r) = nᵀ v + (r × n)ᵀ ω at the point; a's moves it away from b
+        rn = cross(p - origin[at], n[:, None, :])  # (K, 2, 3)
+        J = jac[at]  # (K, 2, 6, nv)
+        side = (np.einsum("ki,ksiv->ksv", n, J[:, :, :3])
+                + np.einsum("ksi,ksiv->ksv", rn, J[:, :, 3:]))
+        return side[:, 0] - side[:, 1]
 
     def closest(self, data) -> tuple[float, int]:
         """The closest pair at ``data``'s joint placements: its signed distance [m] and index

@@ -227,17 +227,20 @@ class FrameQP:
         A0, up0, lo0, sense0, kind0 = fixed.stack()
         A0 = A0 * S[None]
         a_lin = a_prev.copy()  # the previous frame's acceleration: a first guess of q_k
+        held = self._held(t, h, nxt, tk)
         best: tuple[float, np.ndarray, int] | None = None
         x, flag = np.zeros(n), 1  # set by the first pass
         for i in range(PASSES + 1):  # rows one step ahead, linearised again at each pass's q_k
             v_hat = v + h * a_lin
-            ahead = self._ahead(pin.integrate(self.m, q, h * v_hat), v_hat)
+            q_hat = pin.integrate(self.m, q, h * v_hat)
+            if i:  # how well the last pass's soles hold: the pass whose hold best is kept
+                err = self._sole_error(t, v, h, held, q_hat, v_hat, a_lin)
+                if best is None or err < best[0]:
+                    best = (err, x, flag)
+                if err < AHEAD_TOL or flag != 1 or i == PASSES:  # (hard rows relaxed: the
+                    break  # frame fails anyway; no refinement)
             rows = _Rows(n)
-            err = self._feet_ahead(rows, t, v, h, nxt, tk, ahead, a_lin)
-            if i and (best is None or err < best[0]):  # the pass whose sole rows hold best
-                best = (err, x, flag)
-            if i and (err < AHEAD_TOL or flag != 1) or i == PASSES:  # (hard rows relaxed:
-                break  # the frame fails anyway; no refinement)
+            self._feet_ahead(rows, t, v, h, nxt, held, self._ahead(q_hat, v_hat), a_lin)
             A, up, lo, sense, kind = rows.stack()
             Hp, fp = H, f
             if i and PROXIMAL > 0:  # a proximal term ρ/2 |a − a_lin|²: zero at the fixed point
@@ -372,36 +375,60 @@ class FrameQP:
             rows.add(M, np.full(dist.size, 1e30), COLLISION_MARGIN - dist - h * Jd @ v, 0,
                      "collision")
 
-    def _feet_ahead(self, rows, t, v, h, nxt, tk: Tasks, ahead, a_lin) -> float:
-        """Rows of the next knot's soles; returns how far the feet held still or at rest
-        would move, at ``a_lin``, from what their rows ask [m/s]."""
-        nv, err = self.m.nv, 0.0
+    def _held(self, t, h: float, nxt: dict, tk: Tasks) -> dict:
+        """``{side: u (6,)}``: the LOCAL sole velocity [m/s, rad/s] asked of each foot held
+        at the next knot — in stance (back towards the pose its stance began with) or
+        resting in swing (towards its rest pose) — over the step ``h`` [s]; read at knot j's
+        pose (fixed: taken at q_k it would move with a, and the passes would close only half
+        the rest gain's share per pass)."""
+        out = {}
+        for s in SIDES:
+            rest = not nxt[s] and s in tk.feet and tk.feet[s][4]
+            if not (nxt[s] or rest):
+                continue
+            now = t["feet"][s][0]
+            if rest:
+                p, R = tk.feet[s][0], tk.feet[s][1]
+                out[s] = (tk.land.get(s, self.g.rest)
+                          * pin.log6(now.actInv(pin.SE3(R, p))).vector / h)
+            elif s in tk.anchor:
+                out[s] = self.g.hold * pin.log6(now.actInv(tk.anchor[s])).vector / h
+            else:  # touch-down: still
+                out[s] = np.zeros(6)
+        return out
+
+    def _sole_error(self, t, v, h: float, held: dict, q_hat, v_hat, a_lin) -> float:
+        """How far the held feet (:meth:`_held`) would move, at ``a_lin``, from what their
+        rows ask [m/s]: the midpoint velocity ``½ (J(q_j) v_k + J(q̂_k) v̂_k)`` less ``u``
+        (``q̂_k``, ``v̂_k``: the state ``a_lin`` leads to)."""
+        if not held:
+            return 0.0
+        m, d = self.m, self.d1
+        pin.forwardKinematics(m, d, q_hat, v_hat)
+        err = 0.0
+        for s, u in held.items():
+            vel = pin.getFrameVelocity(m, d, self.fid[s], _LOCAL).vector
+            mid = 0.5 * (t["feet"][s][3] @ (v + h * a_lin) + vel)
+            err = max(err, float(np.max(np.abs(mid - u))))
+        return err
+
+    def _feet_ahead(self, rows, t, v, h, nxt, held: dict, ahead, a_lin) -> None:
+        """Rows of the next knot's soles: a held foot's (:meth:`_held`) velocity, a swinging
+        foot's corners above the floor."""
+        nv = self.m.nv
         for s in SIDES:
             oMf, vel, dq, Jl, Jw = ahead[s]
-            rest = not nxt[s] and s in tk.feet and tk.feet[s][4]
-            if nxt[s] or rest:  # J(q_k) v_k = back towards the stance's (rest) pose: a Newton
-                # row in a, q_k = q ⊕ h v_k, v_k = v + h a (both through a); the feedback u is
-                # read at knot j's pose (fixed: taken at q_k it would move with a, and the
-                # passes would close only half the rest gain's share per pass)
-                now = t["feet"][s][0]
-                if rest:
-                    p, R = tk.feet[s][0], tk.feet[s][1]
-                    u = (tk.land.get(s, self.g.rest)
-                         * pin.log6(now.actInv(pin.SE3(R, p))).vector / h)
-                elif s in tk.anchor:
-                    u = self.g.hold * pin.log6(now.actInv(tk.anchor[s])).vector / h
-                else:  # touch-down: still
-                    u = np.zeros(6)
-                # the midpoint rule ½ (J(q_j) + J(q_k)) v_k = u: the sole moves by h·u over
-                # the step (not only ends it still), so that it does not drift knot by knot
+            if s in held:  # J(q_k) v_k = u: a Newton row in a, q_k = q ⊕ h v_k, v_k = v + h a
+                # (both through a); the midpoint rule ½ (J(q_j) + J(q_k)) v_k = u: the sole
+                # moves by h·u over the step (not only ends it still), so that it does not
+                # drift knot by knot
                 Jj = t["feet"][s][3]
                 D = 0.5 * (h * Jj + h * Jl + h * h * dq)[self.comp]
                 mid = 0.5 * (Jj @ (v + h * a_lin) + vel)
                 A = np.zeros((self.nw, rows.n))
                 A[:, :nv] = D
-                b = (u - mid)[self.comp] + D @ a_lin
+                b = (held[s] - mid)[self.comp] + D @ a_lin
                 rows.add(A, b, b, _EQ, "stance")
-                err = max(err, float(np.max(np.abs(mid - u))))
                 continue
             R, p = oMf.rotation, oMf.translation
             rc = self.corners[s] @ R.T  # corner offsets, world axes (4, 3)
@@ -411,7 +438,6 @@ class FrameQP:
             A[:, :nv] = h * h * Jz
             lb = -FLOOR_MARGIN - z + h * h * Jz @ a_lin
             rows.add(A, np.full(4, 1e30), lb, 0, "swing")
-        return err
 
     def _exact_base(self, a, t, W, stance) -> None:
         """The base rows exact: ``a``'s base components absorb the QP's round-off."""
@@ -424,24 +450,29 @@ class FrameQP:
 
 
 class _Rows:
+    """Constraint rows ``lo ≤ A x ≤ up`` of ``n`` variables added block by block, each block
+    with its DAQP sense and its kind (which relaxation softens it, :func:`_solve`)."""
+
     def __init__(self, n: int):
         self.n = n
         self.A: list[np.ndarray] = []
         self.up: list[np.ndarray] = []
         self.lo: list[np.ndarray] = []
-        self.sense: list[np.ndarray] = []
-        self.kind: list[np.ndarray] = []
+        self.tags: list[tuple[int, str]] = []
+        self.count: list[int] = []
 
     def add(self, A, up, lo, sense, kind) -> None:
         self.A.append(A)
         self.up.append(np.asarray(up, float))
         self.lo.append(np.asarray(lo, float))
-        self.sense.append(np.full(A.shape[0], sense, np.intc))
-        self.kind.append(np.full(A.shape[0], kind))
+        self.tags.append((sense, kind))
+        self.count.append(A.shape[0])
 
     def stack(self):
+        sense, kind = zip(*self.tags)
         return (np.vstack(self.A), np.concatenate(self.up), np.concatenate(self.lo),
-                np.concatenate(self.sense), np.concatenate(self.kind))
+                np.repeat(np.array(sense, np.intc), self.count),
+                np.repeat(np.array(kind), self.count))
 
 
 def _solve(H, f, A, up, lo, sense, kind) -> tuple[np.ndarray, int]:
