@@ -199,10 +199,14 @@ class Proximity:
         (self.centre, self.radius, self.pairs, self.joints, self._used,
          self._of) = collision.spheres
         self.gdata = pin.GeometryData(collision.geometry)
+        #: tracked()'s view of each pair's result, taken once (live references: indexing
+        #: the vector costs 1 µs a pair)
+        self._res: list = []
         #: the joints' placements (U, 4, 4) and each pair's lower bound (P,) at the last call
         self._H: np.ndarray | None = None
         self._low = np.full(len(self.pairs), -np.inf)
-        self._kept = self._on = np.arange(len(self.pairs))  # tracked()'s kept, measured
+        self._kept = np.arange(len(self.pairs))  # tracked()'s pairs: kept, measured
+        self._on: list[int] = self._kept.tolist()
 
     def bounds(self, data) -> np.ndarray:
         """``(P,)`` lower bounds [m] of the pairs' signed distances at ``data``'s joint
@@ -250,17 +254,15 @@ class Proximity:
         and measuring fewer pairs every frame changed the streams' motions (Talos on the
         SFU-style walk: 248 of 265 frames feasible, not 253)."""
         g, gd, m = self.c.geometry, self.gdata, self.c.model
+        res = self._res = self._res or list(gd.distanceResults)
         if refresh:
             self._active(np.flatnonzero(self._spheres(data)[2] < near))
             pin.computeDistances(m, data, g, gd, q)
-            res = gd.distanceResults
-            self._kept = np.array([i for i in self._on if res[int(i)].min_distance < near],
-                                  int)
+            self._kept = np.array([i for i in self._on if res[i].min_distance < near], int)
             self._active(self._kept)
         else:
             pin.computeDistances(m, data, g, gd, q)  # the kept pairs: the active ones
-        res = gd.distanceResults
-        close = [res[int(i)] for i in self._kept]
+        close = [res[i] for i in self._kept.tolist()]
         keep = [k for k, r in enumerate(close) if r.min_distance < watch]
         close = [close[k] for k in keep]
         return (self._kept[keep], np.array([r.min_distance for r in close]),
@@ -269,9 +271,10 @@ class Proximity:
     def _active(self, pairs: np.ndarray) -> None:
         """Make ``pairs`` (indices) the ones ``pin.computeDistances`` measures."""
         self.gdata.deactivateAllCollisionPairs()
-        for i in pairs:
-            self.gdata.activateCollisionPair(int(i))
-        self._on = pairs
+        on = pairs.tolist()
+        for i in on:
+            self.gdata.activateCollisionPair(i)
+        self._on = on
 
     def rates(self, data, idx: np.ndarray, res: list) -> np.ndarray:
         """``(K, nv)``: the rate per velocity of the distance of each pair of ``idx`` whose

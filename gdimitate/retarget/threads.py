@@ -7,6 +7,12 @@ products of the streaming mode's small matrices ten times slower (12.8 → 1.4 m
 QP on HOAP-2; docs/design.md §6, "the solver"); the knot-sized dense blocks gain nothing from
 them. :func:`single_thread` sets each to one thread for the duration of a ``with`` block and
 restores the previous counts after; a library it cannot find is left alone.
+
+:func:`hold_one_thread` does the same from a call to its release, for an object that runs
+many small blocks (the streaming mode's frames): setting OpenBLAS back to two threads after
+every frame woke its worker threads, which then spun — 10–15 % more CPU than the frames' own,
+taken from the core the verdict worker runs on. Holds nest (the counts come back at the last
+release).
 """
 
 from __future__ import annotations
@@ -14,11 +20,17 @@ from __future__ import annotations
 import ctypes
 import glob
 import os
+import threading
+from collections.abc import Callable
 from contextlib import contextmanager
 
-__all__ = ["single_thread"]
+__all__ = ["single_thread", "hold_one_thread"]
 
 _LIBS: list | None = None
+#: :func:`hold_one_thread`'s open holds and the counts its first one found
+_HOLDS: list[int] = [0]
+_SAVED: list[int] = []
+_LOCK = threading.Lock()
 
 
 _TARGETS = (
@@ -74,3 +86,29 @@ def single_thread():
     finally:
         for (_, s), n in zip(libs, old):
             s(max(int(n), 1))
+
+
+def hold_one_thread() -> Callable[[], None]:
+    """Set one OpenBLAS and one OpenMP thread until the returned function is called (it
+    restores the previous counts at the last open hold's release; calling it again does
+    nothing)."""
+    with _LOCK:
+        if _HOLDS[0] == 0:
+            libs = _libs()
+            _SAVED[:] = [g() for g, _ in libs]
+            for _, s in libs:
+                s(1)
+        _HOLDS[0] += 1
+    done = [False]
+
+    def release() -> None:
+        with _LOCK:
+            if done[0]:
+                return
+            done[0] = True
+            _HOLDS[0] -= 1
+            if _HOLDS[0] == 0:
+                for (_, s), n in zip(_libs(), _SAVED):
+                    s(max(int(n), 1))
+
+    return release

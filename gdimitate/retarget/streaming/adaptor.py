@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import time
 import warnings
+import weakref
+from contextlib import nullcontext
 from os import PathLike
 from typing import NamedTuple
 
@@ -47,7 +49,7 @@ from ..bodymap import BodyMap, body_map
 from ..info import limited_robot, resolve_contacts
 from ..knot import base_dofs
 from ..params import Contact, Limits, Weights
-from ..threads import single_thread
+from ..threads import hold_one_thread, single_thread
 from .frameref import FrameReference, initial_pose, initial_velocity
 from .receding import FrameQP
 from .verdict_worker import InlineVerdicts, VerdictWorker, can_fork, knot_verdicts
@@ -137,8 +139,11 @@ class StreamingAdaptor:
     (the previous frame's, ``FrameResult.previous_feasible``: ~20 ms a frame on Talos);
     ``False``/``"off"``: none (audit the assembled motion afterwards, as
     :func:`adapt_per_frame` does). Both judges run :func:`.verdict_worker.knot_verdicts` and
-    give the same verdicts. :meth:`close` (or a ``with`` block) stops the worker; so do
-    garbage collection and the interpreter's exit. ``start`` (:data:`STARTS`): a stream given
+    give the same verdicts. While open, the adaptor holds NumPy's and CasADi's BLAS to one
+    thread (:func:`~gdimitate.retarget.threads.hold_one_thread`: setting it back after each
+    frame woke OpenBLAS's threads, which spun on the worker's core). :meth:`close` (or a
+    ``with`` block) stops the worker and gives the threads back; so do garbage collection
+    and the interpreter's exit. ``start`` (:data:`STARTS`): a stream given
     no ``v_demo`` at its first frame — a live one, or one joined mid-walk — waits for its
     second frame (``"estimate"``: the first frame's result is a preview, the rest pose, with
     ``status="waiting"`` and the verdict False; :attr:`first_frame` is then 1) and starts
@@ -188,6 +193,9 @@ class StreamingAdaptor:
                            self.contact.f_min, self.contact.cop_margin)
         self._fid = {s: imitator.model.getFrameId(self.contacts[s].frame) for s in SIDES}
         self._judge: InlineVerdicts | VerdictWorker | None = None
+        #: one BLAS thread while open (:func:`~..threads.hold_one_thread`): released by
+        #: close(), garbage collection or the interpreter's exit
+        self._one_thread = weakref.finalize(self, hold_one_thread())
         self.reset()
         judge_args = (self._audit_robot, self.contacts, self.contact.cone_half_angle)
         if self.audit_mode == "worker":
@@ -278,7 +286,7 @@ class StreamingAdaptor:
         if self._lost >= RECOVER_AFTER:
             return self._recover(t, flags, t0)
         own = self._own_flags(flags)
-        with single_thread():
+        with self._threads():
             a, W, flag = self._solve(len(H["t"]) - 1, own)
         v_next = H["v"][-1] + self._h * a
         if not (np.all(np.isfinite(a)) and all(np.all(np.isfinite(W[s])) for s in SIDES)
@@ -522,7 +530,7 @@ class StreamingAdaptor:
         j = len(H["t"]) - 1
         if j < 0:
             raise InvalidInputError("final() needs at least one step()")
-        with single_thread():
+        with self._threads():
             a, W, _ = self._solve(j, H["c"][j])
         ok = None
         if self.audit:  # the frame before may have waited for this acceleration
@@ -532,6 +540,11 @@ class StreamingAdaptor:
             self._final_verdicts = (first, [bool(x) for x in oks])
             ok = bool(oks[-1])
         return a, W, ok
+
+    def _threads(self):
+        """A solve's thread context: nothing while the adaptor holds one thread, one for the
+        block after :meth:`close`."""
+        return nullcontext() if self._one_thread.alive else single_thread()
 
     # ------------------------------------------------------------------ the verdicts
     def _judged(self) -> tuple[tuple[tuple[int, bool], ...], bool | None]:
@@ -573,8 +586,10 @@ class StreamingAdaptor:
 
     def close(self) -> None:
         """Stop the verdict worker, keeping the verdicts delivered so far (:meth:`verdicts`);
-        later steps are not judged. Idempotent; ``with StreamingAdaptor(...) as sa:`` calls
-        it at the block's end."""
+        later steps are not judged; give back the BLAS threads (the adaptor holds one while
+        open: :func:`~gdimitate.retarget.threads.hold_one_thread`). Idempotent; ``with
+        StreamingAdaptor(...) as sa:`` calls it at the block's end."""
+        self._one_thread()
         if self._judge is not None:
             judge, self._judge = self._judge, None
             try:
@@ -676,6 +691,7 @@ def adapt_per_frame(demo: Motion, demonstrator: Robot, imitator: Robot, force: s
                 W[s][k - 1] = r.previous_wrenches[s]
         statuses.append(r.status)
     a[-1], wl, _ = ad.final()
+    ad.close()
     for s in SIDES:
         W[s][-1] = wl[s]
     elapsed = time.perf_counter() - t0
