@@ -99,14 +99,28 @@ def turn_motion(motion: Motion, yaw: float, about: np.ndarray | None = None) -> 
 def turn_configurations(q: np.ndarray, yaw: float, about: np.ndarray | None = None
                         ) -> np.ndarray:
     """Free-flyer configurations ``q`` ``(..., nq)`` turned like :func:`turn_motion`."""
-    q = np.array(q, float)
-    flat = q.reshape(-1, q.shape[-1])
-    R = yaw_matrix(yaw)
-    flat[:, :3] = _turned(flat[:, :3], R, about)
-    Q = pin.Quaternion(R)
-    for row in flat:
-        row[3:7] = (Q * pin.Quaternion(row[3:7])).coeffs()
-    return q
+    return Turn(yaw, about).configurations(q)
+
+
+class Turn:
+    """A turn by ``yaw`` [rad] about the vertical through ``about`` ``(2,)`` [m] (default:
+    the origin), its rotation made once: :meth:`configurations` is
+    :func:`turn_configurations` (a stream turns two configurations a frame)."""
+
+    def __init__(self, yaw: float, about: np.ndarray | None = None):
+        self.R = yaw_matrix(yaw)
+        self.Q = pin.Quaternion(self.R)
+        self.about = about
+
+    def configurations(self, q: np.ndarray) -> np.ndarray:
+        """Free-flyer configurations ``q`` ``(..., nq)`` turned: base positions turned, base
+        orientations premultiplied by the turn, the rest as it is (a copy)."""
+        q = np.array(q, float)
+        flat = q.reshape(-1, q.shape[-1])
+        flat[:, :3] = _turned(flat[:, :3], self.R, self.about)
+        for row in flat:
+            row[3:7] = (self.Q * pin.Quaternion(row[3:7])).coeffs()
+        return q
 
 
 def turn_forces(forces: ContactForces, yaw: float, about: np.ndarray | None = None

@@ -40,7 +40,7 @@ from ...assess.result import AdaptedMotion, compare
 from ...assess.solver import SolverInfo
 from ...errors import GdimitateWarning, InvalidInputError, UnknownNameError
 from ...model.contact import ContactForces, SoleContact
-from ...model.heading import facing_yaw, turn_configurations, yaw_matrix
+from ...model.heading import Turn, facing_yaw
 from ...model.kinematics import robot_motion
 from ...model.motion import Motion
 from ...model.robot import SIDES, Robot
@@ -213,7 +213,7 @@ class StreamingAdaptor:
         self._demo_flags: dict[str, bool] = {}
         self._a_prev = np.zeros(self.imitator.model.nv)
         self._n = 0
-        self._frame: tuple[float, np.ndarray] = (0.0, np.zeros(2))
+        self._turns: tuple[Turn, Turn] | None = None  # into the stream's frame, and back
         self._verdicts: list[bool] = []  # the motion's frames 0, 1, ... judged so far
         #: the first frame while it waits for the second (start="estimate"): (q_demo, flags,
         #: forces)
@@ -249,16 +249,17 @@ class StreamingAdaptor:
             raise InvalidInputError(f"q_demo must have shape ({d.model.nq},) for {d.name}; "
                                     f"got {q_demo.shape}")
         if not self._hist["t"] and self._waiting is None:
-            self._frame = stream_frame(d, q_demo)
-        yaw, about = self._frame
-        if yaw:
-            q_demo = turn_configurations(q_demo, -yaw, about)
-            R = yaw_matrix(-yaw)
+            yaw, about = stream_frame(d, q_demo)
+            self._turns = (Turn(-yaw, about), Turn(yaw, about)) if yaw else None
+        turns = self._turns
+        if turns is not None:
+            q_demo = turns[0].configurations(q_demo)
+            R = turns[0].R
             forces = None if forces is None else {s: R @ np.asarray(f, float)
                                                   for s, f in forces.items()}
         r = self._step(q_demo, contact, dt, forces, v_demo)
-        if yaw and self.imitator.base == "free":  # a planar imitator walks in its x–z plane
-            r = r._replace(q=turn_configurations(r.q, yaw, about))
+        if turns is not None and self.imitator.base == "free":  # a planar imitator walks in
+            r = r._replace(q=turns[1].configurations(r.q))  # its x–z plane
         return r
 
     def _step(self, q_demo: np.ndarray, contact: dict[str, bool], dt: float | None,

@@ -167,6 +167,15 @@ class FrameQP:
         # units of m·g·(10 cm)
         self.cop_w = np.where(np.isin(np.arange(6)[self.comp], (3, 4)),
                               gains.w_cop / (0.1 * self.mg) ** 2, 0.0)
+        # the cost's constant parts, made once: the regularisations, the posture rows
+        nv, na = m.nv, self.act_idx.size
+        self._acc_reg = gains.w_acc * np.eye(nv)
+        self._wrench_reg = np.diag(gains.w_wrench / self.wscale**2 + self.cop_w)
+        self._posture_J = np.zeros((na, nv))
+        self._posture_J[np.arange(na), self.act_idx] = 1.0
+        self._com_w = {n: np.where(self.lin == 2, gains.w_com, w) for n, w in
+                       ((1, gains.w_com_xy_single), (2, gains.w_com_xy))}
+        self._lower = np.tril_indices(nv, -1)  # M's lower triangle, from its upper
 
     # ------------------------------------------------------------------ model terms
     def _terms(self, q: np.ndarray, v: np.ndarray) -> dict:
@@ -187,23 +196,27 @@ class FrameQP:
         pin.centerOfMass(m, d, q, v, np.zeros(nv))
         t["com"] = (d.com[0].copy(), d.vcom[0].copy(), d.acom[0].copy(),
                     pin.jacobianCenterOfMass(m, d, q, False).copy())
-        M = pin.crba(m, d, q)
-        t["M"] = np.triu(M) + np.triu(M, 1).T
+        M = pin.crba(m, d, q).copy()
+        M[self._lower] = M.T[self._lower]
+        t["M"] = M
         t["h"] = pin.nonLinearEffects(m, d, q, v).copy()
         return t
 
-    def _ahead(self, q_hat: np.ndarray, v_hat: np.ndarray) -> dict:
-        """At the predicted next state: each sole's placement, its LOCAL velocity
-        ``J(q̂) v̂`` ``(6,)`` and that velocity's derivatives with respect to ``q`` (tangent)
-        and ``v`` (= the LOCAL Jacobian), and its LOCAL_WORLD_ALIGNED Jacobian."""
+    def _ahead(self, q_hat: np.ndarray, v_hat: np.ndarray, held: dict) -> dict:
+        """At the predicted next state, per sole: for a foot in ``held`` (:meth:`_held`) its
+        LOCAL velocity ``J(q̂) v̂`` ``(6,)`` and that velocity's derivatives with respect to
+        ``q`` (tangent) and ``v`` (= the LOCAL Jacobian); for the others, its placement and
+        LOCAL_WORLD_ALIGNED Jacobian."""
         m, d = self.m, self.d1
         pin.computeForwardKinematicsDerivatives(m, d, q_hat, v_hat, np.zeros(m.nv))
-        pin.updateFramePlacements(m, d)
-        out = {}
+        out: dict[str, tuple] = {}
         for s, f in self.fid.items():
-            dq, dv = pin.getFrameVelocityDerivatives(m, d, f, _LOCAL)
-            out[s] = (d.oMf[f].copy(), pin.getFrameVelocity(m, d, f, _LOCAL).vector.copy(),
-                      dq.copy(), dv.copy(), pin.getFrameJacobian(m, d, f, _LWA).copy())
+            if s in held:
+                dq, dv = pin.getFrameVelocityDerivatives(m, d, f, _LOCAL)
+                out[s] = (pin.getFrameVelocity(m, d, f, _LOCAL).vector.copy(), dq, dv)
+            else:
+                out[s] = (pin.updateFramePlacement(m, d, f),
+                          pin.getFrameJacobian(m, d, f, _LWA))
         return out
 
     # ------------------------------------------------------------------ the QP
@@ -240,7 +253,7 @@ class FrameQP:
                 if err < AHEAD_TOL or flag != 1 or i == PASSES:  # (hard rows relaxed: the
                     break  # frame fails anyway; no refinement)
             rows = _Rows(n)
-            self._feet_ahead(rows, t, v, h, nxt, held, self._ahead(q_hat, v_hat), a_lin)
+            self._feet_ahead(rows, t, v, h, held, self._ahead(q_hat, v_hat, held), a_lin)
             A, up, lo, sense, kind = rows.stack()
             Hp, fp = H, f
             if i and PROXIMAL > 0:  # a proximal term ρ/2 |a − a_lin|²: zero at the fixed point
@@ -279,8 +292,7 @@ class FrameQP:
         # horizontally in single support the centre of mass is left to its pendulum dynamics
         # (the steps, placed at the capture point, govern it); in double support it follows
         # the demonstrator's velocity
-        wxy = g.w_com_xy if len(stance) > 1 else g.w_com_xy_single
-        w.append(np.where(self.lin == 2, g.w_com, wxy))
+        w.append(self._com_w[2 if len(stance) > 1 else 1])
         Rb, wb, db, Jb = t["base"]
         kp, kd = _pd(g.base)
         acc = kp * pin.log3(tk.base_rot @ Rb.T) - kd * wb - db
@@ -297,9 +309,7 @@ class FrameQP:
         kp, kd = _pd(g.posture)
         qa = self._qa
         acc = kp * (tk.joints - qa) + kd * (tk.joints_vel - v[self.act_idx])
-        Js = np.zeros((self.act_idx.size, nv))
-        Js[np.arange(self.act_idx.size), self.act_idx] = 1.0
-        J.append(Js)
+        J.append(self._posture_J)
         r.append(acc)
         w.append(g.w_posture * self.posture_w)
         Jt = np.zeros((sum(len(x) for x in r), n))
@@ -307,10 +317,10 @@ class FrameQP:
         wt, rt = np.concatenate(w), np.concatenate(r)
         H = Jt.T @ (wt[:, None] * Jt)
         f = -Jt.T @ (wt * rt)
-        H[:nv, :nv] += g.w_acc * np.eye(nv)
+        H[:nv, :nv] += self._acc_reg
         for i, s in enumerate(stance):
             sl = slice(nv + nw * i, nv + nw * (i + 1))
-            H[sl, sl] += np.diag(g.w_wrench / self.wscale**2 + self.cop_w)
+            H[sl, sl] += self._wrench_reg
             d = tk.push.get(s)
             if d is not None:  # the force along d: its components across d vanish
                 R = t["feet"][s][0].rotation
@@ -412,13 +422,14 @@ class FrameQP:
             err = max(err, float(np.max(np.abs(mid - u))))
         return err
 
-    def _feet_ahead(self, rows, t, v, h, nxt, held: dict, ahead, a_lin) -> None:
+    def _feet_ahead(self, rows, t, v, h, held: dict, ahead, a_lin) -> None:
         """Rows of the next knot's soles: a held foot's (:meth:`_held`) velocity, a swinging
         foot's corners above the floor."""
         nv = self.m.nv
         for s in SIDES:
-            oMf, vel, dq, Jl, Jw = ahead[s]
-            if s in held:  # J(q_k) v_k = u: a Newton row in a, q_k = q ⊕ h v_k, v_k = v + h a
+            if s in held:
+                vel, dq, Jl = ahead[s]
+                # J(q_k) v_k = u: a Newton row in a, q_k = q ⊕ h v_k, v_k = v + h a
                 # (both through a); the midpoint rule ½ (J(q_j) + J(q_k)) v_k = u: the sole
                 # moves by h·u over the step (not only ends it still), so that it does not
                 # drift knot by knot
@@ -430,6 +441,7 @@ class FrameQP:
                 b = (held[s] - mid)[self.comp] + D @ a_lin
                 rows.add(A, b, b, _EQ, "stance")
                 continue
+            oMf, Jw = ahead[s]
             R, p = oMf.rotation, oMf.translation
             rc = self.corners[s] @ R.T  # corner offsets, world axes (4, 3)
             z = p[2] + rc[:, 2]
