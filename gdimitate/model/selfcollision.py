@@ -205,9 +205,8 @@ class Proximity:
         #: the joints' placements (U, 4, 4) and each pair's lower bound (P,) at the last call
         self._H: np.ndarray | None = None
         self._low = np.full(len(self.pairs), -np.inf)
-        self._kept = np.arange(len(self.pairs))  # tracked()'s pairs: kept, measured
-        self._on: list[int] = self._kept.tolist()
-
+        self._all = np.arange(len(self.pairs))
+        self._kept = self._all  # tracked()'s pairs
     def bounds(self, data) -> np.ndarray:
         """``(P,)`` lower bounds [m] of the pairs' signed distances at ``data``'s joint
         placements (``data.oMi``), and the geometries placed there for :meth:`distance`."""
@@ -244,21 +243,24 @@ class Proximity:
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The pairs near at ``q`` (``data``: its joint placements and Jacobians computed
         there), as the streaming mode's frames and first pose measure them: when
-        ``refresh``, every pair that may be within ``near`` [m] (its bounding spheres' gap
-        below it: the others cannot be), keeping those that are; otherwise the kept ones
-        only (coal's GJK in Pinocchio's loop over the active pairs, ~2 µs a pair). Returns
-        the kept pairs within ``watch`` [m]: their indices ``(K,)``, signed distances
-        ``(K,)`` [m] and :meth:`rates` ``(K, nv)``. Not the bounds every frame: coal's GJK
-        starts from each pair's last answer (``enable_cached_gjk_guess``; the same pair at
-        the same configuration differs by up to 2e-3 in its normal with another history),
-        and measuring fewer pairs every frame changed the streams' motions (Talos on the
-        SFU-style walk: 248 of 265 frames feasible, not 253)."""
+        ``refresh``, every pair, keeping those within ``near`` [m] (reading only the pairs
+        whose bounding spheres' gap is below it: the others cannot be); otherwise the kept
+        ones only (coal's GJK in Pinocchio's loop over the active pairs). Returns the kept
+        pairs within ``watch`` [m]: their indices ``(K,)``, signed distances ``(K,)`` [m] and
+        :meth:`rates` ``(K, nv)``. Every pair at a refresh, not the bounds every frame, nor
+        only those that may be near at a refresh: coal's GJK starts from each pair's last
+        answer (``enable_cached_gjk_guess``; the same pair at the same configuration differs
+        by up to 2e-3 in its normal with another history), and measuring fewer pairs changed
+        the streams' motions (Talos on the SFU-style walk: 248 of 265 frames feasible, not
+        253; measuring at a refresh only the pairs whose spheres may be near moved its
+        stream by up to 1 rad)."""
         g, gd, m = self.c.geometry, self.gdata, self.c.model
         res = self._res = self._res or list(gd.distanceResults)
         if refresh:
-            self._active(np.flatnonzero(self._spheres(data)[2] < near))
+            self._active(self._all)
             pin.computeDistances(m, data, g, gd, q)
-            self._kept = np.array([i for i in self._on if res[i].min_distance < near], int)
+            may = np.flatnonzero(self._spheres(data)[2] < near).tolist()
+            self._kept = np.array([i for i in may if res[i].min_distance < near], int)
             self._active(self._kept)
         else:
             pin.computeDistances(m, data, g, gd, q)  # the kept pairs: the active ones
@@ -268,13 +270,12 @@ class Proximity:
         return (self._kept[keep], np.array([r.min_distance for r in close]),
                 self.rates(data, self._kept[keep], close))
 
-    def _active(self, pairs: np.ndarray) -> None:
+    def _active(self, pairs) -> None:
         """Make ``pairs`` (indices) the ones ``pin.computeDistances`` measures."""
-        self.gdata.deactivateAllCollisionPairs()
-        on = pairs.tolist()
-        for i in on:
-            self.gdata.activateCollisionPair(i)
-        self._on = on
+        on = np.zeros((self.c.geometry.ngeoms,) * 2, bool)
+        ab = self.pairs[np.asarray(pairs, int)]
+        on[ab[:, 0], ab[:, 1]] = on[ab[:, 1], ab[:, 0]] = True
+        self.gdata.setActiveCollisionPairs(self.c.geometry, on, True)
 
     def rates(self, data, idx: np.ndarray, res: list) -> np.ndarray:
         """``(K, nv)``: the rate per velocity of the distance of each pair of ``idx`` whose
