@@ -556,6 +556,12 @@ def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: d
     targets = f0["joints"]
     near = _Near(collision)
     qa, vl = q_of_v(m, act_idx), _leg_dofs(m, fids, act_idx)  # vl: held at their limits
+    ql = q_of_v(m, vl)
+    lin = [0] if planar else [0, 1]
+    ang = [4] if planar else [3, 4, 5]
+    Js = np.zeros((act_idx.size, m.nv))  # the posture rows
+    Js[np.arange(act_idx.size), act_idx] = 1.0
+    damping = 1e-6 * np.eye(m.nv)
     for _ in range(iterations):
         pin.computeJointJacobians(m, d, q)
         pin.updateFramePlacements(m, d)
@@ -567,26 +573,22 @@ def _pose_at(robot, ref: FrameReference, f0: dict, act_idx: np.ndarray, goals: d
             w.append(np.full(comp.size, 1e5))
         c = pin.centerOfMass(m, d, q)
         Jc = pin.jacobianCenterOfMass(m, d, q)
-        lin = [0] if planar else [0, 1]
         J.append(Jc[lin])
         e.append((centre - c)[lin])
         w.append(np.full(len(lin), 30.0))
         Jr = pin.getJointJacobian(m, d, root, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        ang = [4] if planar else [3, 4, 5]
         J.append(Jr[[2] + ang])
         Rb = d.oMi[root].rotation
         e.append(np.r_[height * z_root - d.oMi[root].translation[2],
                        pin.log3(rot @ Rb.T)[[a - 3 for a in ang]]])
         w.append(np.full(1 + len(ang), 10.0))
-        Js = np.zeros((act_idx.size, m.nv))
-        Js[np.arange(act_idx.size), act_idx] = 1.0
         J.append(Js)
         e.append(targets - q[qa])
         w.append(np.full(act_idx.size, 0.1))
         near.rows(q, d, J, e, w)
         Ja, ea, wa = np.vstack(J), np.concatenate(e), np.concatenate(w)
-        dq = _bounded_step(Ja.T @ (wa[:, None] * Ja) + 1e-6 * np.eye(m.nv), Ja.T @ (wa * ea),
-                           m, q, vl)
+        dq = _bounded_step(Ja.T @ (wa[:, None] * Ja) + damping, Ja.T @ (wa * ea), m, q, vl,
+                           ql)
         q = np.clip(pin.integrate(m, q, dq), m.lowerPositionLimit, m.upperPositionLimit)
         if np.max(np.abs(dq)) < STILL:  # converged
             break
@@ -637,10 +639,11 @@ def _leg_dofs(m, fids: dict, act_idx: np.ndarray) -> np.ndarray:
 
 
 def _bounded_step(A: np.ndarray, b: np.ndarray, m, q: np.ndarray,
-                  act_idx: np.ndarray) -> np.ndarray:
+                  act_idx: np.ndarray, qi: np.ndarray) -> np.ndarray:
     """The Gauss–Newton step ``(nv,)`` solving ``A dq = b`` (``A`` ``(nv, nv)``) at the
     configuration ``q`` ``(nq,)`` of model ``m`` with the 1-dof joints ``act_idx`` (velocity
-    indices) that are at a position limit the step would push past held still — an active
+    indices; ``qi``: their configuration indices, :func:`~.receding.q_of_v`) that are at a
+    position limit the step would push past held still — an active
     set, so that the other joints take up what they cannot. Clipping the step afterwards
     instead stalls (the rest of the step assumed the held joint's share): iCub's swing sole
     at the CMU walk's first pose stayed 1.9 mm under the floor, tilted 1.1°, its hip roll at
@@ -648,7 +651,6 @@ def _bounded_step(A: np.ndarray, b: np.ndarray, m, q: np.ndarray,
     frame). :func:`initial_pose` holds the legs' joints only — they carry the soles, whose
     rows are the hard ones; holding the arms too (Talos's arm_left_2 at its limit) moved
     Talos's start by 4 mm, and its CMU walk then failed from frame 76 instead of 167."""
-    qi = q_of_v(m, act_idx)
     qa, lo, up = q[qi], m.lowerPositionLimit[qi], m.upperPositionLimit[qi]
     free = np.ones(b.size, bool)
     dq = np.linalg.solve(A, b)

@@ -338,8 +338,8 @@ def test_bounded_step_holds_a_joint_at_its_limit_and_lets_the_others_take_its_sh
     m.lowerPositionLimit[:] = -1.0
     m.upperPositionLimit[:] = 1.0
     A, b = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([3.0, 3.0])
-    free = _bounded_step(A, b, m, np.array([0.0, 0.0]), np.arange(2))
-    held = _bounded_step(A, b, m, np.array([1.0, 0.0]), np.arange(2))
+    free = _bounded_step(A, b, m, np.array([0.0, 0.0]), np.arange(2), np.arange(2))
+    held = _bounded_step(A, b, m, np.array([1.0, 0.0]), np.arange(2), np.arange(2))
     assert np.allclose(free, [1.0, 1.0], atol=1e-12)
     assert np.allclose(held, [0.0, 1.5], atol=1e-12)
 
